@@ -1,0 +1,65 @@
+"""Per-run metrics computed from a trace (plain arrays; no simulator here)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: |lane offset| [m] under which the car counts as back in its lane
+RETURN_OFFSET_M = 0.5
+#: how long [s] it must stay there
+RETURN_HOLD_S = 2.0
+AVOID_PHASES = ("avoid_left", "avoid_straight", "avoid_right")
+
+
+def _nan_to_none(value: float) -> float | None:
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def central_range_m(lidar: np.ndarray, beams: int) -> float:
+    """The shortest range among the ``beams`` central beams [m]."""
+    center, half = len(lidar) // 2, beams // 2
+    return float(np.min(lidar[max(0, center - half): center - half + beams]))
+
+
+def return_to_lane(t_s: np.ndarray, offset_m: np.ndarray, phase: list[str]):
+    """``(returned, return_time_s)``: after the last avoid phase, did the body centre
+    stay within ``RETURN_OFFSET_M`` of its lane's centre for ``RETURN_HOLD_S``?
+    ``return_time_s`` runs from the maneuver's first step to the start of that hold."""
+    avoiding = np.isin(np.asarray(phase), AVOID_PHASES)
+    if not avoiding.any():
+        return False, None
+    start = int(np.argmax(avoiding))
+    end = len(avoiding) - int(np.argmax(avoiding[::-1]))  # first step after the maneuver
+    inside = np.abs(offset_m) < RETURN_OFFSET_M  # NaN (lane not sensed) is outside
+    hold_from = None
+    for i in range(end, len(t_s)):
+        if not inside[i]:
+            hold_from = None
+            continue
+        if hold_from is None:
+            hold_from = i
+        if t_s[i] - t_s[hold_from] >= RETURN_HOLD_S - 1e-9:
+            return True, float(t_s[hold_from] - t_s[start])
+    return False, None
+
+
+def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[np.ndarray],
+                  detect_beams: int) -> dict:
+    """Result-row metrics of one run (``None`` where a metric does not apply)."""
+    started = "avoid_left" in phase
+    detection = None
+    if started:
+        detection = central_range_m(lidar[phase.index("avoid_left")], detect_beams)
+    returned, return_time = return_to_lane(floats["t_s"], floats["lane_offset_m"], phase)
+    offsets = np.abs(floats["lane_offset_m"])
+    gaps = floats["obstacle_gap_m"]
+    return {
+        "maneuver_started": started,
+        "detection_range_m": _nan_to_none(detection) if started else None,
+        "returned_to_lane": returned,
+        "return_time_s": return_time,
+        "max_abs_lane_offset_m": _nan_to_none(np.nanmax(offsets)) if offsets.size else None,
+        "min_gap_obstacle_m": _nan_to_none(np.min(gaps)) if gaps.size else None,
+    }

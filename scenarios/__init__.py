@@ -1,0 +1,41 @@
+"""The world: scenario specs, road geometry, and the simulator backends."""
+
+from pathlib import Path
+
+from scenarios.errors import SdcError, SpecError
+from scenarios.spec import (
+    ControllerSpec,
+    EgoSpec,
+    LaneKeepParams,
+    LidarSpec,
+    ObstacleSpec,
+    RoadSpec,
+    ScenarioMeta,
+    ScenarioSpec,
+    SeedParams,
+    TrafficSpec,
+    VehicleSpec,
+)
+from scenarios.toml_io import dumps_spec, load_spec
+
+#: the scenarios shipped with sdc
+CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
+
+__all__ = [
+    "CATALOG_DIR",
+    "ControllerSpec",
+    "EgoSpec",
+    "LaneKeepParams",
+    "LidarSpec",
+    "ObstacleSpec",
+    "RoadSpec",
+    "ScenarioMeta",
+    "ScenarioSpec",
+    "SdcError",
+    "SeedParams",
+    "SpecError",
+    "TrafficSpec",
+    "VehicleSpec",
+    "dumps_spec",
+    "load_spec",
+]

@@ -1,0 +1,64 @@
+"""Sizes of the things on the road: obstacle kinds and ego vehicle models.
+
+Plain data shared by the spec's validation, the world backends and the car's
+dynamics. Lengths and widths are full body dimensions in metres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: kind -> (length_m, width_m) of a stationary obstacle
+OBSTACLE_SIZES_M: dict[str, tuple[float, float]] = {
+    "car": (4.5, 1.8),
+    "truck": (12.0, 2.5),
+    "barrel": (0.6, 0.6),
+}
+
+
+@dataclass(frozen=True)
+class VehicleModel:
+    """Geometry and actuator limits of the ego car (kinematic bicycle).
+
+    The bicycle's reference point is the rear-axle centre.
+    """
+
+    name: str
+    wheelbase_m: float
+    track_m: float
+    length_m: float
+    width_m: float
+    rear_overhang_m: float  # rear bumper to rear axle
+    max_steer_rad: float
+    max_steer_rate_radps: float
+    max_accel_mps2: float
+    max_decel_mps2: float
+
+    @property
+    def center_ahead_of_rear_axle_m(self) -> float:
+        """Distance from the rear axle forward to the body centre [m]."""
+        return self.length_m / 2 - self.rear_overhang_m
+
+    @property
+    def front_ahead_of_rear_axle_m(self) -> float:
+        """Distance from the rear axle forward to the front bumper [m]."""
+        return self.length_m - self.rear_overhang_m
+
+
+# BMW X5 as in the lesson's Webots model: wheelbase 2.995 m, track 1.628 m,
+# body about 4.85 x 1.93 m with equal overhangs. The lesson's position-controlled
+# steering reaches 0.7 rad well within 0.64 s; a road car steers about 0.5 rad/s.
+_X5 = dict(
+    wheelbase_m=2.995,
+    track_m=1.628,
+    length_m=4.85,
+    width_m=1.93,
+    rear_overhang_m=(4.85 - 2.995) / 2,
+    max_steer_rad=0.75,
+    max_accel_mps2=3.0,
+    max_decel_mps2=8.0,
+)
+VEHICLE_MODELS: dict[str, VehicleModel] = {
+    "x5-lesson": VehicleModel(name="x5-lesson", max_steer_rate_radps=5.0, **_X5),
+    "x5-road": VehicleModel(name="x5-road", max_steer_rate_radps=0.5, **_X5),
+}

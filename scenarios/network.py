@@ -1,0 +1,82 @@
+"""SUMO road networks built with ``netconvert`` and cached by content hash.
+
+The road is one edge ``road`` from node ``start`` to node ``end`` whose shape is
+the centre line of :mod:`scenarios.road`; ``spreadType="center"`` puts the lanes
+on both sides of it, so SUMO's lane ``road_i`` is our lane ``i``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+from scenarios.errors import SdcError
+from scenarios.road import RoadGeometry
+from scenarios.spec import RoadSpec
+
+EDGE_ID = "road"
+
+
+def default_cache_dir() -> Path:
+    return Path.home() / ".cache" / "sdc" / "networks"
+
+
+def sumo_binary(name: str) -> str:
+    """Path of a SUMO tool (``netconvert``, ``sumo``) shipped by eclipse-sumo."""
+    import sumo  # the eclipse-sumo package
+
+    return str(Path(sumo.SUMO_HOME) / "bin" / name)
+
+
+def _xml_sources(road: RoadSpec, geometry: RoadGeometry) -> tuple[str, str]:
+    (x0, y0), (x1, y1) = geometry.center_xy[0], geometry.center_xy[-1]
+    nodes = (
+        "<nodes>\n"
+        f'  <node id="start" x="{x0:.6f}" y="{y0:.6f}"/>\n'
+        f'  <node id="end" x="{x1:.6f}" y="{y1:.6f}"/>\n'
+        "</nodes>\n"
+    )
+    shape = " ".join(f"{x:.6f},{y:.6f}" for x, y in geometry.center_xy)
+    edges = (
+        "<edges>\n"
+        f'  <edge id="{EDGE_ID}" from="start" to="end" numLanes="{road.lanes}" '
+        f'speed="{road.speed_limit_mps:.6f}" width="{road.lane_width_m:.6f}" '
+        f'spreadType="center" shape="{shape}"/>\n'
+        "</edges>\n"
+    )
+    return nodes, edges
+
+
+def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
+    """Path of the ``.net.xml`` for ``road``, built on first use and cached.
+
+    Concurrent builders of the same network are safe: each writes a temporary
+    file and renames it into place.
+    """
+    cache_dir = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
+    tool = sumo_binary("netconvert")
+    digest = hashlib.sha256(f"{tool}\n{nodes}\n{edges}".encode()).hexdigest()[:20]
+    target = cache_dir / f"{digest}.net.xml"
+    if target.exists():
+        return target
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
+        tmp = Path(tmp)
+        (tmp / "road.nod.xml").write_text(nodes)
+        (tmp / "road.edg.xml").write_text(edges)
+        out = tmp / "road.net.xml"
+        proc = subprocess.run(
+            [tool, "--node-files", str(tmp / "road.nod.xml"),
+             "--edge-files", str(tmp / "road.edg.xml"), "--output-file", str(out),
+             "--offset.disable-normalization", "--no-turnarounds", "--no-warnings",
+             "--precision", "4"],
+            capture_output=True, text=True, check=False,
+        )
+        if proc.returncode != 0:
+            raise SdcError(f"netconvert failed: {proc.stderr.strip()[-2000:]}")
+        os.replace(out, target)
+    return target

@@ -1,0 +1,122 @@
+"""Road geometry in plain numpy: a centre-line polyline with lanes on both sides.
+
+Answers in road coordinates (``s`` metres along the centre line, ``d`` metres to
+its left) and back in world x, y. Lane ``i`` (0 = rightmost) has its centre at
+``d = (i - (lanes - 1) / 2) * lane_width_m``; the road edges are at
+``d = +-lanes * lane_width_m / 2``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from scenarios.spec import RoadSpec
+
+#: largest gap between a curve's polyline chord and its arc [m]
+CHORD_TOLERANCE_M = 0.001
+
+
+def centre_line_xy(road: RoadSpec) -> np.ndarray:
+    """The centre line as an (M, 2) polyline starting at the origin heading +x [m]."""
+    if road.kind == "straight":
+        return np.array([[0.0, 0.0], [road.length_m, 0.0]])
+    radius_m = road.curve_radius_m
+    outer_m = abs(radius_m) + road.half_width_m
+    step_rad = 2 * math.acos(1 - CHORD_TOLERANCE_M / outer_m)
+    sweep_rad = road.length_m / abs(radius_m)
+    theta = np.linspace(0.0, sweep_rad, max(2, math.ceil(sweep_rad / step_rad) + 1))
+    # a left curve (radius > 0) turns around (0, radius); a right one around (0, -|radius|)
+    x = abs(radius_m) * np.sin(theta)
+    y = radius_m * (1 - np.cos(theta))
+    return np.column_stack([x, y])
+
+
+class RoadGeometry:
+    """A one-way road along a polyline centre line."""
+
+    def __init__(self, center_xy: np.ndarray, lanes: int, lane_width_m: float):
+        self.center_xy = np.asarray(center_xy, dtype=float)
+        self.lanes = lanes
+        self.lane_width_m = lane_width_m
+        delta = np.diff(self.center_xy, axis=0)
+        self._seg_len_m = np.hypot(delta[:, 0], delta[:, 1])
+        self._seg_dir = delta / self._seg_len_m[:, None]
+        self._seg_start_s_m = np.concatenate([[0.0], np.cumsum(self._seg_len_m)[:-1]])
+        self.length_m = float(self._seg_len_m.sum())
+
+    @classmethod
+    def from_spec(cls, road: RoadSpec) -> RoadGeometry:
+        return cls(centre_line_xy(road), road.lanes, road.lane_width_m)
+
+    @property
+    def half_width_m(self) -> float:
+        return self.lanes * self.lane_width_m / 2
+
+    def lane_center_d_m(self, lane: int) -> float:
+        return (lane - (self.lanes - 1) / 2) * self.lane_width_m
+
+    def to_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Road coordinates ``(s_m, d_m)`` of (K, 2) points.
+
+        Points before the start or past the end are projected on the extended
+        first or last segment, so ``s`` is negative or above ``length_m`` there.
+        """
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        rel = xy[:, None, :] - self.center_xy[None, :-1, :]  # (K, S, 2)
+        along = np.einsum("ksj,sj->ks", rel, self._seg_dir)
+        low = np.zeros_like(self._seg_len_m)
+        high = self._seg_len_m.copy()
+        low[0], high[-1] = -np.inf, np.inf
+        along_c = np.clip(along, low, high)
+        foot = self.center_xy[None, :-1, :] + along_c[..., None] * self._seg_dir[None]
+        dist2 = np.sum((xy[:, None, :] - foot) ** 2, axis=-1)
+        seg = np.argmin(dist2, axis=1)
+        k = np.arange(len(xy))
+        direction = self._seg_dir[seg]
+        r = rel[k, seg]
+        s_m = self._seg_start_s_m[seg] + along_c[k, seg]
+        d_m = direction[:, 0] * r[:, 1] - direction[:, 1] * r[:, 0]
+        return s_m, d_m
+
+    def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
+        return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
+                       0, len(self._seg_len_m) - 1)
+
+    def heading_at(self, s_m) -> np.ndarray:
+        """Heading of the centre line at ``s_m`` [rad, CCW from +x]."""
+        direction = self._seg_dir[self._segment_at(np.asarray(s_m, dtype=float))]
+        return np.arctan2(direction[..., 1], direction[..., 0])
+
+    def xy_at(self, s_m, d_m) -> np.ndarray:
+        """World points at road coordinates (broadcast), shape (..., 2) [m]."""
+        s_m, d_m = np.broadcast_arrays(np.asarray(s_m, float), np.asarray(d_m, float))
+        seg = self._segment_at(s_m)
+        direction = self._seg_dir[seg]
+        normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
+        along = (s_m - self._seg_start_s_m[seg])[..., None]
+        return self.center_xy[seg] + along * direction + d_m[..., None] * normal
+
+    def offset_polyline(self, d_m: float) -> np.ndarray:
+        """The polyline at constant lateral offset ``d_m`` (vertices on the bisectors)."""
+        normals = np.stack([-self._seg_dir[:, 1], self._seg_dir[:, 0]], axis=-1)
+        vertex_normals = np.concatenate([normals[:1], normals[:-1] + normals[1:], normals[-1:]])
+        vertex_normals[1:-1] /= np.sum(vertex_normals[1:-1] * normals[1:], axis=1)[:, None]
+        return self.center_xy + d_m * vertex_normals
+
+    def edge_segments(self) -> np.ndarray:
+        """Both road edges as (S, 4) segments ``[x0, y0, x1, y1]`` [m]."""
+        parts = []
+        for d_m in (-self.half_width_m, self.half_width_m):
+            line = self.offset_polyline(d_m)
+            parts.append(np.hstack([line[:-1], line[1:]]))
+        return np.vstack(parts)
+
+    def to_plain(self) -> dict:
+        """JSON-able description, enough to draw the road without SUMO."""
+        return {
+            "center_xy": self.center_xy.round(6).tolist(),
+            "lanes": self.lanes,
+            "lane_width_m": self.lane_width_m,
+        }

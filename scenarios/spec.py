@@ -1,0 +1,286 @@
+"""The scenario specification: frozen dataclasses, validated on construction.
+
+Positions are metres along the road's centre line, lane 0 is the rightmost lane,
+lateral offsets are positive to the left (ISO 8855). ``position_m`` and
+``start_m`` locate the centre of the obstacle's or the ego's body.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, Literal
+
+from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.errors import SpecError
+from scenarios.fields import Spec, build, num, to_plain
+
+spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
+
+
+@spec_class
+class ScenarioMeta(Spec):
+    name: str
+    duration_s: float = num(gt=0, le=36_000)
+    step_s: float = num(0.064, gt=0, le=1.0)
+    seed: int = num(0, ge=0, lt=2**31)
+
+
+@spec_class
+class RoadSpec(Spec):
+    """A one-way N-lane road starting at the origin heading +x.
+
+    ``curve_radius_m`` (curve only) is signed: positive turns left, negative right.
+    """
+
+    kind: Literal["straight", "curve"] = "straight"
+    length_m: float = num(gt=0, le=20_000)
+    lanes: int = num(ge=1, le=8)
+    lane_width_m: float = num(3.5, ge=2.0, le=6.0)
+    speed_limit_mps: float = num(33.33, gt=0, le=70)
+    curve_radius_m: float | None = None
+    see_edges: bool = True
+
+    @property
+    def half_width_m(self) -> float:
+        return self.lanes * self.lane_width_m / 2
+
+    def lane_center_d_m(self, lane: int) -> float:
+        """Lateral offset of a lane's centre from the road's centre line [m]."""
+        return (lane - (self.lanes - 1) / 2) * self.lane_width_m
+
+
+@spec_class
+class TrafficSpec(Spec):
+    """Background traffic entering at the road's start; ``speed_dev`` is relative."""
+
+    flow_vph_per_lane: float = num(0.0, ge=0, le=3600)
+    speed_mean_mps: float = num(25.0, gt=0, le=70)
+    speed_dev: float = num(0.1, ge=0, le=1)
+
+
+@spec_class
+class ObstacleSpec(Spec):
+    kind: Literal["car", "truck", "barrel"]
+    lane: int = num(ge=0)
+    position_m: float = num(ge=0)
+    lateral_offset_m: float = 0.0
+
+    @property
+    def size_m(self) -> tuple[float, float]:
+        return OBSTACLE_SIZES_M[self.kind]
+
+
+@spec_class
+class EgoSpec(Spec):
+    lane: int = num(ge=0)
+    start_m: float = num(ge=0)
+    speed_mps: float = num(ge=0, le=70)
+
+
+@spec_class
+class LidarSpec(Spec):
+    """Lesson semantics (SICK LMS 291): ``beams`` ranges over ``fov_deg``, index 0 leftmost."""
+
+    beams: int = num(180, ge=1, le=4096)
+    fov_deg: float = num(180.0, gt=0, le=360)
+    max_range_m: float = num(80.0, gt=0, le=1000)
+    noise_std_m: float = num(0.0, ge=0, le=10)
+    mount_ahead_m: float = num(3.85, ge=-10, le=10)  # ahead of the rear axle
+
+
+@spec_class
+class VehicleSpec(Spec):
+    model: Literal["x5-lesson", "x5-road"] = "x5-lesson"
+    friction_mu: float = num(0.9, gt=0, le=2.0)
+
+
+@spec_class
+class LaneKeepParams(Spec):
+    """Bang-bang lane keeping on the lane centre's offset at a look-ahead point.
+
+    Steer ``keep_steer_rad`` toward the centre while the look-ahead offset exceeds
+    ``deadband_m``; otherwise (and when the lane is not sensed) keep the last angle.
+    """
+
+    keep_steer_rad: float = num(0.1, ge=0, le=1.0)
+    look_ahead_m: float = num(5.0, ge=0, le=100)
+    deadband_m: float = num(0.0, ge=0, le=5)
+
+
+@spec_class
+class SeedParams(LaneKeepParams):
+    """The lesson's avoid-then-return maneuver; periods are control steps."""
+
+    detect_range_m: float = num(5.0, gt=0)
+    detect_beams: int = num(11, ge=1)
+    avoid_steer_rad: float = num(0.7, ge=0, le=1.5)
+    left_periods: int = num(10, ge=0)
+    straight_periods: int = num(20, ge=0)
+    right_periods: int = num(10, ge=0)
+
+
+CONTROLLER_PARAMS: dict[str, type[LaneKeepParams]] = {
+    "seed": SeedParams,
+    "lane-keep": LaneKeepParams,
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class ControllerSpec:
+    name: str
+    params: LaneKeepParams
+
+    @classmethod
+    def from_plain(cls, data: Any, path: str = "controller") -> ControllerSpec:
+        if not isinstance(data, dict):
+            raise SpecError(path, f"must be a table, got {type(data).__name__}")
+        name = data.get("name", "seed")
+        if name not in CONTROLLER_PARAMS:
+            known = ", ".join(CONTROLLER_PARAMS)
+            raise SpecError(f"{path}.name", f"unknown controller {name!r} (known: {known})")
+        params = {k: v for k, v in data.items() if k != "name"}
+        return cls(name, build(CONTROLLER_PARAMS[name], params, path))
+
+    def to_plain(self) -> dict:
+        return {"name": self.name, **to_plain(self.params)}
+
+    def renamed(self, name: str) -> ControllerSpec:
+        """The controller ``name`` with every parameter the two share carried over."""
+        plain = self.to_plain()
+        target = CONTROLLER_PARAMS.get(name)
+        shared = {f.name for f in dataclasses.fields(target)} if target else set()
+        return ControllerSpec.from_plain(
+            {"name": name, **{k: v for k, v in plain.items() if k in shared}}
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class ScenarioSpec:
+    scenario: ScenarioMeta
+    road: RoadSpec
+    ego: EgoSpec
+    traffic: TrafficSpec = TrafficSpec()
+    obstacles: tuple[ObstacleSpec, ...] = ()
+    lidar: LidarSpec = LidarSpec()
+    vehicle: VehicleSpec = VehicleSpec()
+    controller: ControllerSpec = ControllerSpec("seed", SeedParams())
+
+    def __post_init__(self):
+        _check_consistency(self)
+
+    @classmethod
+    def from_plain(cls, data: Any) -> ScenarioSpec:
+        """Build from the plain mapping of a TOML file; errors name the field path."""
+        if not isinstance(data, dict):
+            raise SpecError("", "a scenario must be a table")
+        tables = {"scenario", "road", "ego", "traffic", "obstacles", "lidar", "vehicle",
+                  "controller"}
+        for key in data:
+            if key not in tables:
+                raise SpecError(key, f"unknown table (known: {', '.join(sorted(tables))})")
+        for key in ("scenario", "road", "ego"):
+            if key not in data:
+                raise SpecError(key, "table is required")
+        obstacles = data.get("obstacles", [])
+        if not isinstance(obstacles, list):
+            raise SpecError("obstacles", "must be an array of tables ([[obstacles]])")
+        return cls(
+            scenario=build(ScenarioMeta, data["scenario"], "scenario"),
+            road=build(RoadSpec, data["road"], "road"),
+            ego=build(EgoSpec, data["ego"], "ego"),
+            traffic=build(TrafficSpec, data.get("traffic", {}), "traffic"),
+            obstacles=tuple(
+                build(ObstacleSpec, o, f"obstacles[{i}]") for i, o in enumerate(obstacles)
+            ),
+            lidar=build(LidarSpec, data.get("lidar", {}), "lidar"),
+            vehicle=build(VehicleSpec, data.get("vehicle", {}), "vehicle"),
+            controller=ControllerSpec.from_plain(data.get("controller", {"name": "seed"})),
+        )
+
+    def to_plain(self) -> dict:
+        plain = {
+            "scenario": to_plain(self.scenario),
+            "road": to_plain(self.road),
+            "traffic": to_plain(self.traffic),
+            "ego": to_plain(self.ego),
+            "lidar": to_plain(self.lidar),
+            "vehicle": to_plain(self.vehicle),
+            "controller": self.controller.to_plain(),
+        }
+        if self.obstacles:
+            plain["obstacles"] = [to_plain(o) for o in self.obstacles]
+        return plain
+
+    def with_controller(self, name: str) -> ScenarioSpec:
+        return dataclasses.replace(self, controller=self.controller.renamed(name))
+
+    def with_seed(self, seed: int) -> ScenarioSpec:
+        return dataclasses.replace(self, scenario=dataclasses.replace(self.scenario, seed=seed))
+
+
+def _overlap_sd(a: tuple[float, float, float, float], b: tuple[float, float, float, float]):
+    """Do two road-aligned rectangles (s, d, length, width) overlap?"""
+    return abs(a[0] - b[0]) < (a[2] + b[2]) / 2 and abs(a[1] - b[1]) < (a[3] + b[3]) / 2
+
+
+def _check_consistency(spec: ScenarioSpec) -> None:
+    road = spec.road
+    if road.kind == "curve":
+        radius = road.curve_radius_m
+        if radius is None:
+            raise SpecError("road.curve_radius_m", 'is required for kind "curve"')
+        if abs(radius) < road.half_width_m + 5.0:
+            raise SpecError(
+                "road.curve_radius_m",
+                f"|{radius}| is too tight for a {2 * road.half_width_m:g} m wide road "
+                f"(needs >= {road.half_width_m + 5.0:g})",
+            )
+        if road.length_m / abs(radius) > 1.5 * math.pi:
+            raise SpecError("road.length_m", "the curve would turn more than 270 degrees")
+    elif road.curve_radius_m is not None:
+        raise SpecError("road.curve_radius_m", 'only applies to kind "curve"')
+
+    if spec.scenario.duration_s < spec.scenario.step_s:
+        raise SpecError("scenario.duration_s", "must be at least one step (step_s)")
+    traffic = spec.traffic
+    if traffic.flow_vph_per_lane > 0 and traffic.speed_mean_mps > 1.5 * road.speed_limit_mps:
+        raise SpecError(
+            "traffic.speed_mean_mps",
+            f"{spec.traffic.speed_mean_mps} is above 1.5 x road.speed_limit_mps "
+            f"({road.speed_limit_mps})",
+        )
+
+    model = VEHICLE_MODELS[spec.vehicle.model]
+    ego = spec.ego
+    if ego.lane >= road.lanes:
+        raise SpecError("ego.lane", f"{ego.lane} >= lanes ({road.lanes})")
+    if ego.start_m - model.length_m / 2 < 0 or ego.start_m + model.length_m / 2 >= road.length_m:
+        raise SpecError(
+            "ego.start_m",
+            f"{ego.start_m} puts the {model.length_m} m car off the {road.length_m} m road",
+        )
+    ego_box = (ego.start_m, road.lane_center_d_m(ego.lane), model.length_m, model.width_m)
+
+    for i, obstacle in enumerate(spec.obstacles):
+        path = f"obstacles[{i}]"
+        length_m, width_m = obstacle.size_m
+        if obstacle.lane >= road.lanes:
+            raise SpecError(f"{path}.lane", f"{obstacle.lane} >= lanes ({road.lanes})")
+        if obstacle.position_m + length_m / 2 > road.length_m or obstacle.position_m < length_m / 2:
+            raise SpecError(
+                f"{path}.position_m",
+                f"{obstacle.position_m} puts the {length_m} m {obstacle.kind} beyond the "
+                f"{road.length_m} m road",
+            )
+        d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
+        if abs(d_m) > road.half_width_m:
+            raise SpecError(
+                f"{path}.lateral_offset_m",
+                f"{obstacle.lateral_offset_m} puts the {obstacle.kind}'s centre off the road",
+            )
+        if _overlap_sd(ego_box, (obstacle.position_m, d_m, length_m, width_m)):
+            raise SpecError(
+                "ego.start_m",
+                f"the ego starts inside {path} ({obstacle.kind} at {obstacle.position_m} m)",
+            )

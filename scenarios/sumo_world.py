@@ -1,0 +1,148 @@
+"""The SUMO world backend: road, traffic and obstacles in libsumo, the ego pushed in.
+
+libsumo holds one simulation per process; a :class:`SumoWorld` owns it from
+:meth:`start` to :meth:`close`. SUMO places a vehicle by its front-bumper centre
+and measures angles in degrees clockwise from north; this module converts to and
+from our boxes (body centre, yaw counter-clockwise from +x).
+
+SUMO traffic sees each obstacle as a vehicle stopped at its lane's centre; the
+obstacle's lateral offset exists only in our geometry (collisions are ours).
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.network import EDGE_ID, build_network
+from scenarios.road import RoadGeometry
+from scenarios.snapshot import NO_BOXES, Snapshot, obstacle_boxes
+from scenarios.spec import ScenarioSpec
+
+EGO_ID = "ego"
+OBSTACLE_PREFIX = "obstacle."
+TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
+
+
+def routes_xml(spec: ScenarioSpec) -> str:
+    """The ``.rou.xml`` text: vehicle types, obstacles as stopped vehicles, flows."""
+    model = VEHICLE_MODELS[spec.vehicle.model]
+    traffic = spec.traffic
+    factor = traffic.speed_mean_mps / spec.road.speed_limit_mps
+    lines = [
+        "<routes>",
+        f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
+        f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},0.2,2.0)"/>',
+        f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}"/>',
+    ]
+    lines += [
+        f'  <vType id="obstacle_{kind}" length="{length}" width="{width}"/>'
+        for kind, (length, width) in OBSTACLE_SIZES_M.items()
+    ]
+    lines.append(f'  <route id="r0" edges="{EDGE_ID}"/>')
+    for i, obstacle in enumerate(spec.obstacles):
+        # SUMO gives every lane of a curve the centre line's length and names the front bumper
+        front_m = obstacle.position_m + obstacle.size_m[0] / 2
+        lines += [
+            f'  <vehicle id="{OBSTACLE_PREFIX}{i}" type="obstacle_{obstacle.kind}" route="r0" '
+            f'depart="0" departLane="{obstacle.lane}" departPos="{front_m:.6f}" departSpeed="0">',
+            f'    <stop lane="{EDGE_ID}_{obstacle.lane}" endPos="{front_m:.6f}" duration="1e9"/>',
+            "  </vehicle>",
+        ]
+    if traffic.flow_vph_per_lane > 0:
+        lines += [
+            f'  <flow id="traffic.{lane}" type="traffic" route="r0" begin="0" '
+            f'end="{spec.scenario.duration_s}" vehsPerHour="{traffic.flow_vph_per_lane}" '
+            f'departLane="{lane}" departSpeed="desired"/>'
+            for lane in range(spec.road.lanes)
+        ]
+    lines.append("</routes>")
+    return "\n".join(lines) + "\n"
+
+
+def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
+    """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
+    cx, cy, yaw, length, _ = box
+    return (cx + length / 2 * math.cos(yaw), cy + length / 2 * math.sin(yaw),
+            90.0 - math.degrees(yaw))
+
+
+class SumoWorld:
+    """One run of a scenario in libsumo."""
+
+    backend = "sumo"
+
+    def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None):
+        self.spec = spec
+        self.road = road
+        self.cache_dir = cache_dir
+        self._obstacle_boxes = obstacle_boxes(spec, road)
+        self._sizes: dict[str, tuple[float, float]] = {}
+        self._tmp: tempfile.TemporaryDirectory | None = None
+        self._sumo = None
+
+    def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
+        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot."""
+        import libsumo  # imported here: only this backend needs the simulator
+
+        net = build_network(self.spec.road, self.cache_dir)
+        self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
+        routes = Path(self._tmp.name) / "scenario.rou.xml"
+        routes.write_text(routes_xml(self.spec))
+        libsumo.start([
+            "sumo", "--net-file", str(net), "--route-files", str(routes),
+            "--step-length", repr(self.spec.scenario.step_s),
+            "--seed", str(self.spec.scenario.seed),
+            "--collision.action", "none", "--time-to-teleport", "-1",
+            "--no-step-log", "true", "--no-warnings", "true",
+        ])
+        self._sumo = libsumo
+        ego = self.spec.ego
+        libsumo.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now",
+                            departLane=str(ego.lane), departSpeed="0")
+        libsumo.vehicle.setSpeedMode(EGO_ID, 0)
+        libsumo.vehicle.setLaneChangeMode(EGO_ID, 0)
+        return self.step(ego_box, ego_speed_mps)
+
+    def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
+        """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
+        sumo = self._sumo
+        x, y, angle_deg = _sumo_pose(ego_box)
+        sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
+        sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
+        sumo.simulationStep()
+        return Snapshot(sumo.simulation.getTime(), self._traffic_boxes(), self._obstacle_boxes)
+
+    def _traffic_boxes(self) -> np.ndarray:
+        vehicle = self._sumo.vehicle
+        rows = []
+        for vid in vehicle.getIDList():
+            if vid == EGO_ID or vid.startswith(OBSTACLE_PREFIX):
+                continue
+            size = self._sizes.get(vid)
+            if size is None:
+                size = self._sizes[vid] = (vehicle.getLength(vid), vehicle.getWidth(vid))
+            fx, fy = vehicle.getPosition(vid)
+            yaw = math.radians(90.0 - vehicle.getAngle(vid))
+            length, width = size
+            rows.append((fx - length / 2 * math.cos(yaw), fy - length / 2 * math.sin(yaw),
+                         yaw, length, width))
+        return np.array(rows) if rows else NO_BOXES
+
+    def close(self) -> None:
+        if self._sumo is not None:
+            self._sumo.close()
+            self._sumo = None
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+    def __enter__(self) -> SumoWorld:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

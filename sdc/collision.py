@@ -1,0 +1,29 @@
+"""Our own collision test: the ego's body box against obstacles, traffic and the
+road edges, every step (SUMO does not see an ego that straddles two lanes)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from scenarios.road import RoadGeometry
+from scenarios.snapshot import Snapshot
+from sdc.geometry import box_corners, boxes_overlap
+
+OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
+
+
+def collision_with(ego_box: np.ndarray, snapshot: Snapshot, road: RoadGeometry) -> str | None:
+    """What the ego touches (``obstacle``, ``vehicle``, ``road_edge``) or ``None``.
+
+    A body corner beyond either road edge, while alongside the road, counts as
+    a road-edge collision.
+    """
+    if len(snapshot.obstacle_boxes) and boxes_overlap(ego_box, snapshot.obstacle_boxes).any():
+        return OBSTACLE
+    if len(snapshot.traffic_boxes) and boxes_overlap(ego_box, snapshot.traffic_boxes).any():
+        return VEHICLE
+    s_m, d_m = road.to_frenet(box_corners(ego_box[None])[0])
+    alongside = (s_m >= 0) & (s_m <= road.length_m)
+    if np.any(alongside & (np.abs(d_m) > road.half_width_m)):
+        return ROAD_EDGE
+    return None

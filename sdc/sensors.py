@@ -1,0 +1,89 @@
+"""The ego's senses: a planar lidar ray-cast against boxes and road edges, and
+its offset from the lane centre. Both see plain arrays, never a simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from scenarios.road import RoadGeometry
+from scenarios.spec import LidarSpec
+from sdc.geometry import ray_box_ranges, ray_segment_ranges
+
+
+def beam_angles_rad(beams: int, fov_deg: float) -> np.ndarray:
+    """Beam directions relative to the car's heading, index 0 leftmost.
+
+    Beams are ``fov_deg / beams`` apart and index ``beams // 2`` looks straight
+    ahead, as in the lesson's 180-beam range image (ranges[85:96] is the centre).
+    """
+    step_rad = math.radians(fov_deg) / beams
+    return (beams // 2 - np.arange(beams)) * step_rad
+
+
+class Lidar:
+    """A single-layer scanning lidar (the lesson's SICK LMS 291 semantics)."""
+
+    def __init__(self, spec: LidarSpec, edge_segments: np.ndarray, rng: np.random.Generator):
+        self.spec = spec
+        self.angles_rad = beam_angles_rad(spec.beams, spec.fov_deg)
+        self.edge_segments = edge_segments
+        seg = edge_segments
+        self._seg_mid = (seg[:, :2] + seg[:, 2:]) / 2
+        self._seg_half_len = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / 2
+        self._rng = rng
+
+    def scan(self, origin_xy: np.ndarray, yaw_rad: float, boxes: np.ndarray) -> np.ndarray:
+        """Range image [m] from a sensor at ``origin_xy`` heading ``yaw_rad``:
+        ``beams`` floats, ``inf`` where nothing is hit within ``max_range_m``."""
+        max_range = self.spec.max_range_m
+        angles = yaw_rad + self.angles_rad
+        half_diag = np.hypot(boxes[:, 3], boxes[:, 4]) / 2
+        near = np.hypot(*(boxes[:, :2] - origin_xy).T) <= max_range + half_diag
+        ranges = ray_box_ranges(origin_xy, angles, boxes[near], max_range)
+        if len(self.edge_segments):
+            dist = np.hypot(*(self._seg_mid - origin_xy).T)
+            near_seg = dist <= max_range + self._seg_half_len
+            edges = ray_segment_ranges(origin_xy, angles, self.edge_segments[near_seg], max_range)
+            ranges = np.minimum(ranges, edges)
+        if self.spec.noise_std_m > 0:
+            noise = self._rng.normal(0.0, self.spec.noise_std_m, size=ranges.shape)
+            ranges = np.where(np.isfinite(ranges), np.maximum(ranges + noise, 0.0), ranges)
+        return ranges
+
+    def points(self, ranges: np.ndarray) -> np.ndarray:
+        """The returns as an (n, 2) point cloud in the sensor frame (x ahead, y left) [m]."""
+        hit = np.isfinite(ranges)
+        a = self.angles_rad[hit]
+        return np.column_stack([ranges[hit] * np.cos(a), ranges[hit] * np.sin(a)])
+
+
+@dataclass(frozen=True)
+class LaneReading:
+    offset_m: float  # body centre's signed offset from the lane centre, + = left
+    heading_error_rad: float  # car yaw minus lane heading, + = pointing left of the lane
+    preview_offset_m: float  # offset of the point look_ahead_m ahead of the body centre
+    s_m: float  # body centre's position along the road
+
+
+class LaneSensor:
+    """Where the car is relative to its own lane (the spec's ``ego.lane``)."""
+
+    def __init__(self, road: RoadGeometry, lane: int):
+        self.road = road
+        self.lane_d_m = road.lane_center_d_m(lane)
+
+    def measure(self, center_xy: np.ndarray, yaw_rad: float,
+                look_ahead_m: float) -> LaneReading | None:
+        """The reading for a body centre and heading; ``None`` past either end of the road."""
+        ahead = center_xy + look_ahead_m * np.array([math.cos(yaw_rad), math.sin(yaw_rad)])
+        s_m, d_m = self.road.to_frenet(np.vstack([center_xy, ahead]))
+        if not 0.0 <= s_m[0] <= self.road.length_m:
+            return None
+        heading_error = yaw_rad - float(self.road.heading_at(s_m[0]))
+        heading_error = (heading_error + math.pi) % (2 * math.pi) - math.pi
+        return LaneReading(float(d_m[0] - self.lane_d_m), heading_error,
+                           float(d_m[1] - self.lane_d_m), float(s_m[0]))

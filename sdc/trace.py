@@ -1,0 +1,103 @@
+"""The per-step record of one run: columns of numpy arrays, a content hash,
+and a Parquet file that carries the spec and road geometry in its metadata.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+#: scalar float columns, in file order
+FLOAT_COLUMNS = (
+    "t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
+    "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m",
+)
+#: list-of-float32 columns: the range image and the traffic boxes (N x 5, flattened)
+LIST_COLUMNS = ("lidar", "traffic")
+METADATA_KEY = b"sdc"
+
+
+@dataclass(frozen=True)
+class Trace:
+    """One row per step. ``x_m, y_m`` is the rear-axle centre; ``phase`` is the
+    controller's phase; ``lidar`` the range image (``inf`` = no return);
+    ``traffic`` the other vehicles' boxes ``[cx, cy, yaw, length, width]``."""
+
+    floats: dict[str, np.ndarray]
+    phase: list[str]
+    lidar: list[np.ndarray]
+    traffic: list[np.ndarray]
+
+    def __len__(self) -> int:
+        return len(self.phase)
+
+    def sha256(self) -> str:
+        """Hash of the content (not of the file): equal traces, equal hashes."""
+        h = hashlib.sha256()
+        for name in FLOAT_COLUMNS:
+            h.update(name.encode())
+            h.update(np.ascontiguousarray(self.floats[name], dtype="<f8").tobytes())
+        h.update("\n".join(self.phase).encode())
+        for name, rows in (("lidar", self.lidar), ("traffic", self.traffic)):
+            h.update(name.encode())
+            for row in rows:
+                h.update(len(row).to_bytes(4, "little"))
+                h.update(np.ascontiguousarray(row, dtype="<f4").tobytes())
+        return h.hexdigest()
+
+    def to_table(self, metadata: dict) -> pa.Table:
+        columns = {name: pa.array(self.floats[name], pa.float64()) for name in FLOAT_COLUMNS}
+        columns["phase"] = pa.array(self.phase, pa.string())
+        for name, rows in (("lidar", self.lidar), ("traffic", self.traffic)):
+            columns[name] = pa.array([np.asarray(r, np.float32) for r in rows],
+                                     pa.list_(pa.float32()))
+        table = pa.table(columns)
+        return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
+
+    def write(self, path: str | Path, metadata: dict) -> None:
+        """Write atomically: a crash leaves either no file or the whole one."""
+        path = Path(path)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            pq.write_table(self.to_table(metadata), tmp)
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
+
+
+class TraceRecorder:
+    """Collects rows during a run; :meth:`finish` turns them into a :class:`Trace`."""
+
+    def __init__(self):
+        self._floats: dict[str, list[float]] = {name: [] for name in FLOAT_COLUMNS}
+        self._phase: list[str] = []
+        self._lidar: list[np.ndarray] = []
+        self._traffic: list[np.ndarray] = []
+
+    def add(self, *, phase: str, lidar: np.ndarray, traffic: np.ndarray, **floats: float):
+        for name in FLOAT_COLUMNS:
+            self._floats[name].append(floats[name])
+        self._phase.append(phase)
+        self._lidar.append(np.asarray(lidar, np.float32))
+        self._traffic.append(np.asarray(traffic, np.float32).ravel())
+
+    def finish(self) -> Trace:
+        floats = {name: np.array(values, dtype=float) for name, values in self._floats.items()}
+        return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic))
+
+
+def read_trace(path: str | Path) -> tuple[Trace, dict]:
+    """A trace and its metadata (spec, road, run) from a Parquet file."""
+    table = pq.read_table(path)
+    metadata = json.loads(table.schema.metadata[METADATA_KEY])
+    floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
+    lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]
+             for name in LIST_COLUMNS}
+    return Trace(floats, table.column("phase").to_pylist(), **lists), metadata

@@ -1,0 +1,100 @@
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from scenarios import CATALOG_DIR
+from scenarios.toml_io import dumps_plain
+from sdc.cli import main
+
+LESSON = str(CATALOG_DIR / "seed-lesson.toml")
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+def test_help_lists_the_commands_and_exit_codes():
+    result = invoke("--help")
+    assert result.exit_code == 0
+    assert "run" in result.output and "demo" in result.output and "130" in result.output
+    assert "--trace" in invoke("run", "--help").output
+
+
+@pytest.mark.slow
+def test_run_json_prints_the_row_on_the_last_line(tmp_path):
+    trace = tmp_path / "t.parquet"
+    result = invoke("run", LESSON, "--json", "--trace", str(trace), "--seed", "5")
+    assert result.exit_code == 0, result.output
+    row = json.loads(result.output.strip().splitlines()[-1])
+    assert row["seed"] == 5 and row["controller"] == "seed" and row["status"] == "ok"
+    for key in ("collision", "collision_with", "maneuver_started", "returned_to_lane",
+                "trace_sha256", "termination", "sim_time_s", "steps", "run_id"):
+        assert key in row
+    assert trace.exists()
+
+
+@pytest.mark.slow
+def test_run_summary_is_readable():
+    result = invoke("run", LESSON, "--controller", "lane-keep")
+    assert result.exit_code == 0  # a collision is an outcome, not an error
+    assert "COLLISION with obstacle" in result.output
+
+
+def _spec_file(tmp_path, lesson_plain, edit) -> str:
+    edit(lesson_plain)
+    path = tmp_path / "spec.toml"
+    path.write_text(dumps_plain(lesson_plain))
+    return str(path)
+
+
+# (how to break the input, the field the message must name)
+BAD = [
+    (lambda p: p["obstacles"][0].update(lane=4), "obstacles[0].lane: 4 >= lanes (3)"),
+    (lambda p: p["ego"].update(start_m=40.0), "ego.start_m"),
+    (lambda p: p["obstacles"][0].update(position_m=1000.0), "obstacles[0].position_m"),
+    (lambda p: p["road"].update(kind="spiral"), "road.kind"),
+    (lambda p: p["road"].update(lanes="three"), "road.lanes"),
+    (lambda p: p["road"].update(length_m=-1.0), "road.length_m"),
+    (lambda p: p["ego"].update(wings=True), "ego.wings: unknown key"),
+    (lambda p: p["lidar"].update(beams=0), "lidar.beams"),
+    (lambda p: p["controller"].update(name="magic"), "controller.name"),
+    (lambda p: p["scenario"].update(step_s=-0.1), "scenario.step_s"),
+    (lambda p: p["road"].update(kind="curve"), "road.curve_radius_m"),
+    (lambda p: p.pop("road"), "road: table is required"),
+]
+
+
+@pytest.mark.parametrize(("edit", "field"), BAD, ids=[f for _, f in BAD])
+def test_bad_spec_exits_2_naming_the_field_and_writes_nothing(tmp_path, lesson_plain, edit,
+                                                              field):
+    trace = tmp_path / "out.parquet"
+    result = invoke("run", _spec_file(tmp_path, lesson_plain, edit), "--trace", str(trace))
+    assert result.exit_code == 2
+    assert field in result.output
+    assert "Traceback" not in result.output
+    assert not trace.exists()
+    assert list(tmp_path.iterdir()) == [tmp_path / "spec.toml"]
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["run", "missing.toml"], "cannot read missing.toml"),
+    (["run", LESSON, "--trace", "out.csv"], "--trace"),
+    (["run", LESSON, "--trace", "no/such/dir/t.parquet"], "--trace"),
+    (["run", LESSON, "--controller", "magic"], "--controller"),
+    (["run", LESSON, "--seed", "-3"], "--seed"),
+    (["run", LESSON, "--backend", "carla"], "--backend"),
+])
+def test_bad_arguments_exit_2_naming_the_option(args, message):
+    result = invoke(*args)
+    assert result.exit_code == 2
+    assert message in result.output
+
+
+def test_invalid_toml_exits_2(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("[road\nlanes = 3\n")
+    result = invoke("run", str(path))
+    assert result.exit_code == 2 and "invalid TOML" in result.output

@@ -1,0 +1,64 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from scenarios import RoadSpec
+from scenarios.network import EDGE_ID, build_network
+from scenarios.road import RoadGeometry
+
+
+def curve(radius_m: float, lanes: int = 3) -> RoadSpec:
+    return RoadSpec(kind="curve", length_m=200.0, lanes=lanes, curve_radius_m=radius_m)
+
+
+@pytest.mark.parametrize("radius_m", [60.0, -60.0])
+def test_curve_frenet_round_trip(radius_m):
+    road = RoadGeometry.from_spec(curve(radius_m))
+    assert road.length_m == pytest.approx(200.0, abs=0.01)
+    s = np.array([0.0, 33.3, 100.0, 199.0])
+    d = np.array([-4.0, 0.0, 1.75, 5.0])
+    s2, d2 = road.to_frenet(road.xy_at(s, d))
+    np.testing.assert_allclose(s2, s, atol=0.02)
+    np.testing.assert_allclose(d2, d, atol=0.002)
+    # the arc's analytic geometry: distance from the turn centre is |R| - d * sign(R)
+    centre = np.array([0.0, radius_m])
+    dist = np.hypot(*(road.xy_at(s, d) - centre).T)
+    np.testing.assert_allclose(dist, abs(radius_m) - d * math.copysign(1, radius_m), atol=0.002)
+    heading = road.heading_at(100.0)
+    assert heading == pytest.approx(100.0 / radius_m, abs=0.01)
+
+
+def test_straight_road_edges_and_lanes():
+    road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=3))
+    assert [road.lane_center_d_m(i) for i in range(3)] == [-3.5, 0.0, 3.5]
+    np.testing.assert_allclose(road.edge_segments(), [[0, -5.25, 100, -5.25], [0, 5.25, 100, 5.25]])
+    s, d = road.to_frenet(np.array([[-3.0, 1.0], [110.0, -2.0]]))
+    np.testing.assert_allclose(s, [-3.0, 110.0])  # extended beyond both ends
+    np.testing.assert_allclose(d, [1.0, -2.0])
+
+
+@pytest.mark.parametrize("spec", [RoadSpec(length_m=300.0, lanes=3), curve(80.0), curve(-120.0, 2)],
+                         ids=["straight", "left-curve", "right-curve"])
+def test_sumo_lanes_match_our_geometry(tmp_path, spec):
+    """SUMO's lane road_i is our lane i: its shape lies on our lane centre line."""
+    import libsumo
+
+    road = RoadGeometry.from_spec(spec)
+    net = build_network(spec, tmp_path)
+    assert build_network(spec, tmp_path) == net  # cached by content
+    libsumo.start(["sumo", "--net-file", str(net), "--no-step-log", "true"])
+    try:
+        for lane in range(spec.lanes):
+            shape = np.array(libsumo.lane.getShape(f"{EDGE_ID}_{lane}"))
+            s, d = road.to_frenet(shape)
+            np.testing.assert_allclose(d, road.lane_center_d_m(lane), atol=0.01)
+            assert s.min() == pytest.approx(0.0, abs=0.05)
+            assert s.max() == pytest.approx(road.length_m, abs=0.05)
+            # SUMO measures positions on every lane by the centre line's length
+            assert libsumo.lane.getLength(f"{EDGE_ID}_{lane}") == pytest.approx(
+                road.length_m, abs=0.01)
+    finally:
+        libsumo.close()

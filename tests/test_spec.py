@@ -1,0 +1,133 @@
+from __future__ import annotations
+
+import tomllib
+
+import pytest
+
+from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, dumps_spec, load_spec
+from scenarios.spec import LaneKeepParams, SeedParams
+
+
+@pytest.mark.parametrize("name", ["seed-lesson", "highway-obstacle"])
+def test_catalog_round_trips_through_toml(name):
+    spec = load_spec(CATALOG_DIR / f"{name}.toml")
+    again = ScenarioSpec.from_plain(tomllib.loads(dumps_spec(spec)))
+    assert again == spec
+
+
+def test_seed_lesson_has_the_lesson_numbers():
+    spec = load_spec(CATALOG_DIR / "seed-lesson.toml")
+    assert spec.ego.speed_mps == pytest.approx(10 * 0.374)
+    assert spec.scenario.step_s == 0.064
+    assert spec.obstacles[0].kind == "barrel" and spec.obstacles[0].lane == spec.ego.lane
+    assert spec.lidar.beams == 180 and spec.lidar.fov_deg == 180 and spec.lidar.max_range_m == 80
+    params = spec.controller.params
+    assert isinstance(params, SeedParams)
+    assert (params.detect_range_m, params.detect_beams, params.avoid_steer_rad) == (5.0, 11, 0.7)
+    assert (params.left_periods, params.straight_periods, params.right_periods) == (10, 20, 10)
+    assert params.keep_steer_rad == 0.1
+
+
+def test_defaults_fill_optional_tables(lesson_plain):
+    for table in ("lidar", "traffic", "controller"):
+        del lesson_plain[table]
+    spec = ScenarioSpec.from_plain(lesson_plain)
+    assert spec.lidar.beams == 180 and spec.traffic.flow_vph_per_lane == 0
+    assert spec.controller.name == "seed"
+
+
+def test_with_controller_carries_shared_parameters(lesson_plain):
+    lesson_plain["controller"] = {"name": "seed", "look_ahead_m": 7.5, "detect_range_m": 9.0}
+    spec = ScenarioSpec.from_plain(lesson_plain).with_controller("lane-keep")
+    assert spec.controller.name == "lane-keep"
+    assert type(spec.controller.params) is LaneKeepParams
+    assert spec.controller.params.look_ahead_m == 7.5
+    back = spec.with_controller("seed").controller.params
+    assert back.look_ahead_m == 7.5 and back.detect_range_m == 5.0  # seed-only: default
+
+
+def test_int_given_for_float_is_accepted_and_float_for_int_is_not(lesson_plain):
+    lesson_plain["ego"]["speed_mps"] = 4
+    assert ScenarioSpec.from_plain(lesson_plain).ego.speed_mps == 4.0
+    lesson_plain["road"]["lanes"] = 3.0
+    with pytest.raises(SpecError) as e:
+        ScenarioSpec.from_plain(lesson_plain)
+    assert e.value.field == "road.lanes"
+
+
+def _set(plain: dict, path: str, value) -> None:
+    node = plain
+    keys = path.replace("[", ".").replace("]", "").split(".")
+    for key in keys[:-1]:
+        node = node[int(key)] if key.isdigit() else node.setdefault(key, {})
+    node[keys[-1]] = value
+
+
+# (path to set, value, field the error must name)
+BAD_INPUTS = [
+    ("obstacles[0].lane", 4, "obstacles[0].lane"),
+    ("ego.lane", 3, "ego.lane"),
+    ("obstacles[0].position_m", 400.0, "obstacles[0].position_m"),
+    ("ego.start_m", 40.0, "ego.start_m"),  # starts inside the barrel
+    ("ego.start_m", 0.5, "ego.start_m"),  # car sticks out behind the road start
+    ("road.kind", "spiral", "road.kind"),
+    ("road.lanes", 0, "road.lanes"),
+    ("road.lanes", "3", "road.lanes"),
+    ("road.length_m", -10.0, "road.length_m"),
+    ("road.curve_radius_m", 50.0, "road.curve_radius_m"),  # only for curves
+    ("road.see_edges", 1, "road.see_edges"),
+    ("scenario.step_s", 0.0, "scenario.step_s"),
+    ("scenario.seed", -1, "scenario.seed"),
+    ("ego.speed_mps", float("nan"), "ego.speed_mps"),
+    ("ego.speed_mps", 500.0, "ego.speed_mps"),
+    ("ego.colour", "red", "ego.colour"),  # unknown key
+    ("lidar.beams", 0, "lidar.beams"),
+    ("lidar.fov_deg", 400.0, "lidar.fov_deg"),
+    ("controller.name", "magic", "controller.name"),
+    ("controller.detect_beams", 2.5, "controller.detect_beams"),
+    ("obstacles[0].kind", "cow", "obstacles[0].kind"),
+    ("obstacles[0].lateral_offset_m", 9.0, "obstacles[0].lateral_offset_m"),
+    ("vehicle.model", "tesla", "vehicle.model"),
+    ("traffic.flow_vph_per_lane", -5.0, "traffic.flow_vph_per_lane"),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "field"), BAD_INPUTS,
+                         ids=[f"{p}={v!r}" for p, v, _ in BAD_INPUTS])
+def test_bad_values_name_their_field(lesson_plain, path, value, field):
+    _set(lesson_plain, path, value)
+    with pytest.raises(SpecError) as e:
+        ScenarioSpec.from_plain(lesson_plain)
+    assert e.value.field == field
+    assert str(e.value).startswith(f"{field}: ")
+
+
+def test_curve_needs_a_radius_and_a_sane_one(lesson_plain):
+    lesson_plain["road"]["kind"] = "curve"
+    with pytest.raises(SpecError, match=r"^road\.curve_radius_m: is required"):
+        ScenarioSpec.from_plain(lesson_plain)
+    lesson_plain["road"]["curve_radius_m"] = 6.0
+    with pytest.raises(SpecError, match=r"^road\.curve_radius_m: .* too tight"):
+        ScenarioSpec.from_plain(lesson_plain)
+    lesson_plain["road"]["curve_radius_m"] = -80.0
+    assert ScenarioSpec.from_plain(lesson_plain).road.curve_radius_m == -80.0
+
+
+def test_missing_and_unknown_tables(lesson_plain):
+    del lesson_plain["ego"]
+    with pytest.raises(SpecError, match="^ego: table is required"):
+        ScenarioSpec.from_plain(lesson_plain)
+    lesson_plain["ego"] = {"lane": 0, "start_m": 10.0}
+    with pytest.raises(SpecError, match=r"^ego\.speed_mps: is required"):
+        ScenarioSpec.from_plain(lesson_plain)
+    lesson_plain["ego"]["speed_mps"] = 3.0
+    lesson_plain["weather"] = {"rain": True}
+    with pytest.raises(SpecError, match="^weather: unknown table"):
+        ScenarioSpec.from_plain(lesson_plain)
+
+
+def test_invalid_toml_is_a_spec_error(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[scenario\nname = 1\n")
+    with pytest.raises(SpecError, match="invalid TOML"):
+        load_spec(bad)
