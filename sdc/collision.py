@@ -7,7 +7,7 @@ import numpy as np
 
 from scenarios.road import RoadGeometry
 from scenarios.snapshot import Snapshot
-from sdc.geometry import box_corners, boxes_overlap
+from sdc.geometry import box_corners, boxes_overlap, boxes_within_m
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
 
@@ -18,10 +18,11 @@ def collision_with(ego_box: np.ndarray, snapshot: Snapshot, road: RoadGeometry) 
     A body corner beyond either road edge, while alongside the road, counts as
     a road-edge collision.
     """
-    if len(snapshot.obstacle_boxes) and boxes_overlap(ego_box, snapshot.obstacle_boxes).any():
-        return OBSTACLE
-    if len(snapshot.traffic_boxes) and boxes_overlap(ego_box, snapshot.traffic_boxes).any():
-        return VEHICLE
+    ego_half_diag_m = 0.5 * float(np.hypot(ego_box[3], ego_box[4]))
+    for kind, boxes in ((OBSTACLE, snapshot.obstacle_boxes), (VEHICLE, snapshot.traffic_boxes)):
+        near = boxes[boxes_within_m(ego_box[:2], boxes, ego_half_diag_m)]
+        if len(near) and boxes_overlap(ego_box, near).any():
+            return kind
     s_m, d_m = road.to_frenet(box_corners(ego_box[None])[0])
     alongside = (s_m >= 0) & (s_m <= road.length_m)
     if np.any(alongside & (np.abs(d_m) > road.half_width_m)):
