@@ -60,6 +60,7 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
         "detection_range_m": _nan_to_none(detection) if started else None,
         "returned_to_lane": returned,
         "return_time_s": return_time,
-        "max_abs_lane_offset_m": _nan_to_none(np.nanmax(offsets)) if offsets.size else None,
+        "max_abs_lane_offset_m": _nan_to_none(np.max(offsets, initial=-np.inf,
+                                                     where=np.isfinite(offsets))),
         "min_gap_obstacle_m": _nan_to_none(np.min(gaps)) if gaps.size else None,
     }

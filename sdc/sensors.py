@@ -54,10 +54,12 @@ class Lidar:
         return ranges
 
     def points(self, ranges: np.ndarray) -> np.ndarray:
-        """The returns as an (n, 2) point cloud in the sensor frame (x ahead, y left) [m]."""
+        """The returns as an (n, 2) point cloud in the ego frame: origin at the rear
+        axle, x ahead, y left [m] (the sensor sits ``mount_ahead_m`` ahead of it)."""
         hit = np.isfinite(ranges)
         a = self.angles_rad[hit]
-        return np.column_stack([ranges[hit] * np.cos(a), ranges[hit] * np.sin(a)])
+        return np.column_stack([self.spec.mount_ahead_m + ranges[hit] * np.cos(a),
+                                ranges[hit] * np.sin(a)])
 
 
 @dataclass(frozen=True)

@@ -98,3 +98,14 @@ def test_invalid_toml_exits_2(tmp_path):
     path.write_text("[road\nlanes = 3\n")
     result = invoke("run", str(path))
     assert result.exit_code == 2 and "invalid TOML" in result.output
+
+
+def test_a_run_that_raises_is_an_error_row_and_exit_1(monkeypatch):
+    def broken(spec, **_):
+        raise RuntimeError("SUMO went away")
+
+    monkeypatch.setattr("sdc.episode.run_episode", broken)
+    result = invoke("run", LESSON, "--json")
+    assert result.exit_code == 1
+    row = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])
+    assert row["status"] == "error" and "SUMO went away" in row["error"]

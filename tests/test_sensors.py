@@ -78,7 +78,8 @@ def test_point_cloud_is_in_the_sensor_frame():
     ranges = sensor.scan(np.array([5.0, 5.0]), math.pi, np.array([[-5.0, 5.0, 0.0, 2.0, 2.0]]))
     points = sensor.points(ranges)
     assert len(points) == np.isfinite(ranges).sum() > 0
-    np.testing.assert_allclose(points[:, 0].min(), 9.0, atol=1e-9)  # 10 m ahead, 1 m half-size
+    # 10 m ahead of the sensor, 1 m half-size, the sensor 3.85 m ahead of the rear axle
+    np.testing.assert_allclose(points[:, 0].min(), 3.85 + 9.0, atol=1e-9)
     assert np.all(np.abs(points[:, 1]) <= 1.0 + 1e-9)
 
 
