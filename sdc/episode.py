@@ -17,7 +17,7 @@ import numpy as np
 from analysis.metrics import trace_metrics
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
+from scenarios.spec import ScenarioSpec, SeedParams
 from scenarios.sumo_world import SumoWorld
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
@@ -74,15 +74,14 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
                                 state.yaw_rad, boxes)
             lane = lane_sensor.measure(box[:2], state.yaw_rad, controller.look_ahead_m)
             command, phase = controller.step(ranges, lane)
-            gaps = box_gap_m(box, snapshot.obstacle_boxes) if len(snapshot.obstacle_boxes) \
-                else np.array([math.inf])
+            gap_m = float(np.min(box_gap_m(box, snapshot.obstacle_boxes), initial=math.inf))
             recorder.add(
                 t_s=k * step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
                 speed_mps=state.speed_mps, steer_rad=state.steer_rad,
                 steer_cmd_rad=command.steer_rad,
                 lane_offset_m=lane.offset_m if lane else math.nan,
                 heading_error_rad=lane.heading_error_rad if lane else math.nan,
-                s_m=lane.s_m if lane else math.nan, obstacle_gap_m=float(gaps.min()),
+                s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m,
                 phase=phase, lidar=ranges, traffic=snapshot.traffic_boxes,
             )
             hit = collision_with(box, snapshot, road)
@@ -100,7 +99,7 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
 
     trace = recorder.finish()
     t_end = float(trace.floats["t_s"][-1])
-    detect_beams = getattr(spec.controller.params, "detect_beams", 11)
+    detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
     row = {
         "seed": spec.scenario.seed,
         "controller": spec.controller.name,
