@@ -54,6 +54,8 @@ def closed_loop_s(spec: ScenarioSpec) -> tuple[float, int]:
     setup_s = time.perf_counter() - start
     start = time.perf_counter()
     row = run_episode(spec).row
+    # a run of n rows advances SUMO n - 1 times; the one-step run's single advance is
+    # subtracted with its start-up, leaving n - 2 timed steps
     return time.perf_counter() - start - setup_s, row["steps"] - 2
 
 
