@@ -7,9 +7,8 @@ Exit codes: 0 done (a collision is an outcome, not an error); 1 a run errored;
 from __future__ import annotations
 
 import json
-import math
+import os
 import sys
-import traceback
 from pathlib import Path
 
 import click
@@ -27,14 +26,6 @@ def _bad_input(message: str) -> None:
     sys.exit(EXIT_BAD_INPUT)
 
 
-def _json_safe(value):
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if hasattr(value, "item"):  # numpy scalar
-        return _json_safe(value.item())
-    return value
-
-
 def _check_trace_path(trace: Path | None) -> None:
     if trace is None:
         return
@@ -46,20 +37,10 @@ def _check_trace_path(trace: Path | None) -> None:
 
 def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     """Run a spec; a failure inside the run becomes a row with ``status`` error."""
-    from sdc.episode import run_episode  # keeps `sdc --help` fast
+    from sdc.task import RunTask, execute
 
     run_id = f"{spec.scenario.name}-{spec.controller.name}-{spec.scenario.seed}"
-    try:
-        episode = run_episode(spec)
-    except SdcError:
-        raise
-    except Exception as e:  # the run's own failure is an outcome row, not a crash
-        return {"run_id": run_id, "seed": spec.scenario.seed, "controller": spec.controller.name,
-                "backend": "sumo", "status": "error", "error": f"{type(e).__name__}: {e}",
-                "traceback": traceback.format_exc()}
-    if trace is not None:
-        episode.write_trace(trace)
-    return {"run_id": run_id, **{k: _json_safe(v) for k, v in episode.row.items()}}
+    return execute(RunTask(run_id, spec, trace_path=trace))
 
 
 def _fmt(value, unit: str = "", digits: int = 2) -> str:
@@ -155,3 +136,85 @@ def demo() -> None:
         click.echo("interrupted", err=True)
         sys.exit(EXIT_INTERRUPTED)
     sys.exit(EXIT_RUN_ERROR if failed else EXIT_OK)
+
+
+def _plan_lines(sweep, plan) -> list[str]:
+    invalid = sum(run.spec is None for run in plan)
+    samples = len({run.sample for run in plan})
+    lines = [f"sweep {sweep.name}: {samples} samples x {len(sweep.controllers)} controllers = "
+             f"{len(plan)} runs ({sweep.sampler} sampler, seed {sweep.seed}); "
+             f"{invalid} runs with an invalid scenario"]
+    paths = [p.path for p in sweep.params]
+    lines.append("  ".join(["run_id", "seed"] + paths))
+    for run in plan:
+        values = [f"{v:.6g}" if isinstance(v, float) else str(v) for v in run.params.values()]
+        line = "  ".join([run.run_id, str(run.seed)] + values)
+        lines.append(line + (f"  INVALID: {run.error}" if run.error else ""))
+    return lines
+
+
+@main.command()
+@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              metavar="DIR", help="Sweep directory (required unless --dry-run).")
+@click.option("--workers", type=click.IntRange(1, 1024), default=os.cpu_count() or 1,
+              show_default="all cores", help="Worker processes (local) or CPUs of a local Ray.")
+@click.option("--executor", type=click.Choice(["local", "ray"]), default="local",
+              show_default=True, help="Local process pool, or Ray.")
+@click.option("--ray-address", metavar="ADDR",
+              help="Join this Ray cluster (default: start and stop a local one).")
+@click.option("--resume", is_flag=True,
+              help="Continue the sweep in DIR: run only the runs that have no row yet.")
+@click.option("--run-timeout", type=click.FloatRange(min=0, min_open=True), metavar="S",
+              help="Stop a run after S wall seconds; it becomes a timeout row.")
+@click.option("--traces", type=click.Choice(["none", "failures", "all"]), default="failures",
+              show_default=True,
+              help="Write DIR/traces/<run_id>.parquet for no run, runs that collided, or all.")
+@click.option("--samples", type=click.IntRange(min=1), metavar="N",
+              help="Override the sweep's sample count (not for the grid sampler).")
+@click.option("--dry-run", is_flag=True, help="Print the plan (one line per run) and stop.")
+@click.option("--quiet", is_flag=True, help="No progress bar; only the final summary.")
+def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
+          ray_address: str | None, resume: bool, run_timeout: float | None, traces: str,
+          samples: int | None, dry_run: bool, quiet: bool) -> None:
+    """Run every sample of a scenario family under each of its controllers.
+
+    Results stream into DIR/parts/ as runs finish and end in DIR/results.parquet
+    (one row per run, one p.<path> column per swept parameter); DIR/manifest.json
+    records the sweep, the versions and the counts. A run that raises, hangs past
+    --run-timeout or kills its worker becomes an error or timeout row. After a
+    kill or Ctrl-C, the same command with --resume finishes the sweep.
+    """
+    from scenarios.sweep import expand, load_sweep
+    from sdc.executors import LocalExecutor, RayExecutor
+    from sdc.progress import QuietReporter, RichReporter
+    from sdc.sweep import run_sweep
+
+    if ray_address and executor != "ray":
+        _bad_input("--ray-address: only applies with --executor ray")
+    try:
+        spec = load_sweep(sweep_file)
+        if samples is not None:
+            spec = spec.with_samples(samples)
+        if dry_run:
+            for line in _plan_lines(spec, expand(spec)):
+                click.echo(line)
+            return
+        if out_dir is None:
+            _bad_input("--out: a sweep directory is required")
+        pool = (RayExecutor(workers, run_timeout, ray_address) if executor == "ray"
+                else LocalExecutor(workers, run_timeout))
+        outcome = run_sweep(spec, out_dir, pool, QuietReporter() if quiet else RichReporter(),
+                            traces=traces, resume=resume)
+    except SdcError as e:
+        _bad_input(str(e))
+    counts = outcome.counts
+    click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
+               f"{counts['timeout']} timeout, {counts['missing']} not run; "
+               f"{outcome.collisions} collisions ({outcome.wall_time_s:.1f} s)")
+    click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
+    if outcome.interrupted or counts["missing"]:
+        click.echo(f"interrupted; to finish: sdc sweep {sweep_file} --out {out_dir} --resume",
+                   err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)

@@ -1,0 +1,361 @@
+"""Sweep specs: one scenario family, sampled into a deterministic plan of runs.
+
+A sweep file names a base scenario, the parameters to vary (each addressed by
+its path in the scenario, ``obstacles[0].kind``, with a distribution) and a
+sampler. Every sampler draws points of the unit cube, one coordinate per
+parameter; each parameter maps its coordinate through its inverse CDF. So
+``random``, ``sobol`` and ``lhs`` differ only in how they cover the cube, and
+``grid`` takes every combination of each parameter's grid values instead.
+
+The plan is a pure function of the file: the same file gives the same runs,
+specs and seeds in any process.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import re
+import warnings
+from pathlib import Path
+from statistics import NormalDist
+from typing import Any, Literal
+
+import numpy as np
+
+from scenarios.errors import SpecError
+from scenarios.fields import Spec, build, num
+from scenarios.spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
+from scenarios.toml_io import load_spec, read_toml
+
+SAMPLERS = ("grid", "random", "sobol", "lhs")
+_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
+
+
+def parse_path(path: str) -> list[tuple[str, int | None]]:
+    """``"obstacles[0].kind"`` -> ``[("obstacles", 0), ("kind", None)]``."""
+    segments = []
+    for part in path.split("."):
+        match = _SEGMENT.match(part)
+        if match is None:
+            raise ValueError(f"bad path segment {part!r} (expected name or name[index])")
+        name, index = match.groups()
+        segments.append((name, None if index is None else int(index)))
+    return segments
+
+
+def _field_names(obj: Any) -> set[str]:
+    if isinstance(obj, ControllerSpec):  # any controller's parameters, and the name itself
+        return {"name"} | {f.name for p in CONTROLLER_PARAMS.values()
+                           for f in dataclasses.fields(p)}
+    return {f.name for f in dataclasses.fields(obj)}
+
+
+def check_path(spec: ScenarioSpec, path: str) -> None:
+    """Raise ``ValueError`` unless ``path`` names a single value of ``spec``."""
+    obj: Any = spec
+    segments = parse_path(path)
+    for depth, (name, index) in enumerate(segments):
+        where = ".".join(f"{n}" if i is None else f"{n}[{i}]" for n, i in segments[:depth])
+        if not dataclasses.is_dataclass(obj) or name not in _field_names(obj):
+            known = ", ".join(sorted(_field_names(obj))) if dataclasses.is_dataclass(obj) else ""
+            raise ValueError(f"no field {name!r} in {where or 'the scenario'}"
+                             + (f" (known: {known})" if known else ""))
+        obj = getattr(obj.params if isinstance(obj, ControllerSpec) and name != "name" else obj,
+                      name, None)
+        if index is not None:
+            if not isinstance(obj, tuple):
+                raise ValueError(f"{name} is not a list")
+            if index >= len(obj):
+                raise ValueError(f"{name}[{index}] does not exist: the base has {len(obj)}")
+            obj = obj[index]
+    if dataclasses.is_dataclass(obj) or isinstance(obj, tuple):
+        raise ValueError("names a table; address one of its fields")
+
+
+def set_path(plain: dict, path: str, value: Any) -> None:
+    """Set the value at ``path`` in a scenario's plain mapping (in place)."""
+    *parents, (leaf, leaf_index) = parse_path(path)
+    node: Any = plain
+    for name, index in parents:
+        node = node.setdefault(name, {})
+        if index is not None:
+            node = node[index]
+    if leaf_index is None:
+        node[leaf] = value
+    else:
+        node[leaf][leaf_index] = value
+
+
+@dataclasses.dataclass(frozen=True)
+class Param:
+    """One swept parameter: a path and a distribution with its arguments."""
+
+    path: str
+    kind: Literal["uniform", "loguniform", "normal", "int_range", "choice"]
+    args: tuple
+
+    def at(self, u: float) -> Any:
+        """The parameter's value at quantile ``u`` in [0, 1) (the inverse CDF)."""
+        a = self.args
+        if self.kind == "uniform":
+            return float(a[0] + u * (a[1] - a[0]))
+        if self.kind == "loguniform":
+            return float(math.exp(math.log(a[0]) + u * (math.log(a[1]) - math.log(a[0]))))
+        if self.kind == "normal":
+            return float(NormalDist(a[0], a[1]).inv_cdf(min(max(u, 1e-12), 1 - 1e-12)))
+        values = range(a[0], a[1] + 1) if self.kind == "int_range" else a
+        return values[min(int(u * len(values)), len(values) - 1)]
+
+    def grid(self, levels: int) -> list:
+        """The values a grid sweep takes: every choice or integer, else ``levels`` points."""
+        a = self.args
+        if self.kind == "uniform":
+            return [float(v) for v in np.linspace(a[0], a[1], levels)]
+        if self.kind == "loguniform":
+            return [float(v) for v in np.geomspace(a[0], a[1], levels)]
+        if self.kind == "int_range":
+            return list(range(a[0], a[1] + 1))
+        return list(a)
+
+    @property
+    def value_type(self) -> type:
+        """``float``, ``int``, ``bool`` or ``str``: the type of every value it yields."""
+        if self.kind in ("uniform", "loguniform", "normal"):
+            return float
+        if self.kind == "int_range":
+            return int
+        return type(self.args[0])
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _parse_param(path: str, table: Any, field: str) -> Param:
+    if not isinstance(table, dict) or len(table) != 1:
+        raise SpecError(field, "must be a table with one distribution, like { uniform = [lo, hi] }")
+    ((kind, args),) = table.items()
+    field = f"{field}.{kind}"
+    if kind not in ("uniform", "loguniform", "normal", "int_range", "choice"):
+        raise SpecError(field, "unknown distribution (known: choice, int_range, loguniform, "
+                               "normal, uniform)")
+    if not isinstance(args, list):
+        raise SpecError(field, f"must be a list, got {type(args).__name__}")
+    if kind == "choice":
+        if not args:
+            raise SpecError(field, "is empty: give at least one value")
+        if all(_number(v) for v in args):
+            kinds = {float} if any(isinstance(v, float) for v in args) else {int}
+            args = [float(v) if float in kinds else v for v in args]
+        kinds = {type(v) for v in args}
+        if len(kinds) != 1 or not kinds <= {bool, int, float, str}:
+            raise SpecError(field, "values must all be numbers, all strings or all booleans")
+        return Param(path, kind, tuple(args))
+    if len(args) != 2 or not all(_number(v) for v in args):
+        raise SpecError(field, f"must be two numbers, got {args!r}")
+    lo, hi = args
+    if kind == "normal":
+        if hi <= 0:
+            raise SpecError(field, f"standard deviation must be > 0, got {hi!r}")
+        return Param(path, kind, (float(lo), float(hi)))
+    if kind == "int_range":
+        if not all(isinstance(v, int) for v in args):
+            raise SpecError(field, f"bounds must be integers, got {args!r}")
+        if lo > hi:
+            raise SpecError(field, f"inverted range: {lo} > {hi}")
+        return Param(path, kind, (lo, hi))
+    if lo >= hi:
+        raise SpecError(field, f"inverted range: {lo} >= {hi}")
+    if kind == "loguniform" and lo <= 0:
+        raise SpecError(field, f"lower bound must be > 0, got {lo!r}")
+    return Param(path, kind, (float(lo), float(hi)))
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class _SweepTable(Spec):
+    name: str
+    base: str
+    samples: int | None = num(None, gt=0, le=10_000_000)
+    sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
+    seed: int = num(0, ge=0, lt=2**31)
+    levels: int | None = num(None, ge=2, le=1000)
+    controllers: tuple = ("seed",)
+    params: tuple = ()
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep: the base scenario, its parameters and the sampling."""
+
+    name: str
+    base_path: Path
+    base: ScenarioSpec
+    samples: int | None  # None for the grid sampler, whose size follows from the params
+    sampler: str
+    seed: int
+    levels: int  # grid points per continuous parameter (grid only)
+    controllers: tuple[str, ...]
+    params: tuple[Param, ...]
+
+    @classmethod
+    def from_plain(cls, data: Any, base_dir: Path) -> SweepSpec:
+        if not isinstance(data, dict) or set(data) != {"sweep"}:
+            extra = sorted(set(data) - {"sweep"}) if isinstance(data, dict) else []
+            raise SpecError(extra[0] if extra else "sweep",
+                            "a sweep file holds one [sweep] table (and [sweep.params])")
+        table = data["sweep"]
+        if not isinstance(table, dict):
+            raise SpecError("sweep", "must be a table")
+        controllers = table.get("controllers", ["seed"])
+        if not isinstance(controllers, list) or not controllers:
+            raise SpecError("sweep.controllers", "must be a non-empty list of controller names")
+        for i, name in enumerate(controllers):
+            if name not in CONTROLLER_PARAMS:
+                raise SpecError(f"sweep.controllers[{i}]", f"unknown controller {name!r} "
+                                f"(known: {', '.join(CONTROLLER_PARAMS)})")
+        if len(set(controllers)) != len(controllers):
+            raise SpecError("sweep.controllers", "lists a controller twice")
+        params = table.get("params", {})
+        if not isinstance(params, dict):
+            raise SpecError("sweep.params", "must be a table of path = { distribution = [...] }")
+        meta = build(_SweepTable, {**table, "controllers": (), "params": ()}, "sweep")
+
+        base_path = (Path(base_dir) / meta.base).resolve()
+        try:
+            base = load_spec(base_path)
+        except SpecError as e:
+            where = f"{e.field}: " if e.field else ""
+            raise SpecError("sweep.base", f"{base_path}: {where}{e.message}") from None
+        parsed = []
+        for path, dist in params.items():
+            field = f'sweep.params."{path}"'
+            try:
+                check_path(base, path)
+            except ValueError as e:
+                raise SpecError(field, f"unknown parameter path: {e}") from None
+            parsed.append(_parse_param(path, dist, field))
+
+        if meta.sampler == "grid":
+            if meta.samples is not None:
+                raise SpecError("sweep.samples", "the grid sampler takes its size from the "
+                                "parameters (set sweep.levels for continuous ones)")
+            for p in parsed:
+                if p.kind == "normal":
+                    raise SpecError(f'sweep.params."{p.path}".normal',
+                                    "has no grid: use uniform or choice with the grid sampler")
+        else:
+            if meta.samples is None:
+                raise SpecError("sweep.samples", f"is required for the {meta.sampler} sampler")
+            if meta.levels is not None:
+                raise SpecError("sweep.levels", "only applies to the grid sampler")
+        return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
+                   meta.levels or 5, tuple(controllers), tuple(parsed))
+
+    def with_samples(self, samples: int) -> SweepSpec:
+        if self.sampler == "grid":
+            raise SpecError("samples", "the grid sampler takes its size from the parameters")
+        if samples <= 0:
+            raise SpecError("samples", f"must be > 0, got {samples}")
+        return dataclasses.replace(self, samples=samples)
+
+    def to_plain(self) -> dict:
+        """The sweep as written in a file (``base`` absolute), for the manifest."""
+        table: dict[str, Any] = {"name": self.name, "base": str(self.base_path),
+                                 "sampler": self.sampler, "seed": self.seed,
+                                 "controllers": list(self.controllers)}
+        if self.samples is not None:
+            table["samples"] = self.samples
+        else:
+            table["levels"] = self.levels
+        table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
+        return {"sweep": table}
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    return SweepSpec.from_plain(read_toml(path), Path(path).resolve().parent)
+
+
+@dataclasses.dataclass(frozen=True)
+class PlannedRun:
+    """One run of a sweep. ``spec`` is None when the sample makes an invalid scenario;
+    ``error`` then says why, with the sample's values."""
+
+    index: int  # position in the plan
+    run_id: str
+    sample: int
+    controller: str
+    seed: int
+    params: dict[str, Any]
+    spec: ScenarioSpec | None
+    error: str | None
+
+
+def _unit_points(sweep: SweepSpec, rng: np.random.Generator) -> np.ndarray:
+    n, d = sweep.samples, len(sweep.params)
+    if d == 0:
+        return np.zeros((n, 0))
+    if sweep.sampler == "random":
+        return rng.random((n, d))
+    from scipy.stats import qmc  # only the quasi-random samplers need scipy
+
+    if sweep.sampler == "sobol":
+        with warnings.catch_warnings():  # balance properties want 2**k points; any n works
+            warnings.simplefilter("ignore", UserWarning)
+            return qmc.Sobol(d, scramble=True, rng=rng).random(n)
+    return qmc.LatinHypercube(d, rng=rng).random(n)
+
+
+def sample_values(sweep: SweepSpec) -> list[dict[str, Any]]:
+    """Each sample's parameter values, in plan order."""
+    point_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(2)[0])
+    if sweep.sampler == "grid":
+        axes = [p.grid(sweep.levels) for p in sweep.params]
+        return [{p.path: v for p, v in zip(sweep.params, combo, strict=True)}
+                for combo in itertools.product(*axes)]
+    return [{p.path: p.at(float(u)) for p, u in zip(sweep.params, row, strict=True)}
+            for row in _unit_points(sweep, point_rng)]
+
+
+def expand(sweep: SweepSpec) -> list[PlannedRun]:
+    """The plan: every sample under every controller, each sample with its own seed.
+
+    A sample's seed is ``scenario.seed`` for all its controllers (a paired
+    comparison), unless ``scenario.seed`` is itself a swept parameter.
+    """
+    samples = sample_values(sweep)
+    seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(2)[1])
+    seeds = seed_rng.integers(0, 2**31 - 1, size=len(samples))
+    width = max(5, len(str(len(samples) - 1)))
+    base_plain = sweep.base.to_plain()
+    plan = []
+    for i, (values, seed) in enumerate(zip(samples, seeds, strict=True)):
+        plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
+        set_path(plain, "scenario.seed", int(seed))
+        for path, value in values.items():
+            set_path(plain, path, value)
+        spec, error = None, None
+        try:
+            spec = ScenarioSpec.from_plain(plain)
+        except SpecError as e:
+            shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
+            error = f"invalid scenario from sample {i} ({shown}): {e}"
+        for controller in sweep.controllers:
+            plan.append(PlannedRun(
+                index=len(plan), run_id=f"{i:0{width}d}-{controller}", sample=i,
+                controller=controller, seed=int(plain["scenario"]["seed"]), params=values,
+                spec=spec.with_controller(controller) if spec else None, error=error,
+            ))
+    return plan
+
+
+def plan_sha256(plan: list[PlannedRun]) -> str:
+    """A digest of everything that decides the runs' results."""
+    digest = hashlib.sha256()
+    for run in plan:
+        body = run.spec.to_plain() if run.spec else run.error
+        digest.update(json.dumps([run.run_id, run.params, body], sort_keys=True).encode())
+    return digest.hexdigest()

@@ -1,0 +1,63 @@
+"""Sweep progress on the terminal: runs done of total, runs/s, ETA, collisions, failures."""
+
+from __future__ import annotations
+
+import time
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+
+class RichReporter:
+    """A rich progress bar; runs/s counts only the runs of this session."""
+
+    def __init__(self, console: Console | None = None):
+        self.console = console or Console(stderr=True)
+        self._progress: Progress | None = None
+
+    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+        self._progress = Progress(
+            TextColumn("sweep"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TextColumn("ETA"),
+            TimeRemainingColumn(),
+            TextColumn("collisions {task.fields[collisions]}  failed {task.fields[failed]}"),
+            console=self.console,
+        )
+        self._task = self._progress.add_task("sweep", total=total, completed=done,
+                                             collisions=collisions, failed=failed, rate="")
+        self._counts = {"collisions": collisions, "failed": failed, "session": 0}
+        self._t0 = time.monotonic()
+        self._progress.start()
+
+    def advance(self, row: dict) -> None:
+        counts = self._counts
+        counts["collisions"] += bool(row.get("collision"))
+        counts["failed"] += row["status"] != "ok"
+        counts["session"] += 1
+        rate = counts["session"] / max(time.monotonic() - self._t0, 1e-9)
+        self._progress.update(self._task, advance=1, collisions=counts["collisions"],
+                              failed=counts["failed"], rate=f"{rate:.1f} runs/s")
+
+    def stop(self) -> None:
+        if self._progress is not None:
+            self._progress.stop()
+
+
+class QuietReporter:
+    """No progress output (logs, CI)."""
+
+    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+        pass
+
+    def advance(self, row: dict) -> None:
+        pass
+
+    def stop(self) -> None:
+        pass

@@ -1,0 +1,128 @@
+"""Result rows on disk: Parquet parts written as runs finish, one consolidated table.
+
+A sweep directory holds ``parts/part-NNNNNN.parquet`` while it runs and
+``results.parquet`` once consolidated. Every file is written to a temporary
+name and renamed, so a kill leaves whole files only; reading deduplicates by
+``run_id``, so a part that was consolidated but not yet deleted is harmless.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+#: the result row of DESIGN.md section 4, in order, plus sdc's own columns
+RESULT_FIELDS = [
+    ("run_id", pa.string()),
+    ("run_index", pa.int64()),  # position in the sweep's plan
+    ("sample", pa.int64()),  # the scenario sample; its controllers share it
+    ("seed", pa.int64()),
+    ("controller", pa.string()),
+    ("backend", pa.string()),
+    ("status", pa.string()),  # ok | error | timeout
+    ("error", pa.string()),
+    ("termination", pa.string()),  # collision | duration | route_end
+    ("collision", pa.bool_()),
+    ("collision_with", pa.string()),  # none | obstacle | vehicle | road_edge
+    ("collision_time_s", pa.float64()),
+    ("min_gap_obstacle_m", pa.float64()),
+    ("min_ttc_s", pa.float64()),
+    ("maneuver_started", pa.bool_()),
+    ("detection_range_m", pa.float64()),
+    ("returned_to_lane", pa.bool_()),
+    ("return_time_s", pa.float64()),
+    ("max_abs_lane_offset_m", pa.float64()),
+    ("sim_time_s", pa.float64()),
+    ("steps", pa.int64()),
+    ("wall_time_s", pa.float64()),
+    ("trace_sha256", pa.string()),
+    ("traceback", pa.string()),
+]
+_ARROW_TYPES = {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}
+
+
+def result_schema(param_types: dict[str, type]) -> pa.Schema:
+    """The fixed columns, then one ``p.<path>`` column per swept parameter."""
+    params = [(f"p.{path}", _ARROW_TYPES[tp]) for path, tp in param_types.items()]
+    return pa.schema(RESULT_FIELDS + params)
+
+
+def _write_atomic(table: pa.Table, path: Path) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+class ResultStore:
+    """Buffers rows and writes a part every ``flush_s`` seconds or ``flush_rows`` rows."""
+
+    def __init__(self, out_dir: Path, schema: pa.Schema, *, flush_s: float = 1.0,
+                 flush_rows: int = 500):
+        self.out_dir = Path(out_dir)
+        self.parts_dir = self.out_dir / "parts"
+        self.results_path = self.out_dir / "results.parquet"
+        self.schema = schema
+        self.flush_s, self.flush_rows = flush_s, flush_rows
+        self._buffer: list[dict] = []
+        self._last_flush = time.monotonic()
+        self._next_part = 1 + max((int(p.stem.split("-")[1]) for p in self._part_files()),
+                                  default=-1)
+
+    def _part_files(self) -> list[Path]:
+        return sorted(self.parts_dir.glob("part-*.parquet"))
+
+    def add(self, row: dict) -> None:
+        self._buffer.append(row)
+        if (len(self._buffer) >= self.flush_rows
+                or time.monotonic() - self._last_flush >= self.flush_s):
+            self.flush()
+
+    def flush(self) -> None:
+        self._last_flush = time.monotonic()
+        if not self._buffer:
+            return
+        table = pa.Table.from_pylist(self._buffer, schema=self.schema)
+        self.parts_dir.mkdir(exist_ok=True)
+        _write_atomic(table, self.parts_dir / f"part-{self._next_part:06d}.parquet")
+        self._next_part += 1
+        self._buffer.clear()
+
+    def read(self) -> pa.Table:
+        """Every stored row (flushed ones), one per ``run_id``, in plan order."""
+        files = ([self.results_path] if self.results_path.exists() else []) + self._part_files()
+        tables = [pq.read_table(f, schema=self.schema) for f in files]
+        table = pa.concat_tables(tables) if tables else self.schema.empty_table()
+        first = pa.array(_first_of_each(table.column("run_id").to_pylist()), pa.int64())
+        return table.take(first).sort_by("run_index")
+
+    def done_run_ids(self) -> set[str]:
+        return set(self.read().column("run_id").to_pylist())
+
+    def consolidate(self) -> pa.Table:
+        """Write ``results.parquet`` from everything stored and remove the parts."""
+        self.flush()
+        table = self.read()
+        _write_atomic(table, self.results_path)
+        for part in self._part_files():
+            part.unlink()
+        if self.parts_dir.exists():
+            self.parts_dir.rmdir()
+        return table
+
+
+def _first_of_each(values: list) -> list[int]:
+    """Indices of the first occurrence of each distinct value."""
+    seen: set = set()
+    first = []
+    for i, value in enumerate(values):
+        if value not in seen:
+            seen.add(value)
+            first.append(i)
+    return first

@@ -1,0 +1,186 @@
+"""Running a sweep into a directory that survives any interruption.
+
+``DIR/manifest.json`` says what the sweep is and how far it got, ``DIR/plan.parquet``
+holds every planned run (its spec as JSON), rows stream into ``DIR/parts/`` as
+runs finish and end in ``DIR/results.parquet``. A resumed sweep runs only the
+runs that have no row yet, so the finished directory is the same whether or not
+it was interrupted.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import dataclasses
+import json
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Protocol
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from scenarios.errors import SdcError
+from scenarios.network import build_network
+from scenarios.sweep import PlannedRun, SweepSpec, expand, plan_sha256
+from sdc.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
+from sdc.results import ResultStore, result_schema
+from sdc.task import RunTask, TraceMode
+
+STATUSES = ("ok", "error", "timeout")
+
+
+class Reporter(Protocol):
+    """What a sweep tells about its progress (see :mod:`sdc.progress`)."""
+
+    def start(self, total: int, done: int, collisions: int, failed: int) -> None: ...
+    def advance(self, row: dict) -> None: ...
+    def stop(self) -> None: ...
+
+
+class Executor(Protocol):
+    name: str
+    workers: int
+
+    def __enter__(self): ...
+    def __exit__(self, *exc): ...
+    def map(self, tasks): ...
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepOutcome:
+    out_dir: Path
+    runs: int  # in the plan
+    counts: dict[str, int]  # rows by status; "missing" for runs without a row
+    collisions: int
+    interrupted: bool
+    wall_time_s: float
+
+
+def param_columns(run: PlannedRun) -> dict:
+    return {f"p.{path}": value for path, value in run.params.items()}
+
+
+def _invalid_row(run: PlannedRun) -> dict:
+    return {"run_id": run.run_id, "run_index": run.index, "sample": run.sample,
+            "seed": run.seed, "controller": run.controller, "backend": "sumo",
+            "status": "error", "error": run.error, **param_columns(run)}
+
+
+def _plan_table(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
+    params = result_schema({p.path: p.value_type for p in sweep.params})
+    rows = [{"run_id": r.run_id, "run_index": r.index, "sample": r.sample,
+             "controller": r.controller, "seed": r.seed, "error": r.error,
+             "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
+             **param_columns(r)} for r in plan]
+    fields = [params.field(n) for n in ("run_id", "run_index", "sample", "controller", "seed",
+                                        "error")]
+    fields += [pa.field("spec_json", pa.string())]
+    fields += [f for f in params if f.name.startswith("p.")]
+    return pa.Table.from_pylist(rows, schema=pa.schema(fields))
+
+
+def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume: bool) -> dict:
+    """Check ``out_dir`` and return its manifest (a new one for a fresh sweep)."""
+    out_dir = Path(out_dir)
+    digest = plan_sha256(plan)
+    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
+    if manifest is not None:
+        if not resume:
+            raise SdcError(f"--out: {out_dir} already holds a sweep; pass --resume to "
+                           "continue it, or choose another directory")
+        if manifest.get("plan_sha256") != digest:
+            raise SdcError(f"--resume: {out_dir} holds a different sweep "
+                           f"({manifest['sweep']['sweep']['name']!r}, another plan); "
+                           "resume it with the sweep file that started it")
+        return manifest
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+        raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pq.write_table(_plan_table(plan, sweep), out_dir / "plan.parquet")
+    return {
+        "sweep": sweep.to_plain(),
+        "base_scenario": sweep.base.to_plain(),
+        "plan_sha256": digest,
+        "runs": len(plan),
+        "samples": len({r.sample for r in plan}),
+        "versions": package_versions(),
+        "git": git_state(),
+        "started_at": now_iso(),
+        "ended_at": None,
+        "status": "running",
+        "counts": {},
+        "collisions": 0,
+        "sessions": [],
+    }
+
+
+def _build_networks(tasks: list[RunTask], workers: int) -> None:
+    """Build each distinct road network once, before any worker needs it."""
+    roads = list({task.spec.road: None for task in tasks})
+    with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
+        list(pool.map(build_network, roads))
+
+
+def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter, *,
+              traces: TraceMode = "failures", resume: bool = False) -> SweepOutcome:
+    """Run every planned run of ``sweep`` that has no row in ``out_dir`` yet.
+
+    ``KeyboardInterrupt`` stops the sweep: what finished is kept, and the
+    outcome says ``interrupted``.
+    """
+    wall_start = time.perf_counter()
+    out_dir = Path(out_dir)
+    plan = expand(sweep)
+    manifest = prepare_dir(out_dir, sweep, plan, resume)
+    store = ResultStore(out_dir, result_schema({p.path: p.value_type for p in sweep.params}))
+    stored = store.read()
+    done = set(stored.column("run_id").to_pylist())
+    trace_dir = out_dir / "traces"
+    if traces != "none":
+        trace_dir.mkdir(exist_ok=True)
+    todo = [run for run in plan if run.run_id not in done]
+    tasks = [RunTask(run.run_id, run.spec,
+                     {"run_index": run.index, "sample": run.sample, **param_columns(run)},
+                     trace_path=None if traces == "none" else trace_dir / f"{run.run_id}.parquet",
+                     traces=traces)
+             for run in todo if run.spec is not None]
+
+    session = {"started_at": now_iso(), "ended_at": None, "executor": executor.name,
+               "workers": executor.workers, "traces": traces, "runs_to_do": len(todo)}
+    manifest["sessions"].append(session)
+    manifest["status"] = "running"
+    write_manifest(out_dir, manifest)
+
+    statuses = Counter(stored.column("status").to_pylist())
+    reporter.start(total=len(plan), done=len(done),
+                   collisions=sum(bool(c) for c in stored.column("collision").to_pylist()),
+                   failed=statuses["error"] + statuses["timeout"])
+    interrupted = False
+    try:
+        for run in todo:
+            if run.spec is None:
+                row = _invalid_row(run)
+                store.add(row)
+                reporter.advance(row)
+        if tasks:
+            _build_networks(tasks, executor.workers)
+            with executor:
+                for row in executor.map(tasks):
+                    store.add(row)
+                    reporter.advance(row)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        reporter.stop()
+        table = store.consolidate()
+        counts = Counter(table.column("status").to_pylist())
+        summary = {s: counts.get(s, 0) for s in STATUSES}
+        summary["missing"] = len(plan) - table.num_rows
+        collisions = sum(bool(c) for c in table.column("collision").to_pylist())
+        session["ended_at"] = now_iso()
+        manifest.update(ended_at=session["ended_at"], counts=summary, collisions=collisions,
+                        status="interrupted" if summary["missing"] else "complete")
+        write_manifest(out_dir, manifest)
+    return SweepOutcome(out_dir, len(plan), summary, collisions, interrupted,
+                        time.perf_counter() - wall_start)

@@ -1,0 +1,209 @@
+"""Sweep files: validation naming the field, samplers, and a deterministic plan."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from click.testing import CliRunner
+
+from scenarios import CATALOG_DIR
+from scenarios.errors import SpecError
+from scenarios.sweep import SweepSpec, expand, load_sweep, plan_sha256, sample_values
+from sdc.cli import main
+
+BASE = str(CATALOG_DIR / "seed-lesson.toml")
+
+
+def sweep_plain(**table) -> dict:
+    params = table.pop("params", {"ego.speed_mps": {"uniform": [2.0, 6.0]}})
+    return {"sweep": {"name": "t", "base": BASE, "samples": 8, "sampler": "random",
+                      "seed": 3, **table, "params": params}}
+
+
+def make(**table) -> SweepSpec:
+    return SweepSpec.from_plain(sweep_plain(**table), CATALOG_DIR)
+
+
+@pytest.mark.parametrize("name", ["seed-envelope", "highway-traffic"])
+def test_catalog_sweeps_expand_to_valid_deterministic_plans(name):
+    path = CATALOG_DIR / "sweeps" / f"{name}.toml"
+    plan = expand(load_sweep(path))
+    assert len(plan) == 2 * load_sweep(path).samples
+    assert all(run.spec is not None for run in plan), [r.error for r in plan if r.error][:3]
+    assert plan_sha256(plan) == plan_sha256(expand(load_sweep(path)))
+    assert len({run.run_id for run in plan}) == len(plan)
+
+
+def test_seed_envelope_covers_the_issue_ranges():
+    sweep = load_sweep(CATALOG_DIR / "sweeps" / "seed-envelope.toml")
+    speeds = [values["ego.speed_mps"] for values in sample_values(sweep)]
+    assert 2.0 <= min(speeds) < 2.5 and 25 < max(speeds) <= 30.0
+    kinds = {values["obstacles[0].kind"] for values in sample_values(sweep)}
+    assert kinds == {"barrel", "car", "truck"}
+
+
+@pytest.mark.parametrize("sampler", ["random", "sobol", "lhs"])
+def test_samplers_stay_inside_each_distribution(sampler):
+    sweep = make(sampler=sampler, samples=64, params={
+        "ego.speed_mps": {"uniform": [2.0, 6.0]},
+        "traffic.flow_vph_per_lane": {"loguniform": [10.0, 1000.0]},
+        "ego.lane": {"int_range": [0, 2]},
+        "obstacles[0].kind": {"choice": ["barrel", "car"]},
+        "obstacles[0].lateral_offset_m": {"normal": [0.0, 0.1]},
+    })
+    values = sample_values(sweep)
+    assert len(values) == 64
+    assert all(2.0 <= v["ego.speed_mps"] <= 6.0 for v in values)
+    assert all(10.0 <= v["traffic.flow_vph_per_lane"] <= 1000.0 for v in values)
+    assert {v["ego.lane"] for v in values} == {0, 1, 2}
+    assert {v["obstacles[0].kind"] for v in values} == {"barrel", "car"}
+    offsets = [v["obstacles[0].lateral_offset_m"] for v in values]
+    assert abs(sum(offsets) / len(offsets)) < 0.05 and max(map(abs, offsets)) < 0.6
+    assert sample_values(sweep) == values  # same spec, same samples
+
+
+def test_quasi_random_samplers_cover_the_range_more_evenly_than_random():
+    def worst_gap(sampler):
+        speeds = sorted(v["ego.speed_mps"] for v in sample_values(make(sampler=sampler,
+                                                                       samples=32)))
+        return max(b - a for a, b in zip([2.0] + speeds, speeds + [6.0], strict=True))
+
+    assert worst_gap("lhs") <= 4.0 / 32 * 2
+    assert worst_gap("sobol") < worst_gap("random")
+
+
+def test_grid_takes_every_combination():
+    sweep = SweepSpec.from_plain({"sweep": {
+        "name": "g", "base": BASE, "sampler": "grid", "levels": 3,
+        "controllers": ["seed", "lane-keep"],
+        "params": {"ego.speed_mps": {"uniform": [2.0, 4.0]},
+                   "obstacles[0].kind": {"choice": ["barrel", "car"]}}}}, CATALOG_DIR)
+    plan = expand(sweep)
+    assert len(plan) == 3 * 2 * 2
+    assert sorted({r.params["ego.speed_mps"] for r in plan}) == [2.0, 3.0, 4.0]
+    assert plan[0].run_id == "00000-seed" and plan[1].run_id == "00000-lane-keep"
+
+
+def test_controllers_of_a_sample_share_its_spec_and_seed():
+    plan = expand(make(controllers=["seed", "lane-keep"]))
+    for a, b in zip(plan[::2], plan[1::2], strict=True):
+        assert a.sample == b.sample and a.seed == b.seed and a.params == b.params
+        assert (a.controller, b.controller) == ("seed", "lane-keep")
+        assert a.spec.controller.name == "seed" and b.spec.controller.name == "lane-keep"
+        assert a.spec.ego == b.spec.ego and a.spec.scenario == b.spec.scenario
+    assert len({run.seed for run in plan}) == 8
+    assert plan_sha256(plan) != plan_sha256(expand(make(controllers=["seed", "lane-keep"],
+                                                        seed=4)))
+
+
+def test_a_swept_seed_overrides_the_drawn_one():
+    plan = expand(make(params={"scenario.seed": {"int_range": [5, 5]}}))
+    assert {run.seed for run in plan} == {5}
+    assert {run.spec.scenario.seed for run in plan} == {5}
+
+
+def test_an_invalid_sample_is_reported_with_its_values():
+    # half the samples put the barrel's centre off the 10.5 m road
+    plan = expand(make(samples=20, params={
+        "obstacles[0].lateral_offset_m": {"uniform": [-3.0, 0.0]}}))
+    invalid = [run for run in plan if run.spec is None]
+    assert 0 < len(invalid) < len(plan)
+    for run in invalid:
+        value = run.params["obstacles[0].lateral_offset_m"]
+        assert value < -1.75
+        assert f"sample {run.sample}" in run.error
+        assert f"obstacles[0].lateral_offset_m={value!r}" in run.error
+        assert "obstacles[0].lateral_offset_m:" in run.error  # the spec's own message
+
+
+@pytest.mark.parametrize(("change", "field", "words"), [
+    ({"params": {"ego.speeed_mps": {"uniform": [1.0, 2.0]}}}, 'sweep.params."ego.speeed_mps"',
+     "unknown parameter path"),
+    ({"params": {"obstacles[3].kind": {"choice": ["car"]}}}, 'sweep.params."obstacles[3].kind"',
+     "does not exist"),
+    ({"params": {"road": {"choice": [1]}}}, 'sweep.params."road"', "table"),
+    ({"params": {"obstacles[0].kind": {"choice": []}}},
+     'sweep.params."obstacles[0].kind".choice', "empty"),
+    ({"params": {"ego.speed_mps": {"uniform": [6.0, 2.0]}}},
+     'sweep.params."ego.speed_mps".uniform', "inverted range"),
+    ({"params": {"ego.lane": {"int_range": [2, 0]}}}, 'sweep.params."ego.lane".int_range',
+     "inverted range"),
+    ({"params": {"ego.speed_mps": {"loguniform": [0.0, 2.0]}}},
+     'sweep.params."ego.speed_mps".loguniform', "> 0"),
+    ({"params": {"ego.speed_mps": {"normal": [3.0, -1.0]}}},
+     'sweep.params."ego.speed_mps".normal', "deviation"),
+    ({"params": {"ego.speed_mps": {"gauss": [3.0, 1.0]}}},
+     'sweep.params."ego.speed_mps".gauss', "unknown distribution"),
+    ({"params": {"ego.speed_mps": [3.0, 1.0]}}, 'sweep.params."ego.speed_mps"', "table"),
+    ({"samples": 0}, "sweep.samples", "> 0"),
+    ({"samples": -5}, "sweep.samples", "> 0"),
+    ({"sampler": "halton"}, "sweep.sampler", "must be one of"),
+    ({"controllers": ["seed", "pid"]}, "sweep.controllers[1]", "unknown controller"),
+    ({"controllers": []}, "sweep.controllers", "non-empty"),
+    ({"base": "nowhere.toml"}, "sweep.base", "cannot read"),
+    ({"levels": 4}, "sweep.levels", "grid"),
+    ({"sampler": "grid"}, "sweep.samples", "grid sampler"),
+    ({"speed": 3}, "sweep.speed", "unknown key"),
+])
+def test_bad_sweep_specs_name_the_field(change, field, words):
+    with pytest.raises(SpecError) as info:
+        make(**change)
+    assert info.value.field == field
+    assert words in info.value.message
+
+
+def test_grid_rejects_a_normal_distribution():
+    plain = sweep_plain(params={"ego.speed_mps": {"normal": [3.0, 1.0]}})
+    del plain["sweep"]["samples"]
+    plain["sweep"]["sampler"] = "grid"
+    with pytest.raises(SpecError, match="has no grid") as info:
+        SweepSpec.from_plain(plain, CATALOG_DIR)
+    assert info.value.field == 'sweep.params."ego.speed_mps".normal'
+
+
+def write_sweep(tmp_path, text: str):
+    path = tmp_path / "sweep.toml"
+    path.write_text(f'[sweep]\nname = "t"\nbase = "{BASE}"\n{text}')
+    return path
+
+
+@pytest.mark.parametrize(("text", "field"), [
+    ('samples = 4\n[sweep.params]\n"ego.nope" = { uniform = [1.0, 2.0] }\n',
+     'sweep.params."ego.nope"'),
+    ('samples = 4\n[sweep.params]\n"ego.lane" = { choice = [] }\n',
+     'sweep.params."ego.lane".choice'),
+    ('samples = 4\n[sweep.params]\n"ego.speed_mps" = { uniform = [3.0, 1.0] }\n',
+     'sweep.params."ego.speed_mps".uniform'),
+    ("samples = 0\n", "sweep.samples"),
+    ('samples = 4\nsampler = "magic"\n', "sweep.sampler"),
+])
+def test_cli_rejects_bad_sweep_files_with_exit_2(tmp_path, text, field):
+    result = CliRunner().invoke(main, ["sweep", str(write_sweep(tmp_path, text)),
+                                       "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output
+    assert f"error: {field}:" in result.output
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_dry_run_prints_the_plan(tmp_path):
+    path = write_sweep(tmp_path, 'samples = 3\ncontrollers = ["seed", "lane-keep"]\n'
+                                 '[sweep.params]\n"ego.speed_mps" = { uniform = [2.0, 4.0] }\n')
+    result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.strip().splitlines()
+    assert "3 samples x 2 controllers = 6 runs" in lines[0]
+    assert lines[1].split() == ["run_id", "seed", "ego.speed_mps"]
+    assert [line.split()[0] for line in lines[2:]] == [run.run_id for run in
+                                                       expand(load_sweep(path))]
+    speeds = [float(line.split()[2]) for line in lines[2:]]
+    assert all(2.0 <= s <= 4.0 for s in speeds) and not any(math.isnan(s) for s in speeds)
+
+
+def test_cli_sweep_needs_an_out_dir_and_checks_samples(tmp_path):
+    path = write_sweep(tmp_path, "samples = 3\n")
+    result = CliRunner().invoke(main, ["sweep", str(path)])
+    assert result.exit_code == 2 and "--out" in result.output
+    result = CliRunner().invoke(main, ["sweep", str(path), "--samples", "0", "--dry-run"])
+    assert result.exit_code == 2 and "--samples" in result.output
