@@ -119,24 +119,41 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str,
 
 
 @main.command()
-def demo() -> None:
-    """Run the catalog's seed-lesson and highway-obstacle under both controllers."""
-    failed = False
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("sdc-demo"), show_default=True, metavar="DIR",
+              help="Sweep directory; an existing demo there is resumed, not rerun.")
+@click.option("--samples", type=click.IntRange(min=1), default=60, show_default=True,
+              help="Samples of the seed-envelope sweep (each runs under both controllers).")
+@click.option("--workers", type=click.IntRange(1, 1024), default=os.cpu_count() or 1,
+              show_default="all cores", help="Worker processes.")
+def demo(out_dir: Path, samples: int, workers: int) -> None:
+    """Sweep the catalog's seed-envelope on all cores and print collisions per controller."""
+    import pandas as pd
+
+    from scenarios.sweep import load_sweep
+    from sdc.executors import LocalExecutor
+    from sdc.progress import RichReporter
+    from sdc.sweep import run_sweep
+
     try:
-        for name in ("seed-lesson", "highway-obstacle"):
-            spec = load_spec(CATALOG_DIR / f"{name}.toml")
-            for controller in ("seed", "lane-keep"):
-                row = run_one(spec.with_controller(controller))
-                failed |= row["status"] != "ok"
-                for line in summary_lines(name, row):
-                    click.echo(line)
+        spec = load_sweep(CATALOG_DIR / "sweeps" / "seed-envelope.toml").with_samples(samples)
+        outcome = run_sweep(spec, out_dir, LocalExecutor(workers), RichReporter(), resume=True)
     except SdcError as e:
         _bad_input(str(e))
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
+    if outcome.interrupted:
+        click.echo("interrupted; run it again to finish", err=True)
         sys.exit(EXIT_INTERRUPTED)
-    sys.exit(EXIT_RUN_ERROR if failed else EXIT_OK)
-
+    results = pd.read_parquet(out_dir / "results.parquet")
+    click.echo(f"seed-envelope, {samples} samples (ego speed 2-30 m/s, obstacle kind and "
+               f"offset, traffic) -> {out_dir / 'results.parquet'}")
+    for controller, runs in results.groupby("controller", sort=False):
+        ok = runs[runs.status == "ok"]
+        kinds = ok.collision_with[ok.collision].value_counts()
+        detail = ", ".join(f"{kind} {n}" for kind, n in kinds.items())
+        click.echo(f"  {controller:<10} {len(ok):4d} runs  {int(ok.collision.sum()):4d} "
+                   f"collisions ({ok.collision.mean():.0%})  {detail}"
+                   + (f"  [{len(runs) - len(ok)} failed runs]" if len(runs) > len(ok) else ""))
+    sys.exit(EXIT_RUN_ERROR if outcome.counts["error"] or outcome.counts["timeout"] else EXIT_OK)
 
 def _plan_lines(sweep, plan) -> list[str]:
     invalid = sum(run.spec is None for run in plan)

@@ -109,3 +109,16 @@ def test_a_run_that_raises_is_an_error_row_and_exit_1(monkeypatch):
     assert result.exit_code == 1
     row = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])
     assert row["status"] == "error" and "SUMO went away" in row["error"]
+
+
+@pytest.mark.slow
+def test_demo_sweeps_and_prints_collisions_per_controller(tmp_path):
+    out = tmp_path / "demo"
+    args = ["demo", "--out", str(out), "--samples", "3", "--workers", "2"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    lines = result.output.strip().splitlines()
+    assert lines[-2].split()[:3] == ["seed", "3", "runs"]
+    assert lines[-1].split()[:5] == ["lane-keep", "3", "runs", "3", "collisions"]
+    rerun = CliRunner().invoke(main, args)  # a finished demo is shown again, not rerun
+    assert rerun.exit_code == 0 and rerun.output.splitlines()[-2:] == lines[-2:]

@@ -1,0 +1,136 @@
+"""Sweep throughput and overheads, as ratios measured in one process run.
+
+Prints ``name value`` lines:
+
+- ``sweep_parallel_efficiency``: runs/s of a 200-run seed-envelope sweep at 2
+  local workers over 2 x runs/s at 1 worker (whole sweeps, start-up included).
+- ``ray_vs_local_throughput``: steady runs/s under a local Ray with 2 CPUs over
+  the local executor's with 2 workers, same sweep, from the first finished run
+  to the last (the clusters' start-up excluded); ``ray_vs_local_wall`` is the
+  same ratio over whole sweeps, Ray's start-up included.
+- ``fixed_cost_per_run_share``: the wall time per run of one-step runs (SUMO
+  start, network from the cache, result row written) over that of 60 s
+  simulated highway-obstacle runs that last the full minute.
+- ``driver_peak_rss_ratio_2000_vs_200``: the sweep driver's peak memory for
+  2000 one-step runs over 200 (results stream to disk, so about 1).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from scenarios import CATALOG_DIR
+from scenarios.sweep import load_sweep
+from sdc.executors import LocalExecutor, RayExecutor
+from sdc.sweep import run_sweep
+
+
+class Clock:
+    """A sweep reporter that notes when each row arrives."""
+
+    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+        self.started, self.arrivals = time.perf_counter(), []
+
+    def advance(self, row: dict) -> None:
+        self.arrivals.append(time.perf_counter())
+
+    def stop(self) -> None:
+        self.stopped = time.perf_counter()
+
+    @property
+    def runs_per_s(self) -> float:
+        return len(self.arrivals) / (self.stopped - self.started)
+
+    @property
+    def steady_runs_per_s(self) -> float:
+        return (len(self.arrivals) - 1) / (self.arrivals[-1] - self.arrivals[0])
+
+
+def timed_sweep(sweep_file: Path, out_dir: Path, executor, samples: int | None = None) -> Clock:
+    sweep = load_sweep(sweep_file)
+    if samples is not None:
+        sweep = sweep.with_samples(samples)
+    clock = Clock()
+    outcome = run_sweep(sweep, out_dir, executor, clock, traces="none")
+    assert outcome.counts["ok"] == outcome.runs, outcome.counts
+    return clock
+
+
+def write_sweep(tmp: Path, name: str, base: str, samples: int, params: dict) -> Path:
+    lines = [f'[sweep]\nname = "{name}"\nbase = "{CATALOG_DIR / base}"\n'
+             f'samples = {samples}\ncontrollers = ["lane-keep"]\n[sweep.params]']
+    lines += [f'"{path}" = {{ choice = [{value!r}] }}' for path, value in params.items()]
+    path = tmp / f"{name}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def driver_peak_rss_kib(sweep_file: Path, out_dir: Path) -> int:
+    """Peak RSS of a process that runs the sweep as its driver."""
+    code = (
+        "import resource, sys\n"
+        "from scenarios.sweep import load_sweep\n"
+        "from sdc.executors import LocalExecutor\n"
+        "from sdc.progress import QuietReporter\n"
+        "from sdc.sweep import run_sweep\n"
+        f"run_sweep(load_sweep({str(sweep_file)!r}), {str(out_dir)!r}, LocalExecutor(2),\n"
+        "          QuietReporter(), traces='none')\n"
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    return int(out.stdout.split()[-1])
+
+
+def main() -> None:
+    envelope = CATALOG_DIR / "sweeps" / "seed-envelope.toml"
+    figures: dict[str, float] = {}
+    raw: dict[str, float] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        one = timed_sweep(envelope, tmp / "w1", LocalExecutor(1), samples=100)
+        two = timed_sweep(envelope, tmp / "w2", LocalExecutor(2), samples=100)
+        ray = timed_sweep(envelope, tmp / "ray", RayExecutor(2), samples=100)
+        raw.update(runs_per_s_1_worker=one.runs_per_s, runs_per_s_2_workers=two.runs_per_s,
+                   runs_per_s_ray_2_cpus=ray.runs_per_s,
+                   steady_runs_per_s_2_workers=two.steady_runs_per_s,
+                   steady_runs_per_s_ray=ray.steady_runs_per_s)
+        figures["sweep_parallel_efficiency"] = two.runs_per_s / (2 * one.runs_per_s)
+        figures["ray_vs_local_throughput"] = ray.steady_runs_per_s / two.steady_runs_per_s
+        figures["ray_vs_local_wall"] = ray.runs_per_s / two.runs_per_s
+
+        # highway-obstacle, ego beside the stopped car at 15 m/s: 900 m in the full 60 s
+        full = {"ego.lane": 1, "ego.speed_mps": 15.0, "scenario.duration_s": 60.0}
+        full_file = write_sweep(tmp, "full", "highway-obstacle.toml", 6, full)
+        step_file = write_sweep(tmp, "step", "highway-obstacle.toml", 60,
+                                {**full, "scenario.duration_s": 0.064})
+        full_clock = timed_sweep(full_file, tmp / "full", LocalExecutor(1))
+        step_clock = timed_sweep(step_file, tmp / "step", LocalExecutor(1))
+        raw.update(s_per_60s_run=1 / full_clock.steady_runs_per_s,
+                   s_per_one_step_run=1 / step_clock.steady_runs_per_s)
+        figures["fixed_cost_per_run_share"] = (full_clock.steady_runs_per_s
+                                               / step_clock.steady_runs_per_s)
+
+        tiny = {"scenario.duration_s": 0.064}
+        small = driver_peak_rss_kib(write_sweep(tmp, "r200", "seed-lesson.toml", 200, tiny),
+                                    tmp / "r200")
+        large = driver_peak_rss_kib(write_sweep(tmp, "r2000", "seed-lesson.toml", 2000, tiny),
+                                    tmp / "r2000")
+        raw.update(driver_peak_rss_mib_200=small / 1024, driver_peak_rss_mib_2000=large / 1024)
+        figures["driver_peak_rss_ratio_2000_vs_200"] = large / small
+        manifest = json.loads((tmp / "r2000" / "manifest.json").read_text())
+        assert manifest["counts"]["ok"] == 2000, manifest["counts"]
+
+    for name, value in figures.items():
+        print(f"{name} {value:.3f}")
+    for name, value in raw.items():
+        print(f"raw.{name} {value:.4f}")
+
+
+if __name__ == "__main__":
+    main()
