@@ -155,6 +155,7 @@ def demo(out_dir: Path, samples: int, workers: int) -> None:
                    + (f"  [{len(runs) - len(ok)} failed runs]" if len(runs) > len(ok) else ""))
     sys.exit(EXIT_RUN_ERROR if outcome.counts["error"] or outcome.counts["timeout"] else EXIT_OK)
 
+
 def _plan_lines(sweep, plan) -> list[str]:
     invalid = sum(run.spec is None for run in plan)
     samples = len({run.sample for run in plan})
