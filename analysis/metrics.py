@@ -47,7 +47,19 @@ def return_to_lane(t_s: np.ndarray, offset_m: np.ndarray, phase: list[str]):
 
 def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[np.ndarray],
                   detect_beams: int) -> dict:
-    """Result-row metrics of one run (``None`` where a metric does not apply)."""
+    """Result-row metrics of one run (``None`` where a metric does not apply).
+
+    - ``maneuver_started``: the controller entered ``avoid_left``.
+    - ``detection_range_m``: the shortest of the ``detect_beams`` central lidar
+      ranges at the maneuver's first step (the range at which it started).
+    - ``returned_to_lane``, ``return_time_s``: see :func:`return_to_lane`.
+    - ``max_abs_lane_offset_m``: the largest |offset| of the body centre from its
+      own lane's centre (steps where the lane was sensed).
+    - ``min_gap_obstacle_m``: the smallest distance between the ego's body box and
+      any obstacle box (0 when they touch).
+    - ``min_ttc_s``: the smallest time-to-collision with anything in the ego's path
+      (see :func:`analysis.safety.time_to_collision_s`); ``None`` when nothing was.
+    """
     started = "avoid_left" in phase
     detection = None
     if started:
@@ -63,4 +75,5 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
         "max_abs_lane_offset_m": _nan_to_none(np.max(offsets, initial=-np.inf,
                                                      where=np.isfinite(offsets))),
         "min_gap_obstacle_m": _nan_to_none(np.min(gaps)) if gaps.size else None,
+        "min_ttc_s": _nan_to_none(np.min(floats["ttc_s"], initial=np.inf)),
     }

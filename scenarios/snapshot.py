@@ -21,6 +21,7 @@ class Snapshot:
     t_s: float
     traffic_boxes: np.ndarray  # (N, 5) moving vehicles other than the ego
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order
+    traffic_speeds_mps: np.ndarray  # (N,) speeds of the traffic boxes, along their headings
 
 
 def obstacle_boxes(spec: ScenarioSpec, road: RoadGeometry) -> np.ndarray:

@@ -115,11 +115,13 @@ class SumoWorld:
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
         sumo.simulationStep()
-        return Snapshot(sumo.simulation.getTime(), self._traffic_boxes(), self._obstacle_boxes)
+        boxes, speeds = self._traffic()
+        return Snapshot(sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds)
 
-    def _traffic_boxes(self) -> np.ndarray:
+    def _traffic(self) -> tuple[np.ndarray, np.ndarray]:
+        """Boxes and speeds of the vehicles other than the ego and the obstacles."""
         vehicle = self._sumo.vehicle
-        rows = []
+        rows, speeds = [], []
         for vid in vehicle.getIDList():
             if vid == EGO_ID or vid.startswith(OBSTACLE_PREFIX):
                 continue
@@ -131,7 +133,8 @@ class SumoWorld:
             length, width = size
             rows.append((fx - length / 2 * math.cos(yaw), fy - length / 2 * math.sin(yaw),
                          yaw, length, width))
-        return np.array(rows) if rows else NO_BOXES
+            speeds.append(vehicle.getSpeed(vid))
+        return (np.array(rows), np.array(speeds)) if rows else (NO_BOXES, np.zeros(0))
 
     def close(self) -> None:
         if self._sumo is not None:

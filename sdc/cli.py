@@ -63,7 +63,9 @@ def summary_lines(name: str, row: dict) -> list[str]:
         f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall)",
         f"  maneuver:  {maneuver}",
         f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
-        f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}",
+        f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
+        f"min TTC {_fmt(row['min_ttc_s'], ' s')}, "
+        f"closest to road edge {_fmt(row['min_road_edge_gap_m'], ' m')}",
         f"  trace sha256 {row['trace_sha256']}",
     ]
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.metrics import trace_metrics
+from analysis.safety import road_edge_gaps_m, time_to_collision_s
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec, SeedParams
@@ -48,6 +49,16 @@ def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> V
                         float(center[1] - back * math.sin(yaw)), yaw, spec.ego.speed_mps, 0.0)
 
 
+def body_boxes(trace: Trace, model) -> np.ndarray:
+    """The ego's body box at every step of a trace, (N, 5)."""
+    f = trace.floats
+    ahead_m = model.center_ahead_of_rear_axle_m
+    return np.column_stack([f["x_m"] + ahead_m * np.cos(f["yaw_rad"]),
+                            f["y_m"] + ahead_m * np.sin(f["yaw_rad"]), f["yaw_rad"],
+                            np.full(len(trace), model.length_m),
+                            np.full(len(trace), model.width_m)])
+
+
 def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode:
     """Run ``spec`` (its seed, its controller) in SUMO and return the outcome."""
     wall_start = time.perf_counter()
@@ -75,13 +86,17 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
             lane = lane_sensor.measure(box[:2], state.yaw_rad, controller.look_ahead_m)
             command, phase = controller.step(ranges, lane)
             gap_m = float(np.min(box_gap_m(box, snapshot.obstacle_boxes), initial=math.inf))
+            ttc_s = time_to_collision_s(
+                box, state.speed_mps, boxes,
+                np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
+                                snapshot.traffic_speeds_mps]))
             recorder.add(
                 t_s=k * step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
                 speed_mps=state.speed_mps, steer_rad=state.steer_rad,
                 steer_cmd_rad=command.steer_rad,
                 lane_offset_m=lane.offset_m if lane else math.nan,
                 heading_error_rad=lane.heading_error_rad if lane else math.nan,
-                s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m,
+                s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m, ttc_s=ttc_s,
                 phase=phase, lidar=ranges, traffic=snapshot.traffic_boxes,
             )
             hit = collision_with(box, snapshot, road)
@@ -99,6 +114,7 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
 
     trace = recorder.finish()
     t_end = float(trace.floats["t_s"][-1])
+    edge_gaps_m = road_edge_gaps_m(body_boxes(trace, model), road)
     detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
     row = {
         "seed": spec.scenario.seed,
@@ -110,8 +126,8 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
         "collision": hit is not None,
         "collision_with": hit or "none",
         "collision_time_s": t_end if hit else None,
-        "min_ttc_s": None,
         **trace_metrics(trace.floats, trace.phase, trace.lidar, detect_beams),
+        "min_road_edge_gap_m": float(np.nanmin(edge_gaps_m, initial=math.inf)),
         "sim_time_s": t_end,
         "steps": len(trace),
         "wall_time_s": time.perf_counter() - wall_start,

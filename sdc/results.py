@@ -31,6 +31,7 @@ RESULT_FIELDS = [
     ("collision_time_s", pa.float64()),
     ("min_gap_obstacle_m", pa.float64()),
     ("min_ttc_s", pa.float64()),
+    ("min_road_edge_gap_m", pa.float64()),
     ("maneuver_started", pa.bool_()),
     ("detection_range_m", pa.float64()),
     ("returned_to_lane", pa.bool_()),

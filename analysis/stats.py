@@ -1,0 +1,134 @@
+"""Collision statistics of a sweep's result table: rates with honest intervals.
+
+Only ``status == "ok"`` rows count toward a rate; error and timeout rows are
+counted beside it, never as "no collision".
+"""
+
+from __future__ import annotations
+
+import math
+from statistics import NormalDist
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+Method = Literal["wilson", "clopper-pearson"]
+#: a continuous parameter with more distinct values than this is binned for grouping
+MAX_GROUPS = 12
+ENVELOPE_RATE = 0.05
+
+
+def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval for ``k`` successes in ``n`` trials ((0, 1) when n = 0)."""
+    if n == 0:
+        return 0.0, 1.0
+    z = NormalDist().inv_cdf(0.5 + confidence / 2)
+    p = k / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def clopper_pearson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Exact (Clopper-Pearson) interval from beta quantiles ((0, 1) when n = 0)."""
+    if n == 0:
+        return 0.0, 1.0
+    alpha = 1 - confidence
+    low = 0.0 if k == 0 else float(stats.beta.ppf(alpha / 2, k, n - k + 1))
+    high = 1.0 if k == n else float(stats.beta.ppf(1 - alpha / 2, k + 1, n - k))
+    return low, high
+
+
+def rate_summary(rows: pd.DataFrame) -> dict:
+    """Counts by status, collisions among the ok rows, their rate and 95% intervals
+    (Wilson, and Clopper-Pearson as ``cp_low``/``cp_high``)."""
+    ok = rows[rows.status == "ok"]
+    k, n = int(ok.collision.sum()), len(ok)
+    wilson, exact = wilson_interval(k, n), clopper_pearson_interval(k, n)
+    return {
+        "n_ok": n,
+        "n_error": int((rows.status == "error").sum()),
+        "n_timeout": int((rows.status == "timeout").sum()),
+        "collisions": k,
+        "collision_rate": k / n if n else None,
+        "wilson_low": wilson[0], "wilson_high": wilson[1],
+        "cp_low": exact[0], "cp_high": exact[1],
+        "collision_with": {str(kind): int(count) for kind, count in
+                           ok.collision_with[ok.collision].value_counts().sort_index().items()},
+    }
+
+
+def by_controller(results: pd.DataFrame) -> dict[str, dict]:
+    return {str(c): rate_summary(rows)
+            for c, rows in results.groupby("controller", sort=False)}
+
+
+def group_values(column: pd.Series, max_groups: int = MAX_GROUPS) -> pd.Series:
+    """The column itself, or equal-width bins (an ``Interval`` per row) when it is numeric
+    with more than ``max_groups`` distinct values."""
+    numeric = pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column)
+    if numeric and column.nunique() > max_groups:
+        edges = np.linspace(column.min(), column.max(), max_groups + 1)
+        return pd.cut(column, edges, include_lowest=True)
+    return column
+
+
+def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> pd.DataFrame:
+    """One row per (group of ``column``, controller): counts, rate, interval."""
+    if column not in results.columns:
+        known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
+        raise KeyError(f"--by: no column {column!r} (swept parameters: {known})")
+    groups = group_values(results[column])
+    out = []
+    for (group, controller), rows in results.groupby([groups, "controller"], sort=True,
+                                                     observed=True):
+        summary = rate_summary(rows)
+        prefix = "wilson" if method == "wilson" else "cp"
+        low, high = summary[f"{prefix}_low"], summary[f"{prefix}_high"]
+        out.append({"group": group, "controller": controller, "n_ok": summary["n_ok"],
+                    "n_failed": summary["n_error"] + summary["n_timeout"],
+                    "collisions": summary["collisions"],
+                    "collision_rate": summary["collision_rate"], "low": low, "high": high})
+    return pd.DataFrame(out)
+
+
+def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
+    """Paired comparison of controllers ``a`` and ``b`` on the samples both ran ok.
+
+    ``only_a`` counts samples where only ``a`` collided, ``only_b`` where only ``b``
+    did; the exact two-sided McNemar p-value is a binomial test of ``only_a``
+    among the discordant pairs at 1/2.
+    """
+    ok = results[results.status == "ok"]
+    pairs = ok.pivot_table(index="sample", columns="controller", values="collision",
+                           aggfunc="first").dropna(subset=[a, b])
+    ca, cb = pairs[a].astype(bool), pairs[b].astype(bool)
+    only_a, only_b = int((ca & ~cb).sum()), int((~ca & cb).sum())
+    discordant = only_a + only_b
+    p = 1.0 if discordant == 0 else float(stats.binomtest(only_a, discordant, 0.5).pvalue)
+    return {"a": a, "b": b, "pairs": len(pairs), "both": int((ca & cb).sum()),
+            "neither": int((~ca & ~cb).sum()), "only_a": only_a, "only_b": only_b,
+            "p_value": p}
+
+
+def safe_envelope(results: pd.DataFrame, column: str, controller: str,
+                  threshold: float = ENVELOPE_RATE) -> dict:
+    """Where the collision rate along ``column`` first exceeds ``threshold``.
+
+    Groups (bins) are taken in increasing order; ``safe_up_to`` is the upper edge of
+    the last group before the first one whose rate exceeds ``threshold`` (None when
+    the first already does), ``crossing_group`` that group (None: never crossed).
+    """
+    table = rates_by(results[results.controller == controller], column)
+    safe_up_to, crossing = None, None
+    for row in table.itertuples():
+        if row.collision_rate is not None and row.collision_rate > threshold:
+            crossing = row.group
+            break
+        safe_up_to = row.group.right if isinstance(row.group, pd.Interval) else row.group
+    return {"controller": controller, "column": column, "threshold": threshold,
+            "safe_up_to": None if safe_up_to is None else float(safe_up_to),
+            "crossing_group": None if crossing is None else str(crossing)}
