@@ -10,7 +10,6 @@ import math
 from statistics import NormalDist
 from typing import Literal
 
-import numpy as np
 import pandas as pd
 from scipy import stats
 
@@ -71,8 +70,7 @@ def group_values(column: pd.Series, max_groups: int = MAX_GROUPS) -> pd.Series:
     with more than ``max_groups`` distinct values."""
     numeric = pd.api.types.is_numeric_dtype(column) and not pd.api.types.is_bool_dtype(column)
     if numeric and column.nunique() > max_groups:
-        edges = np.linspace(column.min(), column.max(), max_groups + 1)
-        return pd.cut(column, edges, include_lowest=True)
+        return pd.cut(column, max_groups, precision=3)
     return column
 
 

@@ -1,0 +1,104 @@
+"""The report's figures, drawn with matplotlib's Agg backend and returned as PNG bytes."""
+
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never a window
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from analysis.stats import Method, group_values, rates_by  # noqa: E402
+
+COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
+
+
+def _png(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def _label(column: str) -> str:
+    return column.removeprefix("p.")
+
+
+def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
+    """x positions and tick labels: bin midpoints for intervals, else categories in order."""
+    values = list(groups)
+    if values and isinstance(values[0], pd.Interval):
+        return np.array([v.mid for v in values]), []
+    return np.arange(len(values)), [str(v) for v in values]
+
+
+def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wilson") -> bytes:
+    """Collision rate per group of ``column``, one line per controller, 95% band."""
+    table = rates_by(results, column, method)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    categories: list[str] = []
+    for controller, rows in table.groupby("controller", sort=False):
+        rows = rows.dropna(subset=["collision_rate"])
+        x, categories = _positions(rows.group)
+        ax.plot(x, rows.collision_rate, marker="o", label=controller)
+        ax.fill_between(x, rows.low, rows.high, alpha=0.2)
+    if categories:
+        ax.set_xticks(range(len(categories)), categories)
+    ax.set(xlabel=_label(column), ylabel="collision rate", ylim=(-0.02, 1.02),
+           title=f"Collision rate by {_label(column)} ({method} 95% interval)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return _png(fig)
+
+
+def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
+    """Collision rate of ``controller`` over two parameters (ok runs; empty cells blank)."""
+    ok = results[(results.status == "ok") & (results.controller == controller)]
+    gx, gy = group_values(ok[x], 8), group_values(ok[y], 8)
+    grid = (ok.assign(_x=gx, _y=gy).groupby(["_y", "_x"], observed=False).collision.mean()
+            .unstack("_x"))
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    image = ax.imshow(grid.to_numpy(dtype=float), origin="lower", aspect="auto",
+                      cmap="viridis", vmin=0, vmax=1)
+    ax.set_xticks(range(grid.shape[1]), [str(c) for c in grid.columns], rotation=45,
+                  ha="right", fontsize=8)
+    ax.set_yticks(range(grid.shape[0]), [str(i) for i in grid.index], fontsize=8)
+    ax.set(xlabel=_label(x), ylabel=_label(y), title=f"Collision rate, {controller}")
+    fig.colorbar(image, ax=ax, label="collision rate")
+    return _png(fig)
+
+
+def distributions(results: pd.DataFrame) -> bytes:
+    """Histograms of the minimum gap to the obstacle and the minimum TTC, per controller."""
+    ok = results[results.status == "ok"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    for ax, column, unit in ((axes[0], "min_gap_obstacle_m", "m"), (axes[1], "min_ttc_s", "s")):
+        values = ok[column].dropna()
+        bins = np.linspace(0, max(float(values.max()), 1.0), 25) if len(values) else 10
+        for controller, rows in ok.groupby("controller", sort=False):
+            ax.hist(rows[column].dropna(), bins=bins, alpha=0.5, label=controller)
+        ax.set(xlabel=f"{column} [{unit}]", ylabel="runs")
+        ax.legend()
+    fig.suptitle("Safety margins (ok runs; TTC missing where nothing was in the path)")
+    return _png(fig)
+
+
+def collision_breakdown(results: pd.DataFrame) -> bytes:
+    """Collisions by what was hit, per controller, with error and timeout runs beside."""
+    controllers = list(dict.fromkeys(results.controller))
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    bottom = np.zeros(len(controllers))
+    ok = results[results.status == "ok"]
+    bars = [(kind, ok[ok.collision_with == kind]) for kind in COLLISION_KINDS]
+    bars += [(status, results[results.status == status]) for status in ("error", "timeout")]
+    for label, rows in bars:
+        counts = rows.controller.value_counts().reindex(controllers, fill_value=0).to_numpy()
+        ax.bar(controllers, counts, bottom=bottom, label=label,
+               hatch="//" if label in ("error", "timeout") else None)
+        bottom += counts
+    ax.set(ylabel="runs", title="Collisions by what was hit (and failed runs)")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _png(fig)

@@ -1,0 +1,294 @@
+"""A sweep directory turned into its collision statistics report.
+
+:func:`write_report` writes ``summary.json`` and ``report.md`` into the sweep
+directory, one self-contained HTML page (figures embedded as PNG data, no
+external resources) and, on request, a JUnit XML file with one test case per run.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import html
+import itertools
+import json
+import math
+from pathlib import Path
+from xml.etree import ElementTree
+
+import pandas as pd
+
+from analysis import plots
+from analysis.stats import Method, by_controller, mcnemar, rates_by, safe_envelope
+
+SPEED = "p.ego.speed_mps"
+MAX_LISTED_FAILURES = 500
+
+
+class ReportError(Exception):
+    """A sweep directory or an option the report cannot use; ``field`` names which."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(f"{field}: {message}")
+        self.field, self.message = field, message
+
+
+@dataclasses.dataclass(frozen=True)
+class Report:
+    summary: dict
+    html_path: Path
+    summary_path: Path
+    markdown_path: Path
+    junit_path: Path | None
+    terminal: list[str]
+
+
+def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
+    """The result rows (consolidated and any parts not yet consolidated) and the manifest."""
+    sweep_dir = Path(sweep_dir)
+    manifest_path = sweep_dir / "manifest.json"
+    if not manifest_path.exists():
+        raise ReportError("DIR", f"{sweep_dir} is not a sweep directory (no manifest.json)")
+    files = [sweep_dir / "results.parquet"] + sorted((sweep_dir / "parts").glob("*.parquet"))
+    frames = [pd.read_parquet(f) for f in files if f.exists()]
+    if not frames:
+        raise ReportError("DIR", f"{sweep_dir} has no results yet")
+    results = (pd.concat(frames, ignore_index=True).drop_duplicates("run_id")
+               .sort_values("run_index").reset_index(drop=True))
+    return results, json.loads(manifest_path.read_text())
+
+
+def varying_parameters(results: pd.DataFrame) -> list[str]:
+    return [c for c in results.columns if c.startswith("p.") and results[c].nunique() > 1]
+
+
+def _finite(value):
+    return None if isinstance(value, float) and not math.isfinite(value) else value
+
+
+def _json_plain(value):
+    """Plain JSON values: numpy scalars unwrapped, NaN and infinities as null."""
+    if isinstance(value, dict):
+        return {str(k): _json_plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_plain(v) for v in value]
+    if hasattr(value, "item"):
+        value = value.item()
+    return _finite(value)
+
+
+def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
+                  method: Method) -> dict:
+    controllers = list(dict.fromkeys(results.controller))
+    grouped = {}
+    for column in by:
+        table = rates_by(results, column, method)
+        grouped[column] = [{**row, "group": str(row["group"]),
+                            "collision_rate": _finite(row["collision_rate"])}
+                           for row in table.to_dict(orient="records")]
+    status = results.status.value_counts()
+    return {
+        "sweep": manifest["sweep"]["sweep"]["name"],
+        "runs_planned": manifest.get("runs"),
+        "runs": len(results),
+        "counts": {s: int(status.get(s, 0)) for s in ("ok", "error", "timeout")},
+        "sweep_status": manifest.get("status"),
+        "interval": method,
+        "by_controller": by_controller(results),
+        "paired": [mcnemar(results, a, b) for a, b in itertools.combinations(controllers, 2)],
+        "by": grouped,
+        "envelope": ([safe_envelope(results, SPEED, c) for c in controllers]
+                     if SPEED in results.columns else []),
+    }
+
+
+def _low_high(summary: dict, numbers: dict) -> tuple[float, float]:
+    prefix = "wilson" if summary["interval"] == "wilson" else "cp"
+    return numbers[f"{prefix}_low"], numbers[f"{prefix}_high"]
+
+
+def _pct(value) -> str:
+    return "-" if value is None else f"{100 * value:.1f}%"
+
+
+def headline_rows(summary: dict) -> list[list[str]]:
+    rows = [["controller", "ok runs", "collisions", "rate", "95% interval", "errors",
+             "timeouts"]]
+    for controller, numbers in summary["by_controller"].items():
+        low, high = _low_high(summary, numbers)
+        rows.append([controller, str(numbers["n_ok"]), str(numbers["collisions"]),
+                     _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
+                     str(numbers["n_error"]), str(numbers["n_timeout"])])
+    return rows
+
+
+def findings(summary: dict) -> list[str]:
+    """Sentences for the paired comparison and the safe envelope."""
+    lines = []
+    for pair in summary["paired"]:
+        lines.append(
+            f"{pair['a']} vs {pair['b']} on {pair['pairs']} shared scenarios: only "
+            f"{pair['a']} collided in {pair['only_a']}, only {pair['b']} in {pair['only_b']}, "
+            f"both in {pair['both']}; McNemar exact p = {pair['p_value']:.3g}")
+    for envelope in summary["envelope"]:
+        if envelope["crossing_group"] is None:
+            text = "stays at or below 5% over the whole range"
+        elif envelope["safe_up_to"] is None:
+            text = f"is above 5% already in the lowest bin {envelope['crossing_group']}"
+        else:
+            text = (f"stays at or below 5% up to {envelope['safe_up_to']:.3g} m/s and first "
+                    f"exceeds it in {envelope['crossing_group']}")
+        lines.append(f"{envelope['controller']}: the collision rate along ego speed {text}")
+    return lines
+
+
+def terminal_table(summary: dict) -> list[str]:
+    rows = headline_rows(summary)
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
+            for row in rows]
+
+
+def failures(results: pd.DataFrame) -> pd.DataFrame:
+    """Runs to look at: collisions and failed runs, failed ones first, then by run."""
+    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
+    return bad.assign(_ok=bad.status == "ok").sort_values(["_ok", "run_index"]).drop(
+        columns="_ok")
+
+
+def replay_command(sweep_dir: Path, run_id: str) -> str:
+    return f"sdc replay {sweep_dir} --run {run_id}"
+
+
+def _outcome(row) -> str:
+    if row.status != "ok":
+        return f"{row.status}: {row.error}"
+    return f"collision with {row.collision_with} at {row.collision_time_s:.2f} s"
+
+
+def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
+    rows = headline_rows(summary)
+    lines = [f"# Collision report: {summary['sweep']}", "",
+             f"{summary['runs']} runs ({summary['counts']['ok']} ok, "
+             f"{summary['counts']['error']} error, {summary['counts']['timeout']} timeout); "
+             f"intervals: {summary['interval']} 95%.", "",
+             "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
+    lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
+    lines += [""] + [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", ""]
+    bad = failures(results)
+    for row in bad.head(MAX_LISTED_FAILURES).itertuples():
+        lines.append(f"- `{row.run_id}` ({row.controller}): {_outcome(row)} — "
+                     f"`{replay_command(sweep_dir, row.run_id)}`")
+    if len(bad) > MAX_LISTED_FAILURES:
+        lines.append(f"- ... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet")
+    return "\n".join(lines) + "\n"
+
+
+def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[str, bytes]]:
+    out = [(f"Collision rate by {c.removeprefix('p.')}", plots.rate_by_parameter(results, c,
+                                                                                 method))
+           for c in by]
+    numeric = [c for c in by if pd.api.types.is_numeric_dtype(results[c])]
+    if len(numeric) >= 2:
+        for controller in dict.fromkeys(results.controller):
+            out.append((f"Collision rate over {numeric[0]} and {numeric[1]}, {controller}",
+                        plots.rate_heatmap(results, numeric[0], numeric[1], controller)))
+    out.append(("Minimum gap and minimum TTC", plots.distributions(results)))
+    out.append(("What was hit", plots.collision_breakdown(results)))
+    return out
+
+
+_CSS = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
+table { border-collapse: collapse; margin: 1em 0; }
+th, td { border: 1px solid #ccc; padding: 4px 8px; text-align: left; font-size: 14px; }
+th { background: #f2f2f2; }
+code { background: #f6f6f6; padding: 1px 4px; }
+figure { margin: 1.5em 0; }
+img { max-width: 100%; }
+"""
+
+
+def _table_html(rows: list[list[str]]) -> str:
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in rows[0])
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
+                   for row in rows[1:])
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
+              images: list[tuple[str, bytes]]) -> str:
+    parts = [f"<h1>Collision report: {html.escape(summary['sweep'])}</h1>",
+             f"<p>{summary['runs']} runs: {summary['counts']['ok']} ok, "
+             f"{summary['counts']['error']} error, {summary['counts']['timeout']} timeout "
+             f"(errors and timeouts are not counted as safe). Intervals: "
+             f"{html.escape(summary['interval'])} 95%.</p>",
+             _table_html(headline_rows(summary)),
+             "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
+    for title, png in images:
+        data = base64.b64encode(png).decode()
+        parts.append(f'<figure><img alt="{html.escape(title)}" '
+                     f'src="data:image/png;base64,{data}"><figcaption>{html.escape(title)}'
+                     "</figcaption></figure>")
+    for column, rows in summary["by"].items():
+        table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
+                  "failed"]]
+        table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
+                   _pct(_finite(r["collision_rate"])), f"{_pct(r['low'])} - {_pct(r['high'])}",
+                   str(r["n_failed"])] for r in rows]
+        parts.append(f"<details><summary>By {html.escape(column)}</summary>"
+                     f"{_table_html(table)}</details>")
+    bad = failures(results)
+    parts.append(f"<h2>Runs to look at ({len(bad)})</h2>")
+    table = [["run", "controller", "outcome", "replay"]]
+    table += [[row.run_id, row.controller, _outcome(row), replay_command(sweep_dir, row.run_id)]
+              for row in bad.head(MAX_LISTED_FAILURES).itertuples()]
+    parts.append(_table_html(table))
+    if len(bad) > MAX_LISTED_FAILURES:
+        parts.append(f"<p>... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet</p>")
+    return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<title>sdc report: {html.escape(summary['sweep'])}</title>"
+            f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>\n")
+
+
+def junit_xml(results: pd.DataFrame, name: str) -> str:
+    """One test case per run: a collision is a failure, an error or timeout an error."""
+    suite = ElementTree.Element("testsuite", name=name, tests=str(len(results)))
+    n_failures = n_errors = 0
+    for row in results.itertuples():
+        case = ElementTree.SubElement(suite, "testcase", classname=f"{name}.{row.controller}",
+                                      name=row.run_id, time=f"{_finite(row.wall_time_s) or 0:.3f}")
+        if row.status != "ok":
+            n_errors += 1
+            ElementTree.SubElement(case, "error", message=_outcome(row), type=row.status)
+        elif row.collision:
+            n_failures += 1
+            ElementTree.SubElement(case, "failure", message=_outcome(row), type="collision")
+    suite.set("failures", str(n_failures))
+    suite.set("errors", str(n_errors))
+    return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),
+                 junit_path: Path | None = None, method: Method = "wilson") -> Report:
+    sweep_dir = Path(sweep_dir)
+    for option, path in (("--out", html_path), ("--junit", junit_path)):
+        if path is not None and not Path(path).parent.is_dir():
+            raise ReportError(option, f"directory {Path(path).parent} does not exist")
+    results, manifest = load_results(sweep_dir)
+    for column in by:
+        if column not in results.columns:
+            known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
+            raise ReportError("--by", f"no column {column!r} (swept parameters: {known})")
+    by = list(by) or varying_parameters(results)
+    summary = build_summary(results, manifest, by, method)
+    html_path = Path(html_path) if html_path else sweep_dir / "report.html"
+    html_path.write_text(html_page(summary, results, sweep_dir, figures(results, by, method)))
+    summary_path = sweep_dir / "summary.json"
+    summary_path.write_text(json.dumps(_json_plain(summary), indent=2) + "\n")
+    markdown_path = sweep_dir / "report.md"
+    markdown_path.write_text(markdown(summary, results, sweep_dir))
+    if junit_path is not None:
+        Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
+    terminal = terminal_table(summary) + findings(summary)
+    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)

@@ -1,0 +1,144 @@
+"""Reports from real sweeps: files, counts, JUnit, and the page in headless Chromium."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import re
+import shutil
+import subprocess
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+
+import matplotlib.image
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from analysis.report import write_report
+from scenarios import CATALOG_DIR
+from scenarios.sweep import load_sweep
+from sdc.cli import main
+from sdc.executors import LocalExecutor
+from sdc.progress import QuietReporter
+from sdc.sweep import run_sweep
+
+pytestmark = pytest.mark.slow
+
+ARTIFACTS = Path(__file__).resolve().parent.parent / ".artifacts"
+# 3 speeds x 2 offsets x 2 controllers; the -3 m offset puts the barrel off the road,
+# so those 6 runs are error rows
+SMALL = f"""[sweep]
+name = "small"
+base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+sampler = "grid"
+controllers = ["seed", "lane-keep"]
+
+[sweep.params]
+"ego.speed_mps" = {{ choice = [3.0, 3.74, 9.0] }}
+"obstacles[0].lateral_offset_m" = {{ choice = [0.0, -3.0] }}
+"scenario.duration_s" = {{ choice = [15.0] }}
+"""
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                  "--no-first-run", "--disable-background-networking",
+                  "--disable-component-update", "--disable-sync", "--enable-logging=stderr",
+                  "--v=0", "--window-size=1200,3000"]
+
+
+@pytest.fixture(scope="module")
+def small_sweep(tmp_path_factory) -> Path:
+    tmp = tmp_path_factory.mktemp("report")
+    (tmp / "small.toml").write_text(SMALL)
+    out = tmp / "sweep"
+    run_sweep(load_sweep(tmp / "small.toml"), out, LocalExecutor(2), QuietReporter(),
+              traces="none")
+    return out
+
+
+def test_report_files_count_errors_apart(small_sweep, tmp_path):
+    report = write_report(small_sweep, html_path=tmp_path / "r.html",
+                          junit_path=tmp_path / "runs.xml")
+    results = pd.read_parquet(small_sweep / "results.parquet")
+    summary = json.loads((small_sweep / "summary.json").read_text())
+    for controller in ("seed", "lane-keep"):
+        numbers = summary["by_controller"][controller]
+        rows = results[results.controller == controller]
+        ok = rows[rows.status == "ok"]
+        assert numbers["n_ok"] == len(ok) == 3 and numbers["n_error"] == 3
+        assert numbers["collisions"] == int(ok.collision.sum())
+        assert numbers["collision_rate"] == pytest.approx(ok.collision.mean())
+        assert 0 <= numbers["wilson_low"] <= numbers["collision_rate"] <= numbers["wilson_high"]
+    assert summary["by_controller"]["lane-keep"]["collisions"] == 3
+    assert set(summary["by"]) == {"p.ego.speed_mps", "p.obstacles[0].lateral_offset_m"}
+    assert summary["paired"][0]["pairs"] == 3
+
+    page = report.html_path.read_text()
+    assert not re.search(r"""(src|href)=["']?(https?:)?//""", page)  # nothing external
+    images = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
+    assert len(images) >= 5
+    for data in images:
+        assert matplotlib.image.imread(io.BytesIO(base64.b64decode(data))).ndim == 3
+    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
+    for run_id in bad.run_id:
+        assert f"sdc replay {small_sweep} --run {run_id}" in page
+        assert f"--run {run_id}" in (small_sweep / "report.md").read_text()
+    assert "invalid scenario from sample" in page
+
+    suite = ElementTree.parse(tmp_path / "runs.xml").getroot()
+    cases = suite.findall("testcase")
+    assert len(cases) == len(results) == 12
+    assert int(suite.get("errors")) == 6 == len(suite.findall("testcase/error"))
+    assert int(suite.get("failures")) == int(results.collision.fillna(False).sum())
+
+
+def test_report_page_renders_in_headless_chromium(small_sweep, tmp_path):
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is needed (make test installs it)"
+    report = write_report(small_sweep, html_path=tmp_path / "report.html")
+    ARTIFACTS.mkdir(exist_ok=True)
+    screenshot = ARTIFACTS / "report-screenshot.png"
+    screenshot.unlink(missing_ok=True)
+    done = subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'profile'}",
+                           f"--screenshot={screenshot}", report.html_path.as_uri()],
+                          capture_output=True, text=True, timeout=120)
+    console = [line for line in done.stderr.splitlines() if "CONSOLE" in line]
+    assert console == []
+    image = matplotlib.image.imread(screenshot)
+    assert image.shape[:2] == (3000, 1200)
+    assert image.std() > 0.05  # not a blank page
+
+
+def test_cli_report_and_its_bad_inputs(small_sweep, tmp_path):
+    result = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "p.ego.speed_mps",
+                                       "--interval", "clopper-pearson"])
+    assert result.exit_code == 0, result.output
+    assert result.output.splitlines()[0].split()[:3] == ["controller", "ok", "runs"]
+    assert f"report: {small_sweep / 'report.html'}" in result.output
+    summary = json.loads((small_sweep / "summary.json").read_text())
+    assert list(summary["by"]) == ["p.ego.speed_mps"] and summary["interval"] == "clopper-pearson"
+
+    bad_by = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "p.ego.nope"])
+    assert bad_by.exit_code == 2 and "--by: no column 'p.ego.nope'" in bad_by.output
+    no_dir = CliRunner().invoke(main, ["report", str(small_sweep), "--out",
+                                       str(tmp_path / "nowhere" / "r.html")])
+    assert no_dir.exit_code == 2 and "--out: directory" in no_dir.output
+    not_a_sweep = CliRunner().invoke(main, ["report", str(tmp_path)])
+    assert not_a_sweep.exit_code == 2 and "not a sweep directory" in not_a_sweep.output
+
+
+def test_demo_shows_the_physics(tmp_path):
+    """seed-envelope: the seed maneuver fails more often fast than slow; lane-keep always."""
+    out = tmp_path / "demo"
+    result = CliRunner().invoke(main, ["demo", "--out", str(out), "--samples", "40",
+                                       "--workers", "2"])
+    assert result.exit_code == 0, result.output
+    assert f"report: {out / 'report.html'}" in result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["by_controller"]["lane-keep"]["collision_rate"] >= 0.95
+    results = pd.read_parquet(out / "results.parquet")
+    seed = results[(results.controller == "seed") & (results.status == "ok")]
+    slow = seed[seed["p.ego.speed_mps"] < 5.0]
+    fast = seed[seed["p.ego.speed_mps"] >= 5.0]
+    assert len(slow) >= 10 and len(fast) >= 10
+    assert slow.collision.mean() + 0.2 < fast.collision.mean()
