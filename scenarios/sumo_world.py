@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
-from scenarios.network import EDGE_ID, build_network
+from scenarios.network import EDGE_ID, build_network, sumo_binary
 from scenarios.road import RoadGeometry
 from scenarios.snapshot import NO_BOXES, Snapshot, obstacle_boxes
 from scenarios.spec import ScenarioSpec
@@ -76,8 +76,10 @@ class SumoWorld:
 
     backend = "sumo"
 
-    def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None):
+    def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
+                 gui: bool = False):
         self.spec = spec
+        self.gui = gui
         self.road = road
         self.cache_dir = cache_dir
         self._obstacle_boxes = obstacle_boxes(spec, road)
@@ -86,26 +88,36 @@ class SumoWorld:
         self._sumo = None
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
-        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot."""
-        import libsumo  # imported here: only this backend needs the simulator
+        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
+
+        With ``gui``, the same simulation runs in ``sumo-gui`` through traci (libsumo
+        has no GUI); its API and its results are the same.
+        """
+        if self.gui:
+            import traci as sim  # a socket to sumo-gui
+            command = [sumo_binary("sumo-gui"), "--start", "--quit-on-end",
+                       "--delay", str(round(1000 * self.spec.scenario.step_s))]
+        else:
+            import libsumo as sim  # imported here: only this backend needs the simulator
+            command = ["sumo"]
 
         net = build_network(self.spec.road, self.cache_dir)
         self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
         routes = Path(self._tmp.name) / "scenario.rou.xml"
         routes.write_text(routes_xml(self.spec))
-        libsumo.start([
-            "sumo", "--net-file", str(net), "--route-files", str(routes),
+        sim.start([
+            *command, "--net-file", str(net), "--route-files", str(routes),
             "--step-length", repr(self.spec.scenario.step_s),
             "--seed", str(self.spec.scenario.seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
             "--no-step-log", "true", "--no-warnings", "true",
         ])
-        self._sumo = libsumo
+        self._sumo = sim
         ego = self.spec.ego
-        libsumo.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now",
-                            departLane=str(ego.lane), departSpeed="0")
-        libsumo.vehicle.setSpeedMode(EGO_ID, 0)
-        libsumo.vehicle.setLaneChangeMode(EGO_ID, 0)
+        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now",
+                        departLane=str(ego.lane), departSpeed="0")
+        sim.vehicle.setSpeedMode(EGO_ID, 0)
+        sim.vehicle.setLaneChangeMode(EGO_ID, 0)
         return self.step(ego_box, ego_speed_mps)
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:

@@ -271,3 +271,111 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
                    err=True)
         sys.exit(EXIT_INTERRUPTED)
     sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
+
+
+def _has_display() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def _render(trace, metadata, out: Path, every: int) -> None:
+    from analysis.render import animate, scene_from_trace, write_html
+
+    scene = scene_from_trace(trace, metadata)
+    write = write_html if out.suffix == ".html" else animate
+    frames = write(scene, out, every)
+    click.echo(f"{frames} frames written to {out}")
+
+
+@main.command()
+@click.argument("target", metavar="DIR|TRACE.parquet", type=click.Path(path_type=Path))
+@click.option("--run", "run_id", metavar="ID", help="The run of sweep DIR to re-simulate.")
+@click.option("--verify", is_flag=True, help="Exit 1 unless the re-simulation is identical.")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+              metavar="FILE.gif|.mp4|.html",
+              help="Draw the run: an animation (mp4 needs ffmpeg) or an interactive page.")
+@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Keep one frame in K.")
+@click.option("--gui", is_flag=True, help="Re-simulate in sumo-gui (needs a display).")
+def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, every: int,
+           gui: bool) -> None:
+    """Re-simulate one run of a sweep exactly, or draw a recorded trace.
+
+    With a sweep DIR and --run ID, the run is rebuilt from DIR's plan (same spec,
+    seed and controller) and its trace compared with the recorded trace_sha256:
+    it prints `identical`, or where the run diverged (the first step and field,
+    when DIR kept the run's trace). With TRACE.parquet, the recorded run is drawn
+    without SUMO (default --out: TRACE.html beside it).
+    """
+    from sdc.trace import read_trace
+
+    if out is not None and out.suffix not in (".gif", ".mp4", ".html"):
+        _bad_input(f"--out: {out} must end in .gif, .mp4 or .html")
+    if out is not None and not out.parent.is_dir():
+        _bad_input(f"--out: directory {out.parent} does not exist")
+    if out is not None and out.suffix == ".mp4":
+        from matplotlib import animation
+
+        if not animation.writers.is_available("ffmpeg"):
+            _bad_input("--out: writing .mp4 needs ffmpeg on PATH; use .gif or .html")
+    if gui and not _has_display():
+        _bad_input("--gui: no display here (DISPLAY is not set); draw the run with "
+                   "--out run.html or run.gif instead")
+    try:
+        if target.suffix == ".parquet":
+            if run_id or verify or gui:
+                _bad_input("--run, --verify and --gui need a sweep DIR, not a trace file")
+            trace, metadata = read_trace(target)
+            _render(trace, metadata, out or target.with_suffix(".html"), every)
+            return
+        if run_id is None:
+            _bad_input("--run: a run ID is required with a sweep DIR (see its results)")
+        diverged = _replay_run(target, run_id, out, every, gui)
+    except SdcError as e:
+        _bad_input(str(e))
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    if verify and diverged:
+        sys.exit(EXIT_RUN_ERROR)
+
+
+def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui: bool) -> bool:
+    """Re-simulate, compare, report and draw; True when the replay is not identical."""
+    from sdc.episode import run_episode
+    from sdc.replay import first_divergence, load_recorded_run, version_warnings
+    from sdc.trace import read_trace
+
+    recorded = load_recorded_run(sweep_dir, run_id)
+    for line in version_warnings(recorded.manifest):
+        click.echo(line, err=True)
+    episode = run_episode(recorded.spec, gui=gui)
+    replayed_sha = episode.trace.sha256()
+    row = recorded.row
+    for line in summary_lines(run_id, {"run_id": run_id, **episode.row}):
+        click.echo(line)
+    diverged = True
+    if row is None:
+        click.echo(f"not comparable: {sweep_dir} has no result for {run_id} yet")
+    elif row["status"] != "ok":
+        click.echo(f"not comparable: the recorded run ended with status {row['status']}: "
+                   f"{row['error']}")
+    elif recorded.trace_path is not None:  # the recorded steps: compare step by step
+        divergence = first_divergence(read_trace(recorded.trace_path)[0], episode.trace)
+        if divergence is not None:
+            click.echo(f"DIVERGED: {divergence.describe()}")
+        elif row["trace_sha256"] != replayed_sha:
+            click.echo(f"DIVERGED: the replay equals the recorded trace file, but its sha256 "
+                       f"{replayed_sha} is not the result row's {row['trace_sha256']}")
+        else:
+            diverged = False
+            click.echo(f"identical: trace sha256 {replayed_sha}")
+    elif row["trace_sha256"] == replayed_sha:
+        diverged = False
+        click.echo(f"identical: trace sha256 {replayed_sha}")
+    else:
+        click.echo(f"DIVERGED: trace sha256 {replayed_sha} != recorded {row['trace_sha256']} "
+                   "(the sweep kept no trace of this run to find the step; sweep with "
+                   "--traces all)")
+    if out is not None:
+        _render(episode.trace, episode.metadata, out, every)
+    return diverged

@@ -49,18 +49,10 @@ def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> V
                         float(center[1] - back * math.sin(yaw)), yaw, spec.ego.speed_mps, 0.0)
 
 
-def body_boxes(trace: Trace, model) -> np.ndarray:
-    """The ego's body box at every step of a trace, (N, 5)."""
-    f = trace.floats
-    ahead_m = model.center_ahead_of_rear_axle_m
-    return np.column_stack([f["x_m"] + ahead_m * np.cos(f["yaw_rad"]),
-                            f["y_m"] + ahead_m * np.sin(f["yaw_rad"]), f["yaw_rad"],
-                            np.full(len(trace), model.length_m),
-                            np.full(len(trace), model.width_m)])
-
-
-def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode:
-    """Run ``spec`` (its seed, its controller) in SUMO and return the outcome."""
+def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None,
+                gui: bool = False) -> Episode:
+    """Run ``spec`` (its seed, its controller) in SUMO and return the outcome;
+    with ``gui``, in sumo-gui (same results, at the speed of the step length)."""
     wall_start = time.perf_counter()
     road = RoadGeometry.from_spec(spec.road)
     model = VEHICLE_MODELS[spec.vehicle.model]
@@ -76,7 +68,7 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
 
     state = initial_state(spec, road, vehicle)
     termination, hit = DURATION, None
-    with SumoWorld(spec, road, cache_dir) as world:
+    with SumoWorld(spec, road, cache_dir, gui) as world:
         snapshot = world.start(vehicle.body_box(state), state.speed_mps)
         for k in range(n_steps + 1):
             box = vehicle.body_box(state)
@@ -114,7 +106,8 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None) -> Episode
 
     trace = recorder.finish()
     t_end = float(trace.floats["t_s"][-1])
-    edge_gaps_m = road_edge_gaps_m(body_boxes(trace, model), road)
+    edge_gaps_m = road_edge_gaps_m(
+        trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m), road)
     detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
     row = {
         "seed": spec.scenario.seed,

@@ -14,6 +14,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from scenarios.errors import SdcError
+
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (
     "t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
@@ -51,6 +53,14 @@ class Trace:
                 h.update(len(row).to_bytes(4, "little"))
                 h.update(np.ascontiguousarray(row, dtype="<f4").tobytes())
         return h.hexdigest()
+
+    def body_boxes(self, ahead_m: float, length_m: float, width_m: float) -> np.ndarray:
+        """The ego's body box ``[cx, cy, yaw, length, width]`` at every step, (N, 5);
+        ``ahead_m`` is the body centre's distance ahead of the rear axle."""
+        x, y, yaw = self.floats["x_m"], self.floats["y_m"], self.floats["yaw_rad"]
+        n = len(self)
+        return np.column_stack([x + ahead_m * np.cos(yaw), y + ahead_m * np.sin(yaw), yaw,
+                                np.full(n, length_m), np.full(n, width_m)])
 
     def to_table(self, metadata: dict) -> pa.Table:
         columns = {name: pa.array(self.floats[name], pa.float64()) for name in FLOAT_COLUMNS}
@@ -96,6 +106,10 @@ class TraceRecorder:
 def read_trace(path: str | Path) -> tuple[Trace, dict]:
     """A trace and its metadata (spec, road, run) from a Parquet file."""
     table = pq.read_table(path)
+    missing = [c for c in (*FLOAT_COLUMNS, "phase", *LIST_COLUMNS) if c not in table.column_names]
+    if missing or METADATA_KEY not in (table.schema.metadata or {}):
+        raise SdcError(f"{path}: not an sdc trace of this version "
+                       f"(missing {', '.join(missing) or 'metadata'})")
     metadata = json.loads(table.schema.metadata[METADATA_KEY])
     floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
     lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]

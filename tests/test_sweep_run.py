@@ -83,6 +83,10 @@ def test_local_and_ray_executors_give_identical_results(tmp_path):
         pd.testing.assert_frame_equal(comparable(tmp_path / name), reference)
         traces = sorted(p.stem for p in (tmp_path / name / "traces").glob("*.parquet"))
         assert traces == sorted(reference.run_id)
+    for run_id in reference.run_id[:2]:  # a Ray sweep's run replays identically here
+        replay = subprocess.run([*SDC, "replay", str(tmp_path / "ray"), "--run", run_id,
+                                 "--verify"], capture_output=True, text=True, timeout=120)
+        assert replay.returncode == 0 and "identical" in replay.stdout, replay.stdout
     # the same spec run alone, in this process, gives the same row
     first = expand(sweep)[0]
     alone = execute(RunTask(first.run_id, first.spec))

@@ -1,0 +1,202 @@
+"""Drawing one run from its trace: an animation (GIF, MP4) or an interactive HTML page.
+
+Everything comes from the trace and its metadata (spec, road centre line,
+vehicle size), so a recorded run is drawn without SUMO. The view follows the
+ego; beams with a return are drawn strong, the others faint.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never a window
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib import animation  # noqa: E402
+from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
+
+from analysis.metrics import central_range_m  # noqa: E402
+from scenarios.road import RoadGeometry  # noqa: E402
+from scenarios.snapshot import obstacle_boxes  # noqa: E402
+from scenarios.spec import ScenarioSpec, SeedParams  # noqa: E402
+from sdc.geometry import box_corners  # noqa: E402
+from sdc.sensors import beam_angles_rad  # noqa: E402
+from sdc.trace import Trace  # noqa: E402
+
+VIEW_BEHIND_M, VIEW_AHEAD_M = 20.0, 45.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """What a frame shows, for every step of a run (plain arrays)."""
+
+    t_s: np.ndarray  # (N,)
+    ego: np.ndarray  # (N, 5) body boxes
+    traffic: list[np.ndarray]  # per step (M, 5)
+    obstacles: np.ndarray  # (K, 5)
+    mount_xy: np.ndarray  # (N, 2) lidar position
+    beam_yaw_rad: np.ndarray  # (N, B) world direction of each beam
+    ranges_m: np.ndarray  # (N, B), inf = no return
+    max_range_m: float
+    phase: list[str]
+    speed_mps: np.ndarray
+    lane_offset_m: np.ndarray
+    central_range_m: np.ndarray  # the detection beams' shortest range (inf: none)
+    lane_lines: list[np.ndarray]  # polylines (P, 2): lane separators
+    edges: list[np.ndarray]  # the two road edges
+    title: str
+
+
+def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
+    spec = ScenarioSpec.from_plain(metadata["spec"])
+    plain_road = metadata["road"]
+    road = RoadGeometry(np.array(plain_road["center_xy"]), plain_road["lanes"],
+                        plain_road["lane_width_m"])
+    vehicle = metadata["vehicle"]
+    ego = trace.body_boxes(vehicle["center_ahead_of_rear_axle_m"], vehicle["length_m"],
+                           vehicle["width_m"])
+    f = trace.floats
+    mount = spec.lidar.mount_ahead_m
+    mount_xy = np.column_stack([f["x_m"] + mount * np.cos(f["yaw_rad"]),
+                                f["y_m"] + mount * np.sin(f["yaw_rad"])])
+    angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
+    ranges = np.array(trace.lidar, dtype=float).reshape(len(trace), -1)
+    detect = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
+    half = road.half_width_m
+    separators = [road.lane_center_d_m(i) + road.lane_width_m / 2 for i in range(road.lanes - 1)]
+    run = metadata.get("run", {})
+    return Scene(
+        t_s=f["t_s"], ego=ego,
+        traffic=[np.asarray(row, float).reshape(-1, 5) for row in trace.traffic],
+        obstacles=obstacle_boxes(spec, road), mount_xy=mount_xy,
+        beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
+        max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
+        lane_offset_m=f["lane_offset_m"],
+        central_range_m=np.array([central_range_m(r, detect) for r in ranges]),
+        lane_lines=[road.offset_polyline(d) for d in separators],
+        edges=[road.offset_polyline(-half), road.offset_polyline(half)],
+        title=(f"{spec.scenario.name}  controller {spec.controller.name}  seed "
+               f"{spec.scenario.seed}  ({run.get('termination', '?')}"
+               + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
+                  else "") + ")"),
+    )
+
+
+def frame_steps(n_steps: int, every: int) -> list[int]:
+    """The steps drawn: every ``every``-th, and always the last."""
+    steps = list(range(0, n_steps, every))
+    if steps[-1] != n_steps - 1:
+        steps.append(n_steps - 1)
+    return steps
+
+
+def _beam_segments(scene: Scene, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(B, 2, 2) beam segments at step ``k`` and whether each has a return."""
+    hit = np.isfinite(scene.ranges_m[k])
+    length = np.where(hit, scene.ranges_m[k], scene.max_range_m)
+    start = np.broadcast_to(scene.mount_xy[k], (len(length), 2))
+    yaw = scene.beam_yaw_rad[k]
+    end = start + length[:, None] * np.column_stack([np.cos(yaw), np.sin(yaw)])
+    return np.stack([start, end], axis=1), hit
+
+
+def _finite_or_nan(values: np.ndarray) -> np.ndarray:
+    return np.where(np.isfinite(values), values, np.nan)
+
+
+def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
+    """Write a GIF or (with ffmpeg) an MP4 of the run; returns the number of frames."""
+    path = Path(path)
+    steps = frame_steps(len(scene.t_s), every)
+    fig, (ax, strip) = plt.subplots(2, 1, figsize=(8, 6.5), height_ratios=[3, 1.4])
+    fig.suptitle(scene.title, fontsize=9)
+    for line in scene.lane_lines:
+        ax.plot(line[:, 0], line[:, 1], color="0.7", linestyle="--", linewidth=0.8)
+    for edge in scene.edges:
+        ax.plot(edge[:, 0], edge[:, 1], color="0.2", linewidth=1.5)
+    beams = LineCollection([], linewidths=0.6)
+    traffic = PolyCollection([], facecolors="tab:blue", edgecolors="k", linewidths=0.5)
+    obstacles = PolyCollection(box_corners(scene.obstacles) if len(scene.obstacles) else [],
+                               facecolors="tab:red", edgecolors="k", linewidths=0.5)
+    ego = PolyCollection([], facecolors="tab:green", edgecolors="k", linewidths=0.8)
+    for artist in (beams, traffic, obstacles, ego):
+        ax.add_collection(artist)
+    label = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
+                    family="monospace", bbox={"facecolor": "white", "alpha": 0.8})
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+    t = scene.t_s
+    strip.plot(t, scene.speed_mps, label="speed [m/s]")
+    strip.plot(t, scene.lane_offset_m, label="lane offset [m]")
+    strip.plot(t, np.minimum(_finite_or_nan(scene.central_range_m), 20.0),
+               label="central range [m] (<= 20)")
+    strip.set_xlabel("t [s]")
+    strip.legend(fontsize=7, loc="upper right")
+    strip.grid(alpha=0.3)
+    cursor = strip.axvline(t[0], color="k", linewidth=0.8)
+
+    def draw(k: int):
+        segments, hit = _beam_segments(scene, k)
+        beams.set_segments(segments)
+        beams.set_colors(np.where(hit[:, None], [[1.0, 0.5, 0.0, 0.9]], [[0.5, 0.5, 0.5, 0.12]]))
+        traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
+        ego.set_verts(box_corners(scene.ego[k : k + 1]))
+        cx, cy, yaw = scene.ego[k, :3]
+        ax.set_xlim(cx - VIEW_BEHIND_M, cx + VIEW_AHEAD_M)
+        ax.set_ylim(cy - 12.0, cy + 12.0)
+        label.set_text(f"t {t[k]:6.2f} s  step {k}  {scene.phase[k]}\n"
+                       f"v {scene.speed_mps[k]:5.2f} m/s  yaw {math.degrees(yaw):6.1f} deg")
+        cursor.set_xdata([t[k], t[k]])
+        return beams, traffic, ego, label, cursor
+
+    anim = animation.FuncAnimation(fig, draw, frames=steps, blit=False)
+    if path.suffix == ".mp4":
+        writer = animation.FFMpegWriter(fps=fps)
+    else:
+        writer = animation.PillowWriter(fps=fps)
+    anim.save(str(path), writer=writer, dpi=80)
+    plt.close(fig)
+    return len(steps)
+
+
+def _round(values: np.ndarray, digits: int = 3) -> list:
+    return np.round(np.where(np.isfinite(values), values, -1.0), digits).tolist()
+
+
+def html_data(scene: Scene, every: int = 1) -> dict:
+    """The page's data: static road and obstacles, and per frame what moves."""
+    steps = frame_steps(len(scene.t_s), every)
+    return {
+        "title": scene.title,
+        "maxRange": scene.max_range_m,
+        "beamAngles": _round(scene.beam_yaw_rad[0] - scene.ego[0, 2], 6),
+        "laneLines": [_round(line, 2) for line in scene.lane_lines],
+        "edges": [_round(edge, 2) for edge in scene.edges],
+        "obstacles": _round(scene.obstacles),
+        "series": {"t": _round(scene.t_s), "speed": _round(scene.speed_mps),
+                   "offset": _round(scene.lane_offset_m),
+                   "range": _round(np.minimum(scene.central_range_m, 20.0))},
+        "frames": [{
+            "k": k, "t": round(float(scene.t_s[k]), 3), "phase": scene.phase[k],
+            "ego": _round(scene.ego[k]), "traffic": _round(scene.traffic[k]),
+            "mount": _round(scene.mount_xy[k]), "ranges": _round(scene.ranges_m[k], 2),
+        } for k in steps],
+    }
+
+
+_PAGE = Path(__file__).with_name("replay_page.html")
+
+
+def write_html(scene: Scene, path: Path, every: int = 1) -> int:
+    """Write the self-contained interactive page; returns the number of frames."""
+    data = html_data(scene, every)
+    text = _PAGE.read_text().replace("/*DATA*/null", json.dumps(data, separators=(",", ":")))
+    Path(path).write_text(text)
+    return len(data["frames"])

@@ -1,0 +1,112 @@
+"""Re-simulating one run of a sweep exactly, and finding where two traces part.
+
+A sweep directory holds every planned run's spec (``plan.parquet``) and its
+result row (``results.parquet`` with ``trace_sha256``); when traces were kept,
+``traces/<run_id>.parquet`` holds the recorded steps, which locate a divergence
+to its first step and field.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from scenarios.errors import SdcError
+from scenarios.spec import ScenarioSpec
+from sdc.manifest import package_versions, read_manifest
+from sdc.trace import FLOAT_COLUMNS, Trace
+
+
+@dataclasses.dataclass(frozen=True)
+class Divergence:
+    step: int
+    field: str
+    recorded: Any
+    replayed: Any
+
+    def describe(self) -> str:
+        return (f"diverged at step {self.step}, field {self.field}: recorded {self.recorded!r}, "
+                f"replayed {self.replayed!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class RecordedRun:
+    run_id: str
+    spec: ScenarioSpec
+    row: dict | None  # its result row; None when the sweep has not run it yet
+    trace_path: Path | None  # the recorded trace, when the sweep kept it
+    manifest: dict
+
+
+def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
+    """The spec, result row and trace of ``run_id`` in a sweep directory."""
+    sweep_dir = Path(sweep_dir)
+    manifest = read_manifest(sweep_dir) if sweep_dir.is_dir() else None
+    if manifest is None or not (sweep_dir / "plan.parquet").exists():
+        raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no manifest.json)")
+    plan = pd.read_parquet(sweep_dir / "plan.parquet", columns=["run_id", "spec_json", "error"])
+    match = plan[plan.run_id == run_id]
+    if match.empty:
+        shown = ", ".join(plan.run_id.head(4))
+        raise SdcError(f"--run: no run {run_id!r} in {sweep_dir} (runs: {shown}, ...)")
+    planned = match.iloc[0]
+    if planned.spec_json is None:
+        raise SdcError(f"--run: {run_id} has no scenario to replay: {planned.error}")
+    spec = ScenarioSpec.from_plain(json.loads(planned.spec_json))
+    results = sweep_dir / "results.parquet"
+    row = None
+    if results.exists():
+        rows = pd.read_parquet(results, filters=[("run_id", "==", run_id)])
+        row = rows.iloc[0].to_dict() if len(rows) else None
+    trace = sweep_dir / "traces" / f"{run_id}.parquet"
+    return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest)
+
+
+def version_warnings(manifest: dict) -> list[str]:
+    """One line per package whose version differs from the sweep's."""
+    now = package_versions()
+    recorded = manifest.get("versions", {})
+    return [f"warning: the sweep ran with {name} {recorded[name]}, this is {now.get(name)}"
+            for name in recorded if name != "ray" and recorded[name] != now.get(name)]
+
+
+def _first_float_mismatch(a: np.ndarray, b: np.ndarray) -> int | None:
+    differ = ~((a == b) | (np.isnan(a) & np.isnan(b)))
+    return int(np.argmax(differ)) if differ.any() else None
+
+
+def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
+    """The earliest step (and, on a tie, the first field in file order) where the
+    traces differ, or None when they are identical."""
+    n = min(len(recorded), len(replayed))
+    found: list[Divergence] = []
+    for name in FLOAT_COLUMNS:
+        a, b = recorded.floats[name][:n], replayed.floats[name][:n]
+        k = _first_float_mismatch(a, b)
+        if k is not None:
+            found.append(Divergence(k, name, float(a[k]), float(b[k])))
+    for k in range(n):
+        if recorded.phase[k] != replayed.phase[k]:
+            found.append(Divergence(k, "phase", recorded.phase[k], replayed.phase[k]))
+            break
+    for name in ("lidar", "traffic"):
+        rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
+        for k in range(n):
+            a, b = np.asarray(rows_a[k]), np.asarray(rows_b[k])
+            if a.shape != b.shape:
+                found.append(Divergence(k, f"{name} (length)", len(a), len(b)))
+                break
+            i = _first_float_mismatch(a, b)
+            if i is not None:
+                found.append(Divergence(k, f"{name}[{i}]", float(a[i]), float(b[i])))
+                break
+    if found:
+        return min(found, key=lambda d: d.step)  # min keeps the first of equal steps
+    if len(recorded) != len(replayed):
+        return Divergence(n, "steps", len(recorded), len(replayed))
+    return None

@@ -1,0 +1,181 @@
+"""Replay: exact re-simulation, divergence located to its step, GIF and HTML drawings."""
+
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from PIL import Image
+
+from analysis.render import frame_steps
+from scenarios import CATALOG_DIR
+from scenarios.sweep import load_sweep
+from sdc.cli import main
+from sdc.executors import LocalExecutor
+from sdc.progress import QuietReporter
+from sdc.replay import first_divergence
+from sdc.sweep import run_sweep
+from sdc.trace import Trace, read_trace
+
+SWEEP = f"""[sweep]
+name = "replays"
+base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+sampler = "grid"
+controllers = ["seed", "lane-keep"]
+
+[sweep.params]
+"ego.speed_mps" = {{ choice = [3.74, 9.0] }}
+"traffic.flow_vph_per_lane" = {{ choice = [0, 1200] }}
+"road.speed_limit_mps" = {{ choice = [27.78] }}
+"scenario.duration_s" = {{ choice = [12.0] }}
+"""
+RUN = "00000-seed"  # 3.74 m/s, no traffic: the lesson's maneuver, about 190 steps
+
+
+def fake_trace(n: int = 6) -> Trace:
+    floats = {name: np.arange(n, dtype=float) for name in
+              ("t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
+               "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s")}
+    floats["lane_offset_m"][:] = np.nan
+    return Trace(floats, ["lane_keep"] * n, [np.full(4, np.inf, np.float32)] * n,
+                 [np.zeros(5, np.float32)] * n)
+
+
+def altered(trace: Trace, **floats) -> Trace:
+    return dataclasses.replace(trace, floats={**trace.floats, **floats})
+
+
+def test_first_divergence_names_the_earliest_step_and_field():
+    a = fake_trace()
+    assert first_divergence(a, fake_trace()) is None  # NaN equals NaN here
+    speed = a.floats["speed_mps"].copy()
+    speed[4] = 99.0
+    yaw = a.floats["yaw_rad"].copy()
+    yaw[4] = -1.0
+    d = first_divergence(a, altered(a, speed_mps=speed, yaw_rad=yaw))
+    assert (d.step, d.field, d.recorded, d.replayed) == (4, "yaw_rad", 4.0, -1.0)
+    lidar = list(a.lidar)
+    lidar[2] = np.array([np.inf, 3.0, np.inf, np.inf], np.float32)
+    d = first_divergence(a, dataclasses.replace(a, lidar=lidar))
+    assert (d.step, d.field, d.replayed) == (2, "lidar[1]", 3.0)
+    d = first_divergence(a, dataclasses.replace(a, phase=["lane_keep"] * 3 + ["avoid_left"] * 3))
+    assert (d.step, d.field) == (3, "phase")
+    shorter = Trace({k: v[:5] for k, v in a.floats.items()}, a.phase[:5], a.lidar[:5],
+                    a.traffic[:5])
+    d = first_divergence(a, shorter)
+    assert (d.step, d.field, d.recorded, d.replayed) == (5, "steps", 6, 5)
+
+
+@pytest.fixture(scope="module")
+def sweep_dir(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("replay")
+    (tmp / "sweep.toml").write_text(SWEEP)
+    out = tmp / "sweep"
+    outcome = run_sweep(load_sweep(tmp / "sweep.toml"), out, LocalExecutor(2), QuietReporter(),
+                        traces="all")
+    assert outcome.counts["ok"] == 8
+    return out
+
+
+
+@pytest.mark.slow
+def test_every_run_of_a_two_worker_sweep_replays_identically(sweep_dir):
+    for run_id in sorted(p.stem for p in (sweep_dir / "traces").glob("*.parquet")):
+        result = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", run_id,
+                                           "--verify"])
+        assert result.exit_code == 0, result.output
+        assert "identical: trace sha256" in result.output
+
+
+@pytest.mark.slow
+def test_a_trace_altered_at_step_k_diverges_at_step_k(sweep_dir, tmp_path):
+    copy = tmp_path / "sweep"
+    shutil.copytree(sweep_dir, copy)
+    path = copy / "traces" / f"{RUN}.parquet"
+    trace, metadata = read_trace(path)
+    speed = trace.floats["speed_mps"].copy()
+    speed[37] += 0.5
+    altered(trace, speed_mps=speed).write(path, metadata)
+    result = CliRunner().invoke(main, ["replay", str(copy), "--run", RUN])
+    assert result.exit_code == 0  # without --verify a divergence is reported, not failed
+    assert "DIVERGED: diverged at step 37, field speed_mps: recorded 4.24" in result.output
+    assert "replayed 3.74" in result.output
+    verify = CliRunner().invoke(main, ["replay", str(copy), "--run", RUN, "--verify"])
+    assert verify.exit_code == 1
+
+
+@pytest.mark.slow
+def test_gif_has_one_frame_per_kept_step(sweep_dir, tmp_path):
+    out = tmp_path / "run.gif"
+    result = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", RUN, "--out",
+                                       str(out), "--every", "20"])
+    assert result.exit_code == 0, result.output
+    steps = len(read_trace(sweep_dir / "traces" / f"{RUN}.parquet")[0])
+    expected = len(frame_steps(steps, 20))
+    assert expected == -(-steps // 20) + (steps % 20 != 1)
+    assert Image.open(out).n_frames == expected
+    assert f"{expected} frames written to {out}" in result.output
+
+
+@pytest.mark.slow
+def test_html_page_steps_on_click_in_headless_chromium(sweep_dir, tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    trace_file = tmp_path / "run.parquet"
+    shutil.copy(sweep_dir / "traces" / f"{RUN}.parquet", trace_file)
+    result = CliRunner().invoke(main, ["replay", str(trace_file), "--every", "3"])
+    assert result.exit_code == 0, result.output
+    page_file = tmp_path / "run.html"  # the default: beside the trace
+    assert page_file.exists() and "http" not in page_file.read_text().split("<script>")[0]
+    chromium = shutil.which("chromium")
+    assert chromium, "Debian's chromium is needed (make test installs it)"
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=[
+            "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync"])
+        page = browser.new_page()
+        problems = []
+        page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
+        page.on("pageerror", lambda e: problems.append(str(e)))
+        page.goto(page_file.as_uri())
+        assert page.get_attribute("body", "data-step") == "0"
+        page.click("#next")
+        page.click("#next")
+        assert page.get_attribute("body", "data-step") == "6"
+        assert "step 6" in page.text_content("#status")
+        page.click("#beams")  # beams off, still drawing
+        page.click("#prev")
+        assert page.get_attribute("body", "data-step") == "3"
+        browser.close()
+    assert problems == []
+
+
+@pytest.mark.slow
+def test_gui_replay_on_a_virtual_display_is_identical(sweep_dir):
+    xvfb_run = shutil.which("xvfb-run")
+    assert xvfb_run, "Debian's xvfb is needed (make test installs it)"
+    done = subprocess.run([xvfb_run, "-a", sys.executable, "-m", "sdc", "replay",
+                           str(sweep_dir), "--run", "00002-seed", "--gui", "--verify"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "identical: trace sha256" in done.stdout
+
+
+@pytest.mark.slow
+def test_replay_bad_inputs_exit_2(sweep_dir, tmp_path):
+    def run(*args, env=None):
+        return CliRunner(env=env).invoke(main, ["replay", *map(str, args)])
+
+    assert "--run: no run 'nope'" in run(sweep_dir, "--run", "nope").output
+    assert run(sweep_dir, "--run", "nope").exit_code == 2
+    assert run(sweep_dir).exit_code == 2
+    assert "must end in .gif" in run(sweep_dir, "--run", RUN, "--out", tmp_path / "x.txt").output
+    no_display = run(sweep_dir, "--run", RUN, "--gui", env={"DISPLAY": None,
+                                                             "WAYLAND_DISPLAY": None})
+    assert no_display.exit_code == 2 and "--gui: no display" in no_display.output
+    assert "not a sweep directory" in run(tmp_path, "--run", RUN).output
