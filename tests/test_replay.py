@@ -17,8 +17,9 @@ from scenarios import CATALOG_DIR
 from scenarios.sweep import load_sweep
 from sdc.cli import main
 from sdc.executors import LocalExecutor
+from sdc.manifest import package_versions
 from sdc.progress import QuietReporter
-from sdc.replay import first_divergence
+from sdc.replay import first_divergence, version_warnings
 from sdc.sweep import run_sweep
 from sdc.trace import Trace, read_trace
 
@@ -179,3 +180,23 @@ def test_replay_bad_inputs_exit_2(sweep_dir, tmp_path):
                                                              "WAYLAND_DISPLAY": None})
     assert no_display.exit_code == 2 and "--gui: no display" in no_display.output
     assert "not a sweep directory" in run(tmp_path, "--run", RUN).output
+
+
+def test_versions_other_than_the_sweeps_are_warned_about():
+    now = package_versions()
+    assert version_warnings({"versions": now}) == []
+    lines = version_warnings({"versions": {**now, "numpy": "0.0.1"}})
+    assert lines == [f"warning: the sweep ran with numpy 0.0.1, this is {now['numpy']}"]
+
+
+@pytest.mark.slow
+def test_mp4_is_written_with_ffmpeg_and_refused_clearly_without(sweep_dir, tmp_path):
+    from matplotlib import animation
+
+    out = tmp_path / "run.mp4"
+    result = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", RUN, "--out",
+                                       str(out), "--every", "50"])
+    if animation.writers.is_available("ffmpeg"):
+        assert result.exit_code == 0 and out.stat().st_size > 0
+    else:
+        assert result.exit_code == 2 and "needs ffmpeg" in result.output and not out.exists()
