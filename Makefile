@@ -31,6 +31,7 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_step.py
 	$(BIN)/python benchmarks/bench_sweep.py
+	$(BIN)/python benchmarks/bench_gym.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

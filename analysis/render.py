@@ -36,6 +36,7 @@ class Scene:
     """What a frame shows, for every step of a run (plain arrays)."""
 
     t_s: np.ndarray  # (N,)
+    step: np.ndarray  # (N,) the run's step number of each entry
     ego: np.ndarray  # (N, 5) body boxes
     traffic: list[np.ndarray]  # per step (M, 5)
     obstacles: np.ndarray  # (K, 5)
@@ -52,6 +53,19 @@ class Scene:
     title: str
 
 
+def road_lines(road: RoadGeometry) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The lane separators and the two road edges as polylines (P, 2)."""
+    separators = [road.lane_center_d_m(i) + road.lane_width_m / 2 for i in range(road.lanes - 1)]
+    half = road.half_width_m
+    return ([road.offset_polyline(d) for d in separators],
+            [road.offset_polyline(-half), road.offset_polyline(half)])
+
+
+def detect_beams(spec: ScenarioSpec) -> int:
+    """The central beams whose shortest range is plotted (the seed controller's)."""
+    return getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
+
+
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
     spec = ScenarioSpec.from_plain(metadata["spec"])
     plain_road = metadata["road"]
@@ -66,20 +80,17 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
                                 f["y_m"] + mount * np.sin(f["yaw_rad"])])
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
     ranges = np.array(trace.lidar, dtype=float).reshape(len(trace), -1)
-    detect = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
-    half = road.half_width_m
-    separators = [road.lane_center_d_m(i) + road.lane_width_m / 2 for i in range(road.lanes - 1)]
+    lane_lines, edges = road_lines(road)
     run = metadata.get("run", {})
     return Scene(
-        t_s=f["t_s"], ego=ego,
+        t_s=f["t_s"], step=np.arange(len(trace)), ego=ego,
         traffic=[np.asarray(row, float).reshape(-1, 5) for row in trace.traffic],
         obstacles=obstacle_boxes(spec, road), mount_xy=mount_xy,
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
         lane_offset_m=f["lane_offset_m"],
-        central_range_m=np.array([central_range_m(r, detect) for r in ranges]),
-        lane_lines=[road.offset_polyline(d) for d in separators],
-        edges=[road.offset_polyline(-half), road.offset_polyline(half)],
+        central_range_m=np.array([central_range_m(r, detect_beams(spec)) for r in ranges]),
+        lane_lines=lane_lines, edges=edges,
         title=(f"{spec.scenario.name}  controller {spec.controller.name}  seed "
                f"{spec.scenario.seed}  ({run.get('termination', '?')}"
                + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
@@ -109,12 +120,8 @@ def _finite_or_nan(values: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(values), values, np.nan)
 
 
-def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
-    """Write a GIF or (with ffmpeg) an MP4 of the run; returns the number of frames."""
-    path = Path(path)
-    steps = frame_steps(len(scene.t_s), every)
-    fig, (ax, strip) = plt.subplots(2, 1, figsize=(8, 6.5), height_ratios=[3, 1.4])
-    fig.suptitle(scene.title, fontsize=9)
+def _scene_axes(ax, scene: Scene):
+    """Draw the static road and obstacles on ``ax``; return ``draw(k)`` for step k."""
     for line in scene.lane_lines:
         ax.plot(line[:, 0], line[:, 1], color="0.7", linestyle="--", linewidth=0.8)
     for edge in scene.edges:
@@ -132,6 +139,39 @@ def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
 
+    def draw(k: int) -> None:
+        segments, hit = _beam_segments(scene, k)
+        beams.set_segments(segments)
+        beams.set_colors(np.where(hit[:, None], [[1.0, 0.5, 0.0, 0.9]], [[0.5, 0.5, 0.5, 0.12]]))
+        traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
+        ego.set_verts(box_corners(scene.ego[k : k + 1]))
+        cx, cy, yaw = scene.ego[k, :3]
+        ax.set_xlim(cx - VIEW_BEHIND_M, cx + VIEW_AHEAD_M)
+        ax.set_ylim(cy - 12.0, cy + 12.0)
+        label.set_text(f"t {scene.t_s[k]:6.2f} s  step {scene.step[k]}  {scene.phase[k]}\n"
+                       f"v {scene.speed_mps[k]:5.2f} m/s  yaw {math.degrees(yaw):6.1f} deg")
+
+    return draw
+
+
+def frame_rgb(scene: Scene, k: int, width_px: int = 640, height_px: int = 320) -> np.ndarray:
+    """Step ``k`` drawn as an (H, W, 3) uint8 image (no strip chart)."""
+    fig = plt.figure(figsize=(width_px / 80, height_px / 80), dpi=80)
+    ax = fig.add_axes([0.08, 0.12, 0.9, 0.85])
+    _scene_axes(ax, scene)(k)
+    fig.canvas.draw()
+    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    plt.close(fig)
+    return image
+
+
+def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
+    """Write a GIF or (with ffmpeg) an MP4 of the run; returns the number of frames."""
+    path = Path(path)
+    steps = frame_steps(len(scene.t_s), every)
+    fig, (ax, strip) = plt.subplots(2, 1, figsize=(8, 6.5), height_ratios=[3, 1.4])
+    fig.suptitle(scene.title, fontsize=9)
+    draw_scene = _scene_axes(ax, scene)
     t = scene.t_s
     strip.plot(t, scene.speed_mps, label="speed [m/s]")
     strip.plot(t, scene.lane_offset_m, label="lane offset [m]")
@@ -142,25 +182,13 @@ def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
     strip.grid(alpha=0.3)
     cursor = strip.axvline(t[0], color="k", linewidth=0.8)
 
-    def draw(k: int):
-        segments, hit = _beam_segments(scene, k)
-        beams.set_segments(segments)
-        beams.set_colors(np.where(hit[:, None], [[1.0, 0.5, 0.0, 0.9]], [[0.5, 0.5, 0.5, 0.12]]))
-        traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
-        ego.set_verts(box_corners(scene.ego[k : k + 1]))
-        cx, cy, yaw = scene.ego[k, :3]
-        ax.set_xlim(cx - VIEW_BEHIND_M, cx + VIEW_AHEAD_M)
-        ax.set_ylim(cy - 12.0, cy + 12.0)
-        label.set_text(f"t {t[k]:6.2f} s  step {k}  {scene.phase[k]}\n"
-                       f"v {scene.speed_mps[k]:5.2f} m/s  yaw {math.degrees(yaw):6.1f} deg")
+    def draw(k: int) -> None:
+        draw_scene(k)
         cursor.set_xdata([t[k], t[k]])
-        return beams, traffic, ego, label, cursor
 
     anim = animation.FuncAnimation(fig, draw, frames=steps, blit=False)
-    if path.suffix == ".mp4":
-        writer = animation.FFMpegWriter(fps=fps)
-    else:
-        writer = animation.PillowWriter(fps=fps)
+    writer = (animation.FFMpegWriter(fps=fps) if path.suffix == ".mp4"
+              else animation.PillowWriter(fps=fps))
     anim.save(str(path), writer=writer, dpi=80)
     plt.close(fig)
     return len(steps)

@@ -95,6 +95,10 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
         "sweep_status": manifest.get("status"),
         "interval": method,
         "by_controller": by_controller(results),
+        # side by side when a sweep ran on more than one world backend
+        "by_backend": ({str(b): by_controller(rows) for b, rows in
+                        results.groupby("backend", sort=False)}
+                       if results.backend.nunique() > 1 else {}),
         "paired": [mcnemar(results, a, b) for a, b in itertools.combinations(controllers, 2)],
         "by": grouped,
         "envelope": ([safe_envelope(results, SPEED, c) for c in controllers]
@@ -112,11 +116,20 @@ def _pct(value) -> str:
 
 
 def headline_rows(summary: dict) -> list[list[str]]:
-    rows = [["controller", "ok runs", "collisions", "rate", "95% interval", "errors",
-             "timeouts"]]
-    for controller, numbers in summary["by_controller"].items():
+    """The headline table: per controller, or per controller and backend side by side
+    when the sweep ran on several backends."""
+    by_backend = summary["by_backend"]
+    if by_backend:
+        controllers = list(summary["by_controller"])
+        groups = [([c, b], by_backend[b][c]) for c in controllers for b in by_backend
+                  if c in by_backend[b]]
+    else:
+        groups = [([c], numbers) for c, numbers in summary["by_controller"].items()]
+    rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
+             "rate", "95% interval", "errors", "timeouts"]]
+    for keys, numbers in groups:
         low, high = _low_high(summary, numbers)
-        rows.append([controller, str(numbers["n_ok"]), str(numbers["collisions"]),
+        rows.append([*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
                      _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
                      str(numbers["n_error"]), str(numbers["n_timeout"])])
     return rows

@@ -24,6 +24,7 @@ class ScenarioMeta(Spec):
     duration_s: float = num(gt=0, le=36_000)
     step_s: float = num(0.064, gt=0, le=1.0)
     seed: int = num(0, ge=0, lt=2**31)
+    backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
 
 
 @spec_class
@@ -214,6 +215,10 @@ class ScenarioSpec:
 
     def with_controller(self, name: str) -> ScenarioSpec:
         return dataclasses.replace(self, controller=self.controller.renamed(name))
+
+    def with_backend(self, backend: str) -> ScenarioSpec:
+        return dataclasses.replace(
+            self, scenario=dataclasses.replace(self.scenario, backend=backend))
 
     def with_seed(self, seed: int) -> ScenarioSpec:
         return dataclasses.replace(self, scenario=dataclasses.replace(self.scenario, seed=seed))

@@ -289,6 +289,7 @@ class PlannedRun:
     sample: int
     controller: str
     seed: int
+    backend: str
     params: dict[str, Any]
     spec: ScenarioSpec | None
     error: str | None
@@ -346,7 +347,8 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
         for controller in sweep.controllers:
             plan.append(PlannedRun(
                 index=len(plan), run_id=f"{i:0{width}d}-{controller}", sample=i,
-                controller=controller, seed=int(plain["scenario"]["seed"]), params=values,
+                controller=controller, seed=int(plain["scenario"]["seed"]),
+                backend=str(plain["scenario"].get("backend", "sumo")), params=values,
                 spec=spec.with_controller(controller) if spec else None, error=error,
             ))
     return plan

@@ -86,13 +86,13 @@ def main() -> None:
               help="Override the spec's scenario.seed (SUMO's and the lidar noise's seed).")
 @click.option("--controller", type=click.Choice(sorted(CONTROLLER_PARAMS)),
               help="Override the spec's controller (shared parameters carry over).")
-@click.option("--backend", type=click.Choice(["sumo"]), default="sumo", show_default=True,
-              help="World backend.")
+@click.option("--backend", type=click.Choice(["sumo", "highway"]),
+              help="Override the spec's scenario.backend (the world simulator).")
 @click.option("--trace", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.parquet",
               help="Write one row per step (pose, steering, lane offset, phase, lidar, traffic).")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the result row as one JSON object on the last line.")
-def run(spec_file: Path, seed: int | None, controller: str | None, backend: str,
+def run(spec_file: Path, seed: int | None, controller: str | None, backend: str | None,
         trace: Path | None, as_json: bool) -> None:
     """Run one scenario and print its outcome."""
     _check_trace_path(trace)
@@ -102,6 +102,8 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str,
             spec = spec.with_seed(seed)
         if controller is not None:
             spec = spec.with_controller(controller)
+        if backend is not None:
+            spec = spec.with_backend(backend)
         row = run_one(spec, trace)
     except SdcError as e:
         _bad_input(str(e))

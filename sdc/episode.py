@@ -2,7 +2,8 @@
 
 Each step senses the world at time t (lidar, lane offset), decides, records the
 row, checks for the end (collision, duration, route end), then moves the car and
-pushes it into the world, which advances to t + step.
+pushes it into the world, which advances to t + step. :class:`Simulation` holds
+those steps; :func:`run_episode` drives it with the spec's controller.
 """
 
 from __future__ import annotations
@@ -19,13 +20,13 @@ from analysis.safety import road_edge_gaps_m, time_to_collision_s
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec, SeedParams
-from scenarios.sumo_world import SumoWorld
+from scenarios.worlds import make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
 from sdc.geometry import box_gap_m
 from sdc.sensors import LaneSensor, Lidar
 from sdc.trace import Trace, TraceRecorder
-from sdc.vehicle import Vehicle, VehicleState
+from sdc.vehicle import Command, Vehicle, VehicleState
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
@@ -49,89 +50,135 @@ def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> V
                         float(center[1] - back * math.sin(yaw)), yaw, spec.ego.speed_mps, 0.0)
 
 
+class Simulation:
+    """One run advanced a step at a time; the caller decides each step's command.
+
+    After :meth:`start` and each :meth:`advance`, ``ranges`` (the lidar's range
+    image) and ``lane`` (the lane sensor's reading, None off the road's ends)
+    describe the current step. :meth:`record` adds the step's trace row,
+    :meth:`end_reason` says whether the run ends at this step, :meth:`finish`
+    gives the :class:`Episode`.
+    """
+
+    def __init__(self, spec: ScenarioSpec, world, look_ahead_m: float):
+        self.spec, self.world, self.look_ahead_m = spec, world, look_ahead_m
+        self.road = world.road
+        self.model = VEHICLE_MODELS[spec.vehicle.model]
+        self.vehicle = Vehicle(self.model, spec.vehicle.friction_mu)
+        edges = self.road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
+        self.lidar = Lidar(spec.lidar, edges, np.random.default_rng(spec.scenario.seed))
+        self.lane_sensor = LaneSensor(self.road, spec.ego.lane)
+        self.recorder = TraceRecorder()
+        self.step_s = spec.scenario.step_s
+        self.n_steps = round(spec.scenario.duration_s / self.step_s)
+        self.hit: str | None = None
+        self.wall_start = time.perf_counter()
+
+    def start(self) -> None:
+        self.k = 0
+        self.state = initial_state(self.spec, self.road, self.vehicle)
+        self.snapshot = self.world.start(self.vehicle.body_box(self.state), self.state.speed_mps)
+        self._sense()
+
+    def _sense(self) -> None:
+        state, snapshot = self.state, self.snapshot
+        self.box = self.vehicle.body_box(state)
+        self.boxes = np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes])
+        self.ranges = self.lidar.scan(
+            self.vehicle.point_ahead(state, self.spec.lidar.mount_ahead_m), state.yaw_rad,
+            self.boxes)
+        self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
+
+    def record(self, command: Command, phase: str) -> None:
+        """Add the current step's row to the trace."""
+        state, snapshot, lane = self.state, self.snapshot, self.lane
+        gap_m = float(np.min(box_gap_m(self.box, snapshot.obstacle_boxes), initial=math.inf))
+        ttc_s = time_to_collision_s(
+            self.box, state.speed_mps, self.boxes,
+            np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
+                            snapshot.traffic_speeds_mps]))
+        self.recorder.add(
+            t_s=self.k * self.step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
+            speed_mps=state.speed_mps, steer_rad=state.steer_rad,
+            steer_cmd_rad=command.steer_rad,
+            lane_offset_m=lane.offset_m if lane else math.nan,
+            heading_error_rad=lane.heading_error_rad if lane else math.nan,
+            s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m, ttc_s=ttc_s,
+            phase=phase, lidar=self.ranges, traffic=snapshot.traffic_boxes,
+        )
+
+    def end_reason(self) -> str | None:
+        """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
+        self.hit = collision_with(self.box, self.snapshot, self.road)
+        if self.hit is not None:
+            return COLLISION
+        front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
+        if self.road.to_frenet(front)[0][0] >= self.road.length_m:
+            return ROUTE_END
+        if self.k == self.n_steps:
+            return DURATION
+        return None
+
+    def advance(self, command: Command) -> None:
+        """Move the car under ``command``, push it into the world, step the world."""
+        self.state = self.vehicle.step(self.state, command, self.step_s)
+        self.snapshot = self.world.step(self.vehicle.body_box(self.state),
+                                        self.state.speed_mps)
+        self.k += 1
+        self._sense()
+
+    def finish(self, termination: str) -> Episode:
+        spec, model, road = self.spec, self.model, self.road
+        trace = self.recorder.finish()
+        t_end = float(trace.floats["t_s"][-1])
+        edge_gaps_m = road_edge_gaps_m(
+            trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
+            road)
+        detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
+        hit = self.hit
+        row = {
+            "seed": spec.scenario.seed,
+            "controller": spec.controller.name,
+            "backend": self.world.backend,
+            "status": "ok",
+            "error": None,
+            "termination": termination,
+            "collision": hit is not None,
+            "collision_with": hit or "none",
+            "collision_time_s": t_end if hit else None,
+            **trace_metrics(trace.floats, trace.phase, trace.lidar, detect_beams),
+            "min_road_edge_gap_m": float(np.nanmin(edge_gaps_m, initial=math.inf)),
+            "sim_time_s": t_end,
+            "steps": len(trace),
+            "wall_time_s": time.perf_counter() - self.wall_start,
+            "trace_sha256": trace.sha256(),
+        }
+        metadata = {
+            "spec": spec.to_plain(),
+            "road": road.to_plain(),
+            "vehicle": {"model": model.name, "length_m": model.length_m,
+                        "width_m": model.width_m,
+                        "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
+            "run": {k: row[k] for k in ("seed", "controller", "backend", "termination",
+                                        "collision_with", "trace_sha256")},
+        }
+        return Episode(row, trace, metadata)
+
+
 def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None,
                 gui: bool = False) -> Episode:
-    """Run ``spec`` (its seed, its controller) in SUMO and return the outcome;
+    """Run ``spec`` (its seed, its controller, its backend) and return the outcome;
     with ``gui``, in sumo-gui (same results, at the speed of the step length)."""
-    wall_start = time.perf_counter()
-    road = RoadGeometry.from_spec(spec.road)
-    model = VEHICLE_MODELS[spec.vehicle.model]
-    vehicle = Vehicle(model, spec.vehicle.friction_mu)
-    rng = np.random.default_rng(spec.scenario.seed)
-    edges = road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
-    lidar = Lidar(spec.lidar, edges, rng)
-    lane_sensor = LaneSensor(road, spec.ego.lane)
     controller = make_controller(spec.controller)
-    recorder = TraceRecorder()
-    step_s = spec.scenario.step_s
-    n_steps = round(spec.scenario.duration_s / step_s)
-
-    state = initial_state(spec, road, vehicle)
-    termination, hit = DURATION, None
-    with SumoWorld(spec, road, cache_dir, gui) as world:
-        snapshot = world.start(vehicle.body_box(state), state.speed_mps)
-        for k in range(n_steps + 1):
-            box = vehicle.body_box(state)
-            boxes = np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes])
-            ranges = lidar.scan(vehicle.point_ahead(state, spec.lidar.mount_ahead_m),
-                                state.yaw_rad, boxes)
-            lane = lane_sensor.measure(box[:2], state.yaw_rad, controller.look_ahead_m)
-            command, phase = controller.step(ranges, lane)
-            gap_m = float(np.min(box_gap_m(box, snapshot.obstacle_boxes), initial=math.inf))
-            ttc_s = time_to_collision_s(
-                box, state.speed_mps, boxes,
-                np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
-                                snapshot.traffic_speeds_mps]))
-            recorder.add(
-                t_s=k * step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
-                speed_mps=state.speed_mps, steer_rad=state.steer_rad,
-                steer_cmd_rad=command.steer_rad,
-                lane_offset_m=lane.offset_m if lane else math.nan,
-                heading_error_rad=lane.heading_error_rad if lane else math.nan,
-                s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m, ttc_s=ttc_s,
-                phase=phase, lidar=ranges, traffic=snapshot.traffic_boxes,
-            )
-            hit = collision_with(box, snapshot, road)
-            if hit is not None:
-                termination = COLLISION
+    road = RoadGeometry.from_spec(spec.road)
+    with make_world(spec, road, cache_dir, gui) as world:
+        sim = Simulation(spec, world, controller.look_ahead_m)
+        sim.start()
+        while True:
+            command, phase = controller.step(sim.ranges, sim.lane)
+            sim.record(command, phase)
+            termination = sim.end_reason()
+            if termination is not None:
                 break
-            front = vehicle.point_ahead(state, model.front_ahead_of_rear_axle_m)
-            if road.to_frenet(front)[0][0] >= road.length_m:
-                termination = ROUTE_END
-                break
-            if k == n_steps:
-                break
-            state = vehicle.step(state, command, step_s)
-            snapshot = world.step(vehicle.body_box(state), state.speed_mps)
-
-    trace = recorder.finish()
-    t_end = float(trace.floats["t_s"][-1])
-    edge_gaps_m = road_edge_gaps_m(
-        trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m), road)
-    detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
-    row = {
-        "seed": spec.scenario.seed,
-        "controller": spec.controller.name,
-        "backend": world.backend,
-        "status": "ok",
-        "error": None,
-        "termination": termination,
-        "collision": hit is not None,
-        "collision_with": hit or "none",
-        "collision_time_s": t_end if hit else None,
-        **trace_metrics(trace.floats, trace.phase, trace.lidar, detect_beams),
-        "min_road_edge_gap_m": float(np.nanmin(edge_gaps_m, initial=math.inf)),
-        "sim_time_s": t_end,
-        "steps": len(trace),
-        "wall_time_s": time.perf_counter() - wall_start,
-        "trace_sha256": trace.sha256(),
-    }
-    metadata = {
-        "spec": spec.to_plain(),
-        "road": road.to_plain(),
-        "vehicle": {"model": model.name, "length_m": model.length_m, "width_m": model.width_m,
-                    "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
-        "run": {k: row[k] for k in ("seed", "controller", "backend", "termination",
-                                    "collision_with", "trace_sha256")},
-    }
-    return Episode(row, trace, metadata)
+            sim.advance(command)
+    return sim.finish(termination)

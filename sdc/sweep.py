@@ -63,7 +63,7 @@ def param_columns(run: PlannedRun) -> dict:
 
 def _invalid_row(run: PlannedRun) -> dict:
     return {"run_id": run.run_id, "run_index": run.index, "sample": run.sample,
-            "seed": run.seed, "controller": run.controller, "backend": "sumo",
+            "seed": run.seed, "controller": run.controller, "backend": run.backend,
             "status": "error", "error": run.error, **param_columns(run)}
 
 

@@ -39,7 +39,8 @@ def _plain(value: Any) -> Any:
 def failed_row(task: RunTask, status: str, error: str, **extra: Any) -> dict:
     """The row of a run that produced no outcome (``status`` error or timeout)."""
     return {"run_id": task.run_id, **task.columns, "seed": task.spec.scenario.seed,
-            "controller": task.spec.controller.name, "backend": "sumo", "status": status,
+            "controller": task.spec.controller.name, "backend": task.spec.scenario.backend,
+            "status": status,
             "error": error, **extra}
 
 
