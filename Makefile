@@ -32,6 +32,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_step.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_gym.py
+	$(BIN)/python benchmarks/bench_perf.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis

@@ -17,7 +17,14 @@ import math
 import numpy as np
 
 from scenarios.road import RoadGeometry
-from scenarios.snapshot import NO_BOXES, Snapshot, obstacle_boxes
+from scenarios.snapshot import (
+    NO_BOXES,
+    Snapshot,
+    in_start_zone,
+    obstacle_boxes,
+    sensing_radius_m,
+    within_m,
+)
 from scenarios.spec import ScenarioSpec
 
 START, END = "start", "end"
@@ -63,6 +70,8 @@ class HighwayWorld:
         self.road = road
         self._obstacle_boxes = obstacle_boxes(spec, road)
         self._rng = np.random.default_rng(spec.scenario.seed)
+        self._radius_m = sensing_radius_m(spec)
+        self._ego = None
         self.t_s = 0.0
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
@@ -89,14 +98,20 @@ class HighwayWorld:
             obstacle.LENGTH, obstacle.WIDTH = float(box[3]), float(box[4])
             obstacle.diagonal = math.hypot(obstacle.LENGTH, obstacle.WIDTH)
             self._hw.objects.append(obstacle)
-        self._ego = PushedVehicle(self._hw, ego_box[:2], float(ego_box[2]), ego_speed_mps)
-        self._ego.LENGTH, self._ego.WIDTH = float(ego_box[3]), float(ego_box[4])
-        self._ego.diagonal = math.hypot(self._ego.LENGTH, self._ego.WIDTH)
-        self._hw.vehicles.append(self._ego)
         traffic = self.spec.traffic
         self._period_s = 3600.0 / traffic.flow_vph_per_lane if traffic.flow_vph_per_lane else None
         self._due = [0] * len(self._lanes)  # departures waiting for a free entry, per lane
         self._next_depart_s = 0.0
+        for _ in range(round(traffic.warm_up_s / self.spec.scenario.step_s)):
+            self._advance()
+        blocking = in_start_zone(self.spec, self.road,
+                                 np.array([v.position for v in self._hw.vehicles]))
+        self._hw.vehicles = [v for v, off in zip(self._hw.vehicles, blocking, strict=True)
+                             if not off]
+        self._ego = PushedVehicle(self._hw, ego_box[:2], float(ego_box[2]), ego_speed_mps)
+        self._ego.LENGTH, self._ego.WIDTH = float(ego_box[3]), float(ego_box[4])
+        self._ego.diagonal = math.hypot(self._ego.LENGTH, self._ego.WIDTH)
+        self._hw.vehicles.append(self._ego)
         return self.step(ego_box, ego_speed_mps)
 
     def _desired_speed_mps(self) -> float:
@@ -134,12 +149,17 @@ class HighwayWorld:
         ego.position = np.array(ego_box[:2], dtype=float)
         ego.heading, ego.speed = float(ego_box[2]), float(ego_speed_mps)
         ego.on_state_update()
+        self._advance()
+        return self._snapshot()
+
+    def _advance(self) -> None:
+        """One step of highway-env: departures, decisions, motion, departures off the end."""
         self._depart()
         self._hw.act()
         self._hw.step(self.spec.scenario.step_s)
         self.t_s += self.spec.scenario.step_s
-        self._hw.vehicles = [v for v in self._hw.vehicles if v is ego or not self._left(v)]
-        return self._snapshot()
+        self._hw.vehicles = [v for v in self._hw.vehicles
+                             if v is self._ego or not self._left(v)]
 
     def _left(self, vehicle) -> bool:
         lane = self._hw.network.get_lane(vehicle.lane_index)
@@ -150,8 +170,9 @@ class HighwayWorld:
         if not others:
             return Snapshot(self.t_s, NO_BOXES, self._obstacle_boxes, np.zeros(0))
         boxes = np.array([(*v.position, v.heading, v.LENGTH, v.WIDTH) for v in others])
-        return Snapshot(self.t_s, boxes, self._obstacle_boxes,
-                        np.array([v.speed for v in others]))
+        keep = within_m(boxes, self._ego.position, self._radius_m)
+        return Snapshot(self.t_s, boxes[keep], self._obstacle_boxes,
+                        np.array([v.speed for v in others])[keep])
 
     def render_rgb(self, width_px: int = 600, height_px: int = 300) -> np.ndarray:
         """highway-env's own drawing of the road around the ego, (H, W, 3) uint8, with

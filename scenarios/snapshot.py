@@ -14,14 +14,44 @@ from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec
 
 NO_BOXES = np.zeros((0, 5))
+#: traffic is reported within the lidar's range plus this, from the ego's body centre [m]
+SENSING_MARGIN_M = 25.0
+
+
+def sensing_radius_m(spec: ScenarioSpec) -> float:
+    """How far from the ego's centre a world reports traffic: nothing farther can be
+    seen by the lidar, touched, or be in the ego's path within its range."""
+    return spec.lidar.max_range_m + SENSING_MARGIN_M
+
+
+def within_m(boxes: np.ndarray, center_xy: np.ndarray, radius_m: float) -> np.ndarray:
+    """Which box centres lie within ``radius_m`` of ``center_xy`` (a bool mask)."""
+    d = boxes[:, :2] - center_xy
+    return d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= radius_m * radius_m
 
 
 @dataclass(frozen=True)
 class Snapshot:
     t_s: float
-    traffic_boxes: np.ndarray  # (N, 5) moving vehicles other than the ego
+    traffic_boxes: np.ndarray  # (N, 5) moving vehicles within the sensing radius
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order
     traffic_speeds_mps: np.ndarray  # (N,) speeds of the traffic boxes, along their headings
+
+
+#: vehicles in the ego's lane or a neighbouring one (they may change into it as the ego
+#: appears), this far behind / ahead of its start, are taken off at entry [m]
+START_ZONE_BEHIND_M, START_ZONE_AHEAD_M = 30.0, 10.0
+
+
+def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray) -> np.ndarray:
+    """Which vehicle centres stand where the ego enters the road (a bool mask)."""
+    if len(centers_xy) == 0:
+        return np.zeros(0, bool)
+    s_m, d_m = road.to_frenet(np.asarray(centers_xy, float).reshape(-1, 2))
+    ego = spec.ego
+    return ((np.abs(d_m - road.lane_center_d_m(ego.lane)) < 1.5 * road.lane_width_m)
+            & (s_m >= ego.start_m - START_ZONE_BEHIND_M)
+            & (s_m <= ego.start_m + START_ZONE_AHEAD_M))
 
 
 def obstacle_boxes(spec: ScenarioSpec, road: RoadGeometry) -> np.ndarray:

@@ -53,11 +53,16 @@ class RoadSpec(Spec):
 
 @spec_class
 class TrafficSpec(Spec):
-    """Background traffic entering at the road's start; ``speed_dev`` is relative."""
+    """Background traffic entering at the road's start; ``speed_dev`` is relative.
+
+    With ``warm_up_s``, the traffic flows that long before the ego is put on the
+    road (vehicles where it starts are taken off), so it starts inside traffic.
+    """
 
     flow_vph_per_lane: float = num(0.0, ge=0, le=3600)
     speed_mean_mps: float = num(25.0, gt=0, le=70)
     speed_dev: float = num(0.1, ge=0, le=1)
+    warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
 
 
 @spec_class

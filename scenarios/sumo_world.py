@@ -16,16 +16,26 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.network import EDGE_ID, build_network, sumo_binary
 from scenarios.road import RoadGeometry
-from scenarios.snapshot import NO_BOXES, Snapshot, obstacle_boxes
+from scenarios.snapshot import (
+    NO_BOXES,
+    Snapshot,
+    in_start_zone,
+    obstacle_boxes,
+    sensing_radius_m,
+    within_m,
+)
 from scenarios.spec import ScenarioSpec
 
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
+SUBSCRIPTION_SLACK_M = 30.0
+_TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED, tc.VAR_LENGTH, tc.VAR_WIDTH)
 
 
 def routes_xml(spec: ScenarioSpec) -> str:
@@ -56,7 +66,8 @@ def routes_xml(spec: ScenarioSpec) -> str:
     if traffic.flow_vph_per_lane > 0:
         lines += [
             f'  <flow id="traffic.{lane}" type="traffic" route="r0" begin="0" '
-            f'end="{spec.scenario.duration_s}" vehsPerHour="{traffic.flow_vph_per_lane}" '
+            f'end="{traffic.warm_up_s + spec.scenario.duration_s}" '
+            f'vehsPerHour="{traffic.flow_vph_per_lane}" '
             f'departLane="{lane}" departSpeed="desired"/>'
             for lane in range(spec.road.lanes)
         ]
@@ -83,7 +94,7 @@ class SumoWorld:
         self.road = road
         self.cache_dir = cache_dir
         self._obstacle_boxes = obstacle_boxes(spec, road)
-        self._sizes: dict[str, tuple[float, float]] = {}
+        self._radius_m = sensing_radius_m(spec)
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
 
@@ -113,12 +124,29 @@ class SumoWorld:
             "--no-step-log", "true", "--no-warnings", "true",
         ])
         self._sumo = sim
+        for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
+            sim.simulationStep()
+        self._clear_start()
         ego = self.spec.ego
-        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now",
-                        departLane=str(ego.lane), departSpeed="0")
+        # inserted where it starts, so traffic knows of it from the first step
+        model = VEHICLE_MODELS[self.spec.vehicle.model]
+        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now", departLane=str(ego.lane),
+                        departPos=f"{ego.start_m + model.length_m / 2:.6f}", departSpeed="0")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
+        # only the vehicles around the ego are read, whatever the size of the network;
+        # SUMO measures from front bumpers, so its radius has a body length to spare
+        sim.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
+                                     self._radius_m + SUBSCRIPTION_SLACK_M, _TRAFFIC_VARS)
         return self.step(ego_box, ego_speed_mps)
+
+    def _clear_start(self) -> None:
+        """Take the traffic off the ego's entry (after a warm-up)."""
+        vehicle = self._sumo.vehicle
+        ids = [v for v in vehicle.getIDList() if not v.startswith(OBSTACLE_PREFIX)]
+        fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
+        for vid in np.array(ids)[in_start_zone(self.spec, self.road, fronts)]:
+            vehicle.remove(str(vid))
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
@@ -127,26 +155,27 @@ class SumoWorld:
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
         sumo.simulationStep()
-        boxes, speeds = self._traffic()
+        boxes, speeds = self._traffic(ego_box)
         return Snapshot(sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds)
 
-    def _traffic(self) -> tuple[np.ndarray, np.ndarray]:
-        """Boxes and speeds of the vehicles other than the ego and the obstacles."""
-        vehicle = self._sumo.vehicle
+    def _traffic(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Boxes and speeds of the vehicles within the sensing radius, ego and
+        obstacles aside, in SUMO's order."""
+        nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         rows, speeds = [], []
-        for vid in vehicle.getIDList():
+        for vid, v in nearby.items():
             if vid == EGO_ID or vid.startswith(OBSTACLE_PREFIX):
                 continue
-            size = self._sizes.get(vid)
-            if size is None:
-                size = self._sizes[vid] = (vehicle.getLength(vid), vehicle.getWidth(vid))
-            fx, fy = vehicle.getPosition(vid)
-            yaw = math.radians(90.0 - vehicle.getAngle(vid))
-            length, width = size
+            (fx, fy), length = v[tc.VAR_POSITION], v[tc.VAR_LENGTH]
+            yaw = math.radians(90.0 - v[tc.VAR_ANGLE])
             rows.append((fx - length / 2 * math.cos(yaw), fy - length / 2 * math.sin(yaw),
-                         yaw, length, width))
-            speeds.append(vehicle.getSpeed(vid))
-        return (np.array(rows), np.array(speeds)) if rows else (NO_BOXES, np.zeros(0))
+                         yaw, length, v[tc.VAR_WIDTH]))
+            speeds.append(v[tc.VAR_SPEED])
+        if not rows:
+            return NO_BOXES, np.zeros(0)
+        boxes, speeds = np.array(rows), np.array(speeds)
+        keep = within_m(boxes, ego_box[:2], self._radius_m)
+        return boxes[keep], speeds[keep]
 
     def close(self) -> None:
         if self._sumo is not None:

@@ -1,0 +1,181 @@
+"""The car's cost against SUMO's and highway-env's, as ratios measured in one run.
+
+Prints ``name value`` lines (medians of REPETITIONS), then the raw timings:
+
+- ``overhead_vs_bare_sumo``: a full closed-loop step (SUMO step, state read,
+  lidar, lane offset, control, collision check, ego push) over the SUMO step
+  inside it, on a 3-lane highway holding about 100 vehicles (traffic warmed up).
+- ``agent_cost_ratio_2000_vs_100``: the agent's own cost per step (everything
+  but ``simulationStep``) with about 2000 vehicles on the network over its cost
+  with about 100; traffic is read only within the sensing radius.
+- ``speedup_vs_highway_env``: our closed-loop steps/s on a 3-lane highway with
+  about 20 vehicles over highway-env's (``highway-v0``, 3 lanes, as many
+  vehicles, 180-cell LidarObservation, ContinuousAction, one simulation step
+  per env step at our step length).
+- ``lidar_speedup_vs_highway_env``: a 180-beam, 360-degree scan of 50 boxes in
+  range, ours over highway-env's ``LidarObservation.trace`` on the same boxes.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+import types
+import warnings
+
+import numpy as np
+
+from scenarios import CATALOG_DIR
+from scenarios.road import RoadGeometry
+from scenarios.spec import LidarSpec, ScenarioSpec
+from scenarios.toml_io import read_toml
+from scenarios.worlds import make_world
+from sdc.controllers import make_controller
+from sdc.episode import Simulation
+from sdc.sensors import Lidar
+
+REPETITIONS = 3
+TIMED_STEPS = 400
+
+
+def traffic_spec(lanes: int, length_m: float, flow_vph: float, warm_up_s: float) -> ScenarioSpec:
+    """A straight highway filled with traffic; the ego drives slower than all of it."""
+    plain = read_toml(CATALOG_DIR / "highway-obstacle.toml")
+    plain["road"].update(lanes=lanes, length_m=length_m)
+    plain["obstacles"] = []
+    plain["traffic"] = {"flow_vph_per_lane": flow_vph, "speed_mean_mps": 25.0,
+                        "warm_up_s": warm_up_s}
+    plain["ego"].update(lane=1, speed_mps=18.0, start_m=length_m / 2)
+    plain["scenario"].update(duration_s=TIMED_STEPS * plain["scenario"]["step_s"] + 1.0)
+    plain["controller"] = {"name": "lane-keep"}
+    return ScenarioSpec.from_plain(plain)
+
+
+def closed_loop(spec: ScenarioSpec) -> dict:
+    """Per-step wall times of the loop and of the SUMO step inside it [ms]."""
+    import libsumo
+
+    controller = make_controller(spec.controller)
+    road = RoadGeometry.from_spec(spec.road)
+    sumo_s = []
+    real_step = libsumo.simulationStep
+
+    def timed_step(*args):
+        start = time.perf_counter()
+        real_step(*args)
+        sumo_s.append(time.perf_counter() - start)
+
+    with make_world(spec, road) as world:
+        sim = Simulation(spec, world, controller.look_ahead_m)
+        sim.start()
+        vehicles = libsumo.vehicle.getIDCount()
+        libsumo.simulationStep = timed_step
+        try:
+            sumo_s.clear()
+            start = time.perf_counter()
+            for _ in range(TIMED_STEPS):
+                command, phase = controller.step(sim.ranges, sim.lane)
+                sim.record(command, phase)
+                assert sim.end_reason() is None, sim.hit
+                sim.advance(command)
+            total_s = time.perf_counter() - start
+        finally:
+            libsumo.simulationStep = real_step
+    step_ms = 1e3 * total_s / TIMED_STEPS
+    sumo_ms = 1e3 * sum(sumo_s) / TIMED_STEPS
+    return {"step_ms": step_ms, "sumo_ms": sumo_ms, "agent_ms": step_ms - sumo_ms,
+            "vehicles": vehicles}
+
+
+def median_of(runs: list[dict], key: str) -> float:
+    return statistics.median(run[key] for run in runs)
+
+
+def highway_v0_steps_per_s(vehicles: int, step_s: float, steps: int = 150) -> float:
+    import gymnasium
+    import highway_env  # noqa: F401  (registers highway-v0)
+
+    frequency = round(1 / step_s)
+    config = {"observation": {"type": "LidarObservation", "cells": 180, "maximum_range": 80},
+              "action": {"type": "ContinuousAction"}, "vehicles_count": vehicles,
+              "lanes_count": 3, "duration": 10_000, "simulation_frequency": frequency,
+              "policy_frequency": frequency}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gymnasium.make("highway-v0", config=config)
+        env.reset(seed=1)
+        start = time.perf_counter()
+        for _ in range(steps):
+            _, _, terminated, truncated, _ = env.step(np.zeros(2, np.float32))
+            if terminated or truncated:
+                env.reset()
+        elapsed = time.perf_counter() - start
+        env.close()
+    return steps / elapsed
+
+
+def lidar_scene(n: int = 50) -> np.ndarray:
+    """``n`` car boxes within 80 m around the origin, none on it."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-70, 70, n)
+    y = rng.choice([-7.0, -3.5, 3.5, 7.0], n) + rng.normal(0, 0.2, n)
+    return np.column_stack([x, y, rng.normal(0, 0.05, n), np.full(n, 5.0), np.full(n, 2.0)])
+
+
+def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
+    """(our scan [ms], highway-env's trace [ms]) on the same 50 boxes."""
+    from highway_env.envs.common.observation import LidarObservation
+    from highway_env.road.lane import StraightLane
+    from highway_env.road.road import Road, RoadNetwork
+    from highway_env.vehicle.kinematics import Vehicle
+
+    boxes = lidar_scene()
+    ours = Lidar(LidarSpec(beams=180, fov_deg=360.0, max_range_m=80.0), np.zeros((0, 4)),
+                 np.random.default_rng(0))
+    network = RoadNetwork()
+    network.add_lane("a", "b", StraightLane([-100.0, 0.0], [100.0, 0.0]))
+    road = Road(network)
+    ego = Vehicle(road, [0.0, 0.0])
+    road.vehicles = [ego] + [Vehicle(road, b[:2], heading=b[2]) for b in boxes]
+    env = types.SimpleNamespace(road=road, vehicle=ego)  # what LidarObservation reads
+    theirs = LidarObservation(env, cells=180, maximum_range=80.0)
+    origin = np.zeros(2)
+
+    def timed(call) -> float:
+        call()
+        start = time.perf_counter()
+        for _ in range(repeats):
+            call()
+        return 1e3 * (time.perf_counter() - start) / repeats
+
+    ours_ms = timed(lambda: ours.scan(origin, 0.0, boxes))
+    theirs_ms = timed(lambda: theirs.trace(origin, np.zeros(2)))
+    return ours_ms, theirs_ms
+
+
+def main() -> None:
+    hundred = [closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)) for _ in range(REPETITIONS)]
+    # the warm-up fills 6 lanes x 18 km: one repetition (its warm-up takes most of a minute)
+    two_thousand = [closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0))]
+    twenty = [closed_loop(traffic_spec(3, 2500.0, 240.0, 100.0)) for _ in range(REPETITIONS)]
+    step_s = traffic_spec(3, 2500.0, 240.0, 0.0).scenario.step_s
+    vehicles_20 = round(median_of(twenty, "vehicles"))
+    reference = highway_v0_steps_per_s(vehicles_20, step_s)
+    lidar_ours_ms, lidar_theirs_ms = lidar_ratio()
+
+    print(f"overhead_vs_bare_sumo "
+          f"{median_of(hundred, 'step_ms') / median_of(hundred, 'sumo_ms'):.2f}")
+    print(f"agent_cost_ratio_2000_vs_100 "
+          f"{median_of(two_thousand, 'agent_ms') / median_of(hundred, 'agent_ms'):.2f}")
+    print(f"speedup_vs_highway_env {1e3 / median_of(twenty, 'step_ms') / reference:.2f}")
+    print(f"lidar_speedup_vs_highway_env {lidar_theirs_ms / lidar_ours_ms:.2f}")
+    for name, runs in (("100", hundred), ("2000", two_thousand), ("20", twenty)):
+        for key in ("vehicles", "step_ms", "sumo_ms", "agent_ms"):
+            print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
+    print(f"raw.highway_v0_steps_per_s_{vehicles_20}_vehicles {reference:.1f}")
+    print(f"raw.lidar_ms_ours {lidar_ours_ms:.3f}")
+    print(f"raw.lidar_ms_highway_env {lidar_theirs_ms:.3f}")
+
+
+if __name__ == "__main__":
+    main()
