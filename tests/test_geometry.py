@@ -17,6 +17,7 @@ from sdc.geometry import (
     boxes_overlap,
     point_segment_distance,
     ray_box_ranges,
+    ray_box_ranges_culled,
     ray_segment_ranges,
 )
 
@@ -375,3 +376,25 @@ def test_axis_aligned_gap_closed_form(a, b):
     assert box_gap_m(a, b[None])[0] == pytest.approx(gap, abs=1e-9)
     if max(sep_x, sep_y) > 1e-9 or max(sep_x, sep_y) < -1e-9:  # skip exactly touching
         assert boxes_overlap(a, b[None])[0] == (max(sep_x, sep_y) < 0.0)
+
+
+@PROPS
+@given(scene=ray_scene(), max_range=st.sampled_from([5.0, 30.0, 80.0]))
+def test_culled_ray_box_ranges_equal_the_straightforward_ones(scene, max_range):
+    """The lidar's kernel skips ray-box pairs that cannot meet; the ranges are the same
+    bit for bit, including rays from inside a box, touching ones and cut-offs."""
+    boxes, origin, angles = scene
+    np.testing.assert_array_equal(ray_box_ranges_culled(origin, angles, boxes, max_range),
+                                  ray_box_ranges(origin, angles, boxes, max_range))
+
+
+def test_culled_ray_box_ranges_on_a_dense_scan():
+    rng = np.random.default_rng(5)
+    boxes = np.column_stack([rng.uniform(-70, 70, (60, 2)), rng.uniform(-3, 3, 60),
+                             rng.uniform(0.5, 12, 60), rng.uniform(0.5, 3, 60)])
+    angles = np.linspace(np.pi, -np.pi, 720, endpoint=False)
+    for origin in (np.zeros(2), boxes[0, :2], np.array([100.0, 0.0])):
+        expected = ray_box_ranges(origin, angles, boxes, 80.0)
+        np.testing.assert_array_equal(ray_box_ranges_culled(origin, angles, boxes, 80.0),
+                                      expected)
+        assert np.isfinite(expected).any()
