@@ -64,6 +64,11 @@ class RoadGeometry:
         first or last segment, so ``s`` is negative or above ``length_m`` there.
         """
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        if len(self._seg_len_m) == 1:  # a straight road: one segment, extended both ways
+            rel = xy - self.center_xy[0]
+            direction = self._seg_dir[0]
+            return (rel[:, 0] * direction[0] + rel[:, 1] * direction[1],
+                    direction[0] * rel[:, 1] - direction[1] * rel[:, 0])
         rel = xy[:, None, :] - self.center_xy[None, :-1, :]  # (K, S, 2)
         along = np.einsum("ksj,sj->ks", rel, self._seg_dir)
         low = np.zeros_like(self._seg_len_m)

@@ -214,6 +214,8 @@ def box_gap_m(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """
     a, b = _as_boxes(box)[:1], _as_boxes(boxes)
     n = b.shape[0]
+    if n == 0:
+        return np.zeros(0)
     corners_a_m, corners_b_m = box_corners(a)[0], box_corners(b)  # (4, 2), (N, 4, 2)
     edges_a_m, edges_b_m = _edges_from_corners(corners_a_m), _edges_from_corners(corners_b_m)
     a_to_b_m = point_segment_distance(corners_a_m, edges_b_m.reshape(-1, 4)).reshape(4, n, 4)
