@@ -46,7 +46,7 @@ def ours(backend: str) -> tuple[float, float]:
     start = time.perf_counter()
     for _ in range(TIMED_STEPS):
         _, _, terminated, truncated, _ = env.step(straight)
-        counts.append(len(env.unwrapped._sim.snapshot.traffic_boxes))
+        counts.append(env.unwrapped._world.vehicle_count())
         assert not (terminated or truncated)
     elapsed = time.perf_counter() - start
     env.close()

@@ -72,7 +72,7 @@ def closed_loop(spec: ScenarioSpec) -> dict:
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, controller.look_ahead_m)
         sim.start()
-        vehicles = libsumo.vehicle.getIDCount()
+        vehicles = world.vehicle_count()
         libsumo.simulationStep = timed_step
         try:
             sumo_s.clear()

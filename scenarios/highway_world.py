@@ -174,6 +174,10 @@ class HighwayWorld:
         return Snapshot(self.t_s, boxes[keep], self._obstacle_boxes,
                         np.array([v.speed for v in others])[keep])
 
+    def vehicle_count(self) -> int:
+        """Traffic vehicles on the whole road (not only within the sensing radius)."""
+        return sum(1 for v in self._hw.vehicles if v is not self._ego)
+
     def render_rgb(self, width_px: int = 600, height_px: int = 300) -> np.ndarray:
         """highway-env's own drawing of the road around the ego, (H, W, 3) uint8, with
         +y up like sdc's drawings (highway-env draws +y down)."""

@@ -177,6 +177,11 @@ class SumoWorld:
         keep = within_m(boxes, ego_box[:2], self._radius_m)
         return boxes[keep], speeds[keep]
 
+    def vehicle_count(self) -> int:
+        """Traffic vehicles in the whole network (not only within the sensing radius)."""
+        ids = self._sumo.vehicle.getIDList()
+        return sum(1 for v in ids if v != EGO_ID and not v.startswith(OBSTACLE_PREFIX))
+
     def close(self) -> None:
         if self._sumo is not None:
             self._sumo.close()

@@ -295,7 +295,7 @@ def _render(trace, metadata, out: Path, every: int) -> None:
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               metavar="FILE.gif|.mp4|.html",
               help="Draw the run: an animation (mp4 needs ffmpeg) or an interactive page.")
-@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--every", type=click.IntRange(min=1), default=1, show_default=True, metavar="K",
               help="Keep one frame in K.")
 @click.option("--gui", is_flag=True, help="Re-simulate in sumo-gui (needs a display).")
 def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, every: int,

@@ -44,9 +44,7 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
             distances = np.hypot(*(sim.snapshot.traffic_boxes[:, :2] - sim.box[:2]).T)
             assert np.all(distances <= radius)
             sim.advance(Command(0.0))
-        everyone = (world._sumo.vehicle.getIDCount() - 1 if backend == "sumo"
-                    else len(world._hw.vehicles) - 1)
-        assert everyone > 2 * len(sim.snapshot.traffic_boxes)  # the rest is not read
+        assert world.vehicle_count() > 2 * len(sim.snapshot.traffic_boxes)  # the rest unread
 
 
 def test_a_warmed_up_run_is_deterministic_and_survives_its_start(lesson_plain):
