@@ -116,8 +116,8 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
 
 
 def _build_networks(tasks: list[RunTask], workers: int) -> None:
-    """Build each distinct road network once, before any worker needs it."""
-    roads = list({task.spec.road: None for task in tasks})
+    """Build each distinct SUMO road network once, before any worker needs it."""
+    roads = list({task.spec.road: None for task in tasks if task.spec.scenario.backend == "sumo"})
     with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
         list(pool.map(build_network, roads))
 
