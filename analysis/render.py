@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -165,8 +166,10 @@ def frame_rgb(scene: Scene, k: int, width_px: int = 640, height_px: int = 320) -
     return image
 
 
-def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
-    """Write a GIF or (with ffmpeg) an MP4 of the run; returns the number of frames."""
+def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,
+            on_frame: Callable[[int, int], None] | None = None) -> int:
+    """Write a GIF or (with ffmpeg) an MP4 of the run; returns the number of frames.
+    ``on_frame(i, n)`` is called as frame ``i`` of ``n`` is written."""
     path = Path(path)
     steps = frame_steps(len(scene.t_s), every)
     fig, (ax, strip) = plt.subplots(2, 1, figsize=(8, 6.5), height_ratios=[3, 1.4])
@@ -189,7 +192,7 @@ def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15) -> int:
     anim = animation.FuncAnimation(fig, draw, frames=steps, blit=False)
     writer = (animation.FFMpegWriter(fps=fps) if path.suffix == ".mp4"
               else animation.PillowWriter(fps=fps))
-    anim.save(str(path), writer=writer, dpi=80)
+    anim.save(str(path), writer=writer, dpi=80, progress_callback=on_frame)
     plt.close(fig)
     return len(steps)
 

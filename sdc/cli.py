@@ -280,11 +280,21 @@ def _has_display() -> bool:
 
 
 def _render(trace, metadata, out: Path, every: int) -> None:
+    from rich.console import Console
+
     from analysis.render import animate, scene_from_trace, write_html
 
     scene = scene_from_trace(trace, metadata)
-    write = write_html if out.suffix == ".html" else animate
-    frames = write(scene, out, every)
+    if out.suffix == ".html":
+        frames = write_html(scene, out, every)
+    else:  # about 0.2 s a frame: show the progress
+        from rich.progress import Progress
+
+        with Progress(console=Console(stderr=True), transient=True) as progress:
+            task = progress.add_task(f"drawing {out.name}", total=None)
+            frames = animate(scene, out, every,
+                             on_frame=lambda i, n: progress.update(task, completed=i + 1,
+                                                                   total=n))
     click.echo(f"{frames} frames written to {out}")
 
 
