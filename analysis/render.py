@@ -24,7 +24,7 @@ from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
 from analysis.metrics import central_range_m  # noqa: E402
 from scenarios.road import RoadGeometry  # noqa: E402
 from scenarios.snapshot import obstacle_boxes  # noqa: E402
-from scenarios.spec import ScenarioSpec, SeedParams  # noqa: E402
+from scenarios.spec import ScenarioSpec  # noqa: E402
 from sdc.geometry import box_corners  # noqa: E402
 from sdc.sensors import beam_angles_rad  # noqa: E402
 from sdc.trace import Trace  # noqa: E402
@@ -62,11 +62,6 @@ def road_lines(road: RoadGeometry) -> tuple[list[np.ndarray], list[np.ndarray]]:
             [road.offset_polyline(-half), road.offset_polyline(half)])
 
 
-def detect_beams(spec: ScenarioSpec) -> int:
-    """The central beams whose shortest range is plotted (the seed controller's)."""
-    return getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
-
-
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
     spec = ScenarioSpec.from_plain(metadata["spec"])
     plain_road = metadata["road"]
@@ -90,7 +85,8 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
         lane_offset_m=f["lane_offset_m"],
-        central_range_m=np.array([central_range_m(r, detect_beams(spec)) for r in ranges]),
+        central_range_m=np.array([central_range_m(r, spec.controller.detect_beams)
+                                  for r in ranges]),
         lane_lines=lane_lines, edges=edges,
         title=(f"{spec.scenario.name}  controller {spec.controller.name}  seed "
                f"{spec.scenario.seed}  ({run.get('termination', '?')}"

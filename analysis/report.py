@@ -19,7 +19,7 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
-from analysis.stats import Method, by_controller, mcnemar, rates_by, safe_envelope
+from analysis.stats import Method, by_controller, interval, mcnemar, rates_by, safe_envelope
 
 SPEED = "p.ego.speed_mps"
 MAX_LISTED_FAILURES = 500
@@ -106,11 +106,6 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
     }
 
 
-def _low_high(summary: dict, numbers: dict) -> tuple[float, float]:
-    prefix = "wilson" if summary["interval"] == "wilson" else "cp"
-    return numbers[f"{prefix}_low"], numbers[f"{prefix}_high"]
-
-
 def _pct(value) -> str:
     return "-" if value is None else f"{100 * value:.1f}%"
 
@@ -128,7 +123,7 @@ def headline_rows(summary: dict) -> list[list[str]]:
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
              "rate", "95% interval", "errors", "timeouts"]]
     for keys, numbers in groups:
-        low, high = _low_high(summary, numbers)
+        low, high = interval(numbers, summary["interval"])
         rows.append([*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
                      _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
                      str(numbers["n_error"]), str(numbers["n_timeout"])])

@@ -60,6 +60,12 @@ def rate_summary(rows: pd.DataFrame) -> dict:
     }
 
 
+def interval(summary: dict, method: Method) -> tuple[float, float]:
+    """The 95% interval of a :func:`rate_summary` by ``method``."""
+    prefix = "wilson" if method == "wilson" else "cp"
+    return summary[f"{prefix}_low"], summary[f"{prefix}_high"]
+
+
 def by_controller(results: pd.DataFrame) -> dict[str, dict]:
     return {str(c): rate_summary(rows)
             for c, rows in results.groupby("controller", sort=False)}
@@ -84,8 +90,7 @@ def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> p
     for (group, controller), rows in results.groupby([groups, "controller"], sort=True,
                                                      observed=True):
         summary = rate_summary(rows)
-        prefix = "wilson" if method == "wilson" else "cp"
-        low, high = summary[f"{prefix}_low"], summary[f"{prefix}_high"]
+        low, high = interval(summary, method)
         out.append({"group": group, "controller": controller, "n_ok": summary["n_ok"],
                     "n_failed": summary["n_error"] + summary["n_timeout"],
                     "collisions": summary["collisions"],

@@ -151,6 +151,12 @@ class ControllerSpec:
     def to_plain(self) -> dict:
         return {"name": self.name, **to_plain(self.params)}
 
+    @property
+    def detect_beams(self) -> int:
+        """The central beams the seed controller watches (the lesson's 11 for the others):
+        their shortest range is the detection range in metrics and drawings."""
+        return getattr(self.params, "detect_beams", SeedParams().detect_beams)
+
     def renamed(self, name: str) -> ControllerSpec:
         """The controller ``name`` with every parameter the two share carried over."""
         plain = self.to_plain()

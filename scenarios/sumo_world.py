@@ -75,6 +75,11 @@ def routes_xml(spec: ScenarioSpec) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _is_traffic(vehicle_id: str) -> bool:
+    """Background traffic: neither the ego nor an obstacle."""
+    return vehicle_id != EGO_ID and not vehicle_id.startswith(OBSTACLE_PREFIX)
+
+
 def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
     """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
     cx, cy, yaw, length, _ = box
@@ -143,7 +148,7 @@ class SumoWorld:
     def _clear_start(self) -> None:
         """Take the traffic off the ego's entry (after a warm-up)."""
         vehicle = self._sumo.vehicle
-        ids = [v for v in vehicle.getIDList() if not v.startswith(OBSTACLE_PREFIX)]
+        ids = [v for v in vehicle.getIDList() if _is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
         for vid in np.array(ids)[in_start_zone(self.spec, self.road, fronts)]:
             vehicle.remove(str(vid))
@@ -164,7 +169,7 @@ class SumoWorld:
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         rows, speeds = [], []
         for vid, v in nearby.items():
-            if vid == EGO_ID or vid.startswith(OBSTACLE_PREFIX):
+            if not _is_traffic(vid):
                 continue
             (fx, fy), length = v[tc.VAR_POSITION], v[tc.VAR_LENGTH]
             yaw = math.radians(90.0 - v[tc.VAR_ANGLE])
@@ -179,8 +184,7 @@ class SumoWorld:
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""
-        ids = self._sumo.vehicle.getIDList()
-        return sum(1 for v in ids if v != EGO_ID and not v.startswith(OBSTACLE_PREFIX))
+        return sum(1 for v in self._sumo.vehicle.getIDList() if _is_traffic(v))
 
     def close(self) -> None:
         if self._sumo is not None:

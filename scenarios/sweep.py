@@ -255,6 +255,11 @@ class SweepSpec:
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
                    meta.levels or 5, tuple(controllers), tuple(parsed))
 
+    @property
+    def param_types(self) -> dict[str, type]:
+        """Each swept path and the type of the values it takes."""
+        return {p.path: p.value_type for p in self.params}
+
     def with_samples(self, samples: int) -> SweepSpec:
         if self.sampler == "grid":
             raise SpecError("samples", "the grid sampler takes its size from the parameters")

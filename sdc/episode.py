@@ -19,7 +19,7 @@ from analysis.metrics import trace_metrics
 from analysis.safety import road_edge_gaps_m, time_to_collision_s
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec, SeedParams
+from scenarios.spec import ScenarioSpec
 from scenarios.worlds import make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
@@ -134,7 +134,6 @@ class Simulation:
         edge_gaps_m = road_edge_gaps_m(
             trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
             road)
-        detect_beams = getattr(spec.controller.params, "detect_beams", SeedParams().detect_beams)
         hit = self.hit
         row = {
             "seed": spec.scenario.seed,
@@ -146,7 +145,8 @@ class Simulation:
             "collision": hit is not None,
             "collision_with": hit or "none",
             "collision_time_s": t_end if hit else None,
-            **trace_metrics(trace.floats, trace.phase, trace.lidar, detect_beams),
+            **trace_metrics(trace.floats, trace.phase, trace.lidar,
+                            spec.controller.detect_beams),
             "min_road_edge_gap_m": float(np.nanmin(edge_gaps_m, initial=math.inf)),
             "sim_time_s": t_end,
             "steps": len(trace),

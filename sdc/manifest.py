@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import datetime
 import json
-import os
 import platform
 import subprocess
 from importlib import metadata
 from pathlib import Path
+
+from sdc.files import write_atomic
 
 MANIFEST = "manifest.json"
 _PACKAGES = ("sdc", "libsumo", "eclipse-sumo", "numpy", "scipy", "pandas", "pyarrow", "ray")
@@ -49,7 +50,5 @@ def read_manifest(out_dir: Path) -> dict | None:
 
 def write_manifest(out_dir: Path, manifest: dict) -> None:
     """Write atomically, so a kill never leaves half a manifest."""
-    path = Path(out_dir) / MANIFEST
-    tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps(manifest, indent=2) + "\n")
-    os.replace(tmp, path)
+    text = json.dumps(manifest, indent=2) + "\n"
+    write_atomic(Path(out_dir) / MANIFEST, lambda tmp: tmp.write_text(text))

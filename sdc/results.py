@@ -8,12 +8,13 @@ name and renamed, so a kill leaves whole files only; reading deduplicates by
 
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.parquet as pq
+
+from sdc.files import write_atomic
 
 #: the result row of DESIGN.md section 4, in order, plus sdc's own columns
 RESULT_FIELDS = [
@@ -53,12 +54,7 @@ def result_schema(param_types: dict[str, type]) -> pa.Schema:
 
 
 def _write_atomic(table: pa.Table, path: Path) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
 class ResultStore:
@@ -102,9 +98,6 @@ class ResultStore:
         table = pa.concat_tables(tables) if tables else self.schema.empty_table()
         first = pa.array(_first_of_each(table.column("run_id").to_pylist()), pa.int64())
         return table.take(first).sort_by("run_index")
-
-    def done_run_ids(self) -> set[str]:
-        return set(self.read().column("run_id").to_pylist())
 
     def consolidate(self) -> pa.Table:
         """Write ``results.parquet`` from everything stored and remove the parts."""

@@ -11,7 +11,7 @@ import numpy as np
 
 from scenarios.road import RoadGeometry
 from scenarios.spec import LidarSpec
-from sdc.geometry import boxes_within_m, ray_box_ranges_culled, ray_segment_ranges
+from sdc.geometry import ray_box_ranges_culled, ray_segment_ranges
 
 
 def beam_angles_rad(beams: int, fov_deg: float) -> np.ndarray:
@@ -41,8 +41,7 @@ class Lidar:
         ``beams`` floats, ``inf`` where nothing is hit within ``max_range_m``."""
         max_range = self.spec.max_range_m
         angles = yaw_rad + self.angles_rad
-        near = boxes_within_m(origin_xy, boxes, max_range)
-        ranges = ray_box_ranges_culled(origin_xy, angles, boxes[near], max_range)
+        ranges = ray_box_ranges_culled(origin_xy, angles, boxes, max_range)  # culls by range
         if len(self.edge_segments):
             dist = np.hypot(*(self._seg_mid - origin_xy).T)
             near_seg = dist <= max_range + self._seg_half_len

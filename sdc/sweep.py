@@ -68,7 +68,7 @@ def _invalid_row(run: PlannedRun) -> dict:
 
 
 def _plan_table(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
-    params = result_schema({p.path: p.value_type for p in sweep.params})
+    params = result_schema(sweep.param_types)
     rows = [{"run_id": r.run_id, "run_index": r.index, "sample": r.sample,
              "controller": r.controller, "seed": r.seed, "error": r.error,
              "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
@@ -122,6 +122,12 @@ def _build_networks(tasks: list[RunTask], workers: int) -> None:
         list(pool.map(build_network, roads))
 
 
+def _tally(table: pa.Table) -> tuple[Counter, int]:
+    """Rows by status, and how many collided."""
+    return (Counter(table.column("status").to_pylist()),
+            sum(bool(c) for c in table.column("collision").to_pylist()))
+
+
 def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter, *,
               traces: TraceMode = "failures", resume: bool = False) -> SweepOutcome:
     """Run every planned run of ``sweep`` that has no row in ``out_dir`` yet.
@@ -133,7 +139,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     out_dir = Path(out_dir)
     plan = expand(sweep)
     manifest = prepare_dir(out_dir, sweep, plan, resume)
-    store = ResultStore(out_dir, result_schema({p.path: p.value_type for p in sweep.params}))
+    store = ResultStore(out_dir, result_schema(sweep.param_types))
     stored = store.read()
     done = set(stored.column("run_id").to_pylist())
     trace_dir = out_dir / "traces"
@@ -152,9 +158,8 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     manifest["status"] = "running"
     write_manifest(out_dir, manifest)
 
-    statuses = Counter(stored.column("status").to_pylist())
-    reporter.start(total=len(plan), done=len(done),
-                   collisions=sum(bool(c) for c in stored.column("collision").to_pylist()),
+    statuses, collisions = _tally(stored)
+    reporter.start(total=len(plan), done=len(done), collisions=collisions,
                    failed=statuses["error"] + statuses["timeout"])
     interrupted = False
     try:
@@ -174,10 +179,9 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     finally:
         reporter.stop()
         table = store.consolidate()
-        counts = Counter(table.column("status").to_pylist())
+        counts, collisions = _tally(table)
         summary = {s: counts.get(s, 0) for s in STATUSES}
         summary["missing"] = len(plan) - table.num_rows
-        collisions = sum(bool(c) for c in table.column("collision").to_pylist())
         session["ended_at"] = now_iso()
         manifest.update(ended_at=session["ended_at"], counts=summary, collisions=collisions,
                         status="interrupted" if summary["missing"] else "complete")

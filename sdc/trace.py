@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.errors import SdcError
+from sdc.files import write_atomic
 
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (
@@ -73,13 +73,8 @@ class Trace:
 
     def write(self, path: str | Path, metadata: dict) -> None:
         """Write atomically: a crash leaves either no file or the whole one."""
-        path = Path(path)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
-            pq.write_table(self.to_table(metadata), tmp)
-            os.replace(tmp, path)
-        finally:
-            tmp.unlink(missing_ok=True)
+        table = self.to_table(metadata)
+        write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
 class TraceRecorder:
