@@ -54,8 +54,12 @@ class Scene:
     title: str
 
 
-def road_lines(road: RoadGeometry) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """The lane separators and the two road edges as polylines (P, 2)."""
+def road_lines(road: RoadGeometry, edge_segments=None) -> tuple[list[np.ndarray],
+                                                                list[np.ndarray]]:
+    """The lane separators and the two road edges as polylines (P, 2); on a network
+    (``edge_segments``, (S, 4)), the route's centre line and the network's edges."""
+    if edge_segments is not None:
+        return [road.center_xy], list(np.asarray(edge_segments, float).reshape(-1, 2, 2))
     separators = [road.lane_center_d_m(i) + road.lane_width_m / 2 for i in range(road.lanes - 1)]
     half = road.half_width_m
     return ([road.offset_polyline(d) for d in separators],
@@ -76,12 +80,14 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
                                 f["y_m"] + mount * np.sin(f["yaw_rad"])])
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
     ranges = np.array(trace.lidar, dtype=float).reshape(len(trace), -1)
-    lane_lines, edges = road_lines(road)
+    lane_lines, edges = road_lines(road, plain_road.get("edge_segments"))
+    obstacles = (np.array(metadata["obstacle_boxes"], float).reshape(-1, 5)
+                 if "obstacle_boxes" in metadata else obstacle_boxes(spec, road))
     run = metadata.get("run", {})
     return Scene(
         t_s=f["t_s"], step=np.arange(len(trace)), ego=ego,
         traffic=[np.asarray(row, float).reshape(-1, 5) for row in trace.traffic],
-        obstacles=obstacle_boxes(spec, road), mount_xy=mount_xy,
+        obstacles=obstacles, mount_xy=mount_xy,
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
         lane_offset_m=f["lane_offset_m"],

@@ -46,8 +46,5 @@ def road_edge_gaps_m(body_boxes: np.ndarray, road: RoadGeometry) -> np.ndarray:
     """Per box, the distance from its outermost corner to the nearer road edge [m]
     (negative beyond it; ``nan`` while no corner is alongside the road)."""
     corners = box_corners(body_boxes)  # (N, 4, 2)
-    s_m, d_m = road.to_frenet(corners.reshape(-1, 2))
-    s_m, d_m = s_m.reshape(-1, 4), d_m.reshape(-1, 4)
-    alongside = (s_m >= 0) & (s_m <= road.length_m)
-    gaps = np.where(alongside, road.half_width_m - np.abs(d_m), np.inf).min(axis=1)
-    return np.where(alongside.any(axis=1), gaps, np.nan)
+    gaps = road.edge_gaps_m(corners.reshape(-1, 2)).reshape(-1, 4).min(axis=1)
+    return np.where(np.isposinf(gaps), np.nan, gaps)

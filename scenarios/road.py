@@ -103,6 +103,21 @@ class RoadGeometry:
         along = (s_m - self._seg_start_s_m[seg])[..., None]
         return self.center_xy[seg] + along * direction + d_m[..., None] * normal
 
+    def place_s_m(self, s_m: float, length_m: float) -> float:
+        """Where a body ``length_m`` long centred at ``s_m`` stands (anywhere here)."""
+        return s_m
+
+    def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
+        """Each point's distance to the nearer road edge [m]: negative beyond it,
+        ``inf`` before the road's start or past its end."""
+        s_m, d_m = self.to_frenet(points)
+        alongside = (s_m >= 0) & (s_m <= self.length_m)
+        return np.where(alongside, self.half_width_m - np.abs(d_m), np.inf)
+
+    def off_road(self, points: np.ndarray) -> np.ndarray:
+        """Which points lie beyond a road edge (a bool mask)."""
+        return self.edge_gaps_m(points) < 0
+
     def offset_polyline(self, d_m: float) -> np.ndarray:
         """The polyline at constant lateral offset ``d_m`` (vertices on the bisectors)."""
         normals = np.stack([-self._seg_dir[:, 1], self._seg_dir[:, 0]], axis=-1)

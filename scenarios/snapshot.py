@@ -58,7 +58,7 @@ def obstacle_boxes(spec: ScenarioSpec, road: RoadGeometry) -> np.ndarray:
     """The exact boxes of the spec's obstacles, lateral offsets included."""
     if not spec.obstacles:
         return NO_BOXES
-    s_m = np.array([o.position_m for o in spec.obstacles])
+    s_m = np.array([road.place_s_m(o.position_m, o.size_m[0]) for o in spec.obstacles])
     d_m = np.array([road.lane_center_d_m(o.lane) + o.lateral_offset_m for o in spec.obstacles])
     xy = road.xy_at(s_m, d_m)
     sizes = np.array([o.size_m for o in spec.obstacles])

@@ -29,31 +29,52 @@ class ScenarioMeta(Spec):
 
 @spec_class
 class RoadSpec(Spec):
-    """A one-way N-lane road starting at the origin heading +x.
+    """A one-way N-lane road starting at the origin heading +x (``straight``,
+    ``curve``), or a route through a SUMO network (``sumo_net``).
 
     ``curve_radius_m`` (curve only) is signed: positive turns left, negative right.
+    For ``sumo_net``, ``net_file`` names any SUMO ``.net.xml`` (relative to the
+    scenario file), ``length_m`` is the length of the ego's route, drawn from the
+    seed, and the road is that route's lane: ``lanes`` is not given, positions
+    are along the route and every lane index is 0. ``lane_width_m`` and
+    ``speed_limit_mps`` come from the network.
     """
 
-    kind: Literal["straight", "curve"] = "straight"
-    length_m: float = num(gt=0, le=20_000)
-    lanes: int = num(ge=1, le=8)
+    kind: Literal["straight", "curve", "sumo_net"] = "straight"
+    length_m: float = num(gt=0, le=50_000)
+    lanes: int | None = num(None, ge=1, le=8)  # required for straight and curve
     lane_width_m: float = num(3.5, ge=2.0, le=6.0)
     speed_limit_mps: float = num(33.33, gt=0, le=70)
     curve_radius_m: float | None = None
+    net_file: str | None = None  # sumo_net only
+    #: sumo_net: "straight" goes straight on at every junction where its lane can
+    #: (turning only where it must), "any" takes a random turn at each
+    route_turns: Literal["straight", "any"] = "straight"
     see_edges: bool = True
 
     @property
+    def lane_count(self) -> int:
+        """Lanes of the road (a sumo_net road is its route's one lane)."""
+        return self.lanes or 1
+
+    @property
     def half_width_m(self) -> float:
-        return self.lanes * self.lane_width_m / 2
+        return self.lane_count * self.lane_width_m / 2
 
     def lane_center_d_m(self, lane: int) -> float:
         """Lateral offset of a lane's centre from the road's centre line [m]."""
-        return (lane - (self.lanes - 1) / 2) * self.lane_width_m
+        return (lane - (self.lane_count - 1) / 2) * self.lane_width_m
 
 
 @spec_class
 class TrafficSpec(Spec):
     """Background traffic entering at the road's start; ``speed_dev`` is relative.
+
+    On a ``sumo_net`` road, ``vehicles`` cars each drive one random trip (from and
+    to edges drawn in proportion to their length, like SUMO's ``randomTrips.py
+    -l``), all departing at 0 s from free random places, at each edge's speed
+    limit times a factor ~ N(1, ``speed_dev``); ``flow_vph_per_lane`` and
+    ``speed_mean_mps`` are for the built-in roads.
 
     With ``warm_up_s``, the traffic flows that long before the ego is put on the
     road (vehicles where it starts are taken off), so it starts inside traffic.
@@ -63,6 +84,7 @@ class TrafficSpec(Spec):
     speed_mean_mps: float = num(25.0, gt=0, le=70)
     speed_dev: float = num(0.1, ge=0, le=1)
     warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
+    vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
 
 
 @spec_class
@@ -256,6 +278,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
             raise SpecError("road.length_m", "the curve would turn more than 270 degrees")
     elif road.curve_radius_m is not None:
         raise SpecError("road.curve_radius_m", 'only applies to kind "curve"')
+    _check_road_kind(spec)
 
     if spec.scenario.duration_s < spec.scenario.step_s:
         raise SpecError("scenario.duration_s", "must be at least one step (step_s)")
@@ -269,8 +292,8 @@ def _check_consistency(spec: ScenarioSpec) -> None:
 
     model = VEHICLE_MODELS[spec.vehicle.model]
     ego = spec.ego
-    if ego.lane >= road.lanes:
-        raise SpecError("ego.lane", f"{ego.lane} >= lanes ({road.lanes})")
+    if ego.lane >= road.lane_count:
+        raise SpecError("ego.lane", f"{ego.lane} >= lanes ({road.lane_count})")
     if ego.start_m - model.length_m / 2 < 0 or ego.start_m + model.length_m / 2 >= road.length_m:
         raise SpecError(
             "ego.start_m",
@@ -281,8 +304,8 @@ def _check_consistency(spec: ScenarioSpec) -> None:
     for i, obstacle in enumerate(spec.obstacles):
         path = f"obstacles[{i}]"
         length_m, width_m = obstacle.size_m
-        if obstacle.lane >= road.lanes:
-            raise SpecError(f"{path}.lane", f"{obstacle.lane} >= lanes ({road.lanes})")
+        if obstacle.lane >= road.lane_count:
+            raise SpecError(f"{path}.lane", f"{obstacle.lane} >= lanes ({road.lane_count})")
         if obstacle.position_m + length_m / 2 > road.length_m or obstacle.position_m < length_m / 2:
             raise SpecError(
                 f"{path}.position_m",
@@ -290,7 +313,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 f"{road.length_m} m road",
             )
         d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
-        if abs(d_m) > road.half_width_m:
+        if abs(d_m) > road.half_width_m and road.kind != "sumo_net":  # the network decides
             raise SpecError(
                 f"{path}.lateral_offset_m",
                 f"{obstacle.lateral_offset_m} puts the {obstacle.kind}'s centre off the road",
@@ -300,3 +323,29 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 "ego.start_m",
                 f"the ego starts inside {path} ({obstacle.kind} at {obstacle.position_m} m)",
             )
+
+
+def _check_road_kind(spec: ScenarioSpec) -> None:
+    """What a built-in road needs, and what a SUMO network road must not be given."""
+    road, traffic = spec.road, spec.traffic
+    if road.kind != "sumo_net":
+        if road.lanes is None:
+            raise SpecError("road.lanes", f'is required for kind "{road.kind}"')
+        for field, given in (("road.net_file", road.net_file is not None),
+                             ("road.route_turns", road.route_turns != "straight"),
+                             ("traffic.vehicles", traffic.vehicles > 0)):
+            if given:
+                raise SpecError(field, 'only applies to road kind "sumo_net"')
+        return
+    if road.net_file is None:
+        raise SpecError("road.net_file", 'is required for kind "sumo_net"')
+    if road.lanes is not None:
+        raise SpecError("road.lanes", 'a "sumo_net" road is its route\'s own lane: leave '
+                        "lanes out (every lane index is 0)")
+    if traffic.flow_vph_per_lane > 0:
+        raise SpecError("traffic.flow_vph_per_lane",
+                        'is for the built-in roads; a "sumo_net" road takes traffic.vehicles')
+    if spec.scenario.backend != "sumo":
+        raise SpecError("scenario.backend",
+                        f'{spec.scenario.backend} cannot load a SUMO network '
+                        '(road.kind "sumo_net")')

@@ -19,6 +19,7 @@ import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.netroad import DEMAND, NetworkRoad, scenario_stream
 from scenarios.network import EDGE_ID, build_network, sumo_binary
 from scenarios.road import RoadGeometry
 from scenarios.snapshot import (
@@ -38,11 +39,55 @@ SUBSCRIPTION_SLACK_M = 30.0
 _TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED, tc.VAR_LENGTH, tc.VAR_WIDTH)
 
 
-def routes_xml(spec: ScenarioSpec) -> str:
-    """The ``.rou.xml`` text: vehicle types, obstacles as stopped vehicles, flows."""
+def _sumo_place(road: RoadGeometry, lane: int, s_m: float) -> tuple[str, int, float]:
+    """SUMO's edge, lane index and lane position of road position ``s_m`` in ``lane``."""
+    if isinstance(road, NetworkRoad):
+        return road.sumo_place(s_m)
+    # SUMO gives every lane of a curve the centre line's length
+    return EDGE_ID, lane, s_m
+
+
+def _route_edges(road: RoadGeometry, s_m: float) -> list[str]:
+    return road.route_edges(s_m) if isinstance(road, NetworkRoad) else [EDGE_ID]
+
+
+def _flows(spec: ScenarioSpec) -> list[str]:
+    """A flow per lane entering at the road's start."""
+    traffic = spec.traffic
+    if traffic.flow_vph_per_lane == 0:
+        return []
+    return [
+        f'  <flow id="traffic.{lane}" type="traffic" route="r0" begin="0" '
+        f'end="{traffic.warm_up_s + spec.scenario.duration_s}" '
+        f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
+        for lane in range(spec.road.lane_count)
+    ]
+
+
+def _trips(spec: ScenarioSpec, road: NetworkRoad) -> list[str]:
+    """``traffic.vehicles`` random trips across the network, all leaving at 0 s."""
+    if spec.traffic.vehicles == 0:
+        return []
+    edges = road.net.trip_edges()
+    weights = np.array([length_m for _, length_m in edges])
+    rng = scenario_stream(spec.scenario.seed, DEMAND)
+    ends = rng.choice(len(edges), size=(spec.traffic.vehicles, 2), p=weights / weights.sum())
+    while np.any(same := ends[:, 0] == ends[:, 1]):
+        ends[same, 1] = rng.choice(len(edges), size=int(same.sum()), p=weights / weights.sum())
+    return [
+        f'  <trip id="traffic.{k}" type="traffic" depart="0" from="{edges[a][0]}" '
+        f'to="{edges[b][0]}" departLane="random" departPos="random_free" departSpeed="0"/>'
+        for k, (a, b) in enumerate(ends)
+    ]
+
+
+def routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    """The ``.rou.xml`` text: vehicle types, the ego's route, obstacles as stopped
+    vehicles, and the background traffic (flows, or trips on a network)."""
     model = VEHICLE_MODELS[spec.vehicle.model]
     traffic = spec.traffic
-    factor = traffic.speed_mean_mps / spec.road.speed_limit_mps
+    network = isinstance(road, NetworkRoad)
+    factor = 1.0 if network else traffic.speed_mean_mps / spec.road.speed_limit_mps
     lines = [
         "<routes>",
         f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
@@ -53,24 +98,23 @@ def routes_xml(spec: ScenarioSpec) -> str:
         f'  <vType id="obstacle_{kind}" length="{length}" width="{width}"/>'
         for kind, (length, width) in OBSTACLE_SIZES_M.items()
     ]
-    lines.append(f'  <route id="r0" edges="{EDGE_ID}"/>')
+    ego_front_m = spec.ego.start_m + model.length_m / 2
+    lines.append(f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>')
     for i, obstacle in enumerate(spec.obstacles):
-        # SUMO gives every lane of a curve the centre line's length and names the front bumper
-        front_m = obstacle.position_m + obstacle.size_m[0] / 2
+        length_m = obstacle.size_m[0]
+        s_m = road.place_s_m(obstacle.position_m, length_m)
+        edge, lane, front_m = _sumo_place(road, obstacle.lane, s_m + length_m / 2)
+        route = "r0" if edge == EDGE_ID else f"{OBSTACLE_PREFIX}{i}"
+        if route != "r0":
+            lines.append(f'  <route id="{route}" edges="{edge}"/>')
         lines += [
-            f'  <vehicle id="{OBSTACLE_PREFIX}{i}" type="obstacle_{obstacle.kind}" route="r0" '
-            f'depart="0" departLane="{obstacle.lane}" departPos="{front_m:.6f}" departSpeed="0">',
-            f'    <stop lane="{EDGE_ID}_{obstacle.lane}" endPos="{front_m:.6f}" duration="1e9"/>',
+            f'  <vehicle id="{OBSTACLE_PREFIX}{i}" type="obstacle_{obstacle.kind}" '
+            f'route="{route}" depart="0" departLane="{lane}" departPos="{front_m:.6f}" '
+            'departSpeed="0">',
+            f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
             "  </vehicle>",
         ]
-    if traffic.flow_vph_per_lane > 0:
-        lines += [
-            f'  <flow id="traffic.{lane}" type="traffic" route="r0" begin="0" '
-            f'end="{traffic.warm_up_s + spec.scenario.duration_s}" '
-            f'vehsPerHour="{traffic.flow_vph_per_lane}" '
-            f'departLane="{lane}" departSpeed="desired"/>'
-            for lane in range(spec.road.lanes)
-        ]
+    lines += _trips(spec, road) if network else _flows(spec)
     lines.append("</routes>")
     return "\n".join(lines) + "\n"
 
@@ -117,12 +161,15 @@ class SumoWorld:
             import libsumo as sim  # imported here: only this backend needs the simulator
             command = ["sumo"]
 
-        net = build_network(self.spec.road, self.cache_dir)
+        network = isinstance(self.road, NetworkRoad)
+        net = self.road.net.path if network else build_network(self.spec.road, self.cache_dir)
         self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
         routes = Path(self._tmp.name) / "scenario.rou.xml"
-        routes.write_text(routes_xml(self.spec))
+        routes.write_text(routes_xml(self.spec, self.road))
         sim.start([
             *command, "--net-file", str(net), "--route-files", str(routes),
+            # a random trip with no way to its end is dropped, not fatal
+            *(["--ignore-route-errors", "true"] if network else []),
             "--step-length", repr(self.spec.scenario.step_s),
             "--seed", str(self.spec.scenario.seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
@@ -135,8 +182,9 @@ class SumoWorld:
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
         model = VEHICLE_MODELS[self.spec.vehicle.model]
-        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now", departLane=str(ego.lane),
-                        departPos=f"{ego.start_m + model.length_m / 2:.6f}", departSpeed="0")
+        _, lane, front_m = _sumo_place(self.road, ego.lane, ego.start_m + model.length_m / 2)
+        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now", departLane=str(lane),
+                        departPos=f"{front_m:.6f}", departSpeed="0")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
         # only the vehicles around the ego are read, whatever the size of the network;

@@ -25,7 +25,13 @@ def read_toml(path: str | Path) -> dict:
 
 
 def load_spec(path: str | Path) -> ScenarioSpec:
-    return ScenarioSpec.from_plain(read_toml(path))
+    """The scenario in a TOML file; a relative ``road.net_file`` is taken from the
+    file's folder (and kept absolute, so the spec runs from anywhere)."""
+    data = read_toml(path)
+    road = data.get("road")
+    if isinstance(road, dict) and isinstance(road.get("net_file"), str) and road["net_file"]:
+        road["net_file"] = str((Path(path).parent / road["net_file"]).resolve())
+    return ScenarioSpec.from_plain(data)
 
 
 def _value(value: Any) -> str:

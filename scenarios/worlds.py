@@ -7,13 +7,38 @@ and ``close()``; it is a context manager.
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 from scenarios.errors import SdcError
+from scenarios.network import build_network
 from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
+from scenarios.spec import RoadSpec, ScenarioSpec
 
 BACKENDS = ("sumo", "highway")
+
+
+def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
+    """The road of ``spec``: a built-in road, or the route drawn through a SUMO network."""
+    if spec.road.kind == "sumo_net":
+        from scenarios.netroad import network_road
+
+        return network_road(spec, cache_dir)
+    return RoadGeometry.from_spec(spec.road)
+
+
+def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
+    """Build and cache what SUMO runs on ``road`` need (its network; a network
+    file's road edges), so parallel runs find it ready. A network file that cannot
+    be read is left to the runs to report."""
+    if road.kind != "sumo_net":
+        build_network(road, cache_dir)
+        return
+    from scenarios.netfile import read_net
+    from scenarios.netroad import network_area
+
+    with contextlib.suppress(SdcError):
+        network_area(read_net(road.net_file), cache_dir)
 
 
 def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,

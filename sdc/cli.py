@@ -60,7 +60,8 @@ def summary_lines(name: str, row: dict) -> list[str]:
     return [
         f"{name}  controller={row['controller']}  seed={row['seed']}  backend={row['backend']}",
         f"  outcome:   {outcome}; ended by {row['termination']} after "
-        f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall)",
+        f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
+        f"{row['network_vehicles']} vehicles in the network)",
         f"  maneuver:  {maneuver}",
         f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
         f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "

@@ -15,16 +15,14 @@ OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
 def collision_with(ego_box: np.ndarray, snapshot: Snapshot, road: RoadGeometry) -> str | None:
     """What the ego touches (``obstacle``, ``vehicle``, ``road_edge``) or ``None``.
 
-    A body corner beyond either road edge, while alongside the road, counts as
-    a road-edge collision.
+    A body corner off the road (beyond either edge, while alongside it; off the
+    drivable area of a network) counts as a road-edge collision.
     """
     ego_half_diag_m = 0.5 * float(np.hypot(ego_box[3], ego_box[4]))
     for kind, boxes in ((OBSTACLE, snapshot.obstacle_boxes), (VEHICLE, snapshot.traffic_boxes)):
         near = boxes[boxes_within_m(ego_box[:2], boxes, ego_half_diag_m)]
         if len(near) and boxes_overlap(ego_box, near).any():
             return kind
-    s_m, d_m = road.to_frenet(box_corners(ego_box[None])[0])
-    alongside = (s_m >= 0) & (s_m <= road.length_m)
-    if np.any(alongside & (np.abs(d_m) > road.half_width_m)):
+    if road.off_road(box_corners(ego_box[None])[0]).any():
         return ROAD_EDGE
     return None

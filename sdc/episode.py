@@ -20,7 +20,7 @@ from analysis.safety import road_edge_gaps_m, time_to_collision_s
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec
-from scenarios.worlds import make_world
+from scenarios.worlds import make_road, make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
 from sdc.geometry import box_gap_m
@@ -78,6 +78,7 @@ class Simulation:
         self.k = 0
         self.state = initial_state(self.spec, self.road, self.vehicle)
         self.snapshot = self.world.start(self.vehicle.body_box(self.state), self.state.speed_mps)
+        self.network_vehicles = self.world.vehicle_count()
         self._sense()
 
     def _sense(self) -> None:
@@ -151,11 +152,13 @@ class Simulation:
             "sim_time_s": t_end,
             "steps": len(trace),
             "wall_time_s": time.perf_counter() - self.wall_start,
+            "network_vehicles": self.network_vehicles,
             "trace_sha256": trace.sha256(),
         }
         metadata = {
             "spec": spec.to_plain(),
             "road": road.to_plain(),
+            "obstacle_boxes": self.snapshot.obstacle_boxes.round(6).tolist(),
             "vehicle": {"model": model.name, "length_m": model.length_m,
                         "width_m": model.width_m,
                         "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
@@ -170,7 +173,7 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None,
     """Run ``spec`` (its seed, its controller, its backend) and return the outcome;
     with ``gui``, in sumo-gui (same results, at the speed of the step length)."""
     controller = make_controller(spec.controller)
-    road = RoadGeometry.from_spec(spec.road)
+    road = make_road(spec, cache_dir)
     with make_world(spec, road, cache_dir, gui) as world:
         sim = Simulation(spec, world, controller.look_ahead_m)
         sim.start()

@@ -38,7 +38,7 @@ from scenarios import CATALOG_DIR
 from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec
 from scenarios.toml_io import load_spec
-from scenarios.worlds import BACKENDS, make_world
+from scenarios.worlds import BACKENDS, make_road, make_world
 from sdc.episode import COLLISION, DURATION, Simulation
 from sdc.vehicle import Command
 
@@ -68,7 +68,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode: {render_mode!r} is not supported (rgb_array)")
         self.scenario, self.render_mode, self.cache_dir = spec, render_mode, cache_dir
-        self.road = RoadGeometry.from_spec(spec.road)
+        self.road = make_road(spec, cache_dir)
         beams, max_range = spec.lidar.beams, spec.lidar.max_range_m
         self._offset_bound_m = 2 * self.road.half_width_m
         low = np.concatenate([np.zeros(beams), [-self._offset_bound_m, -math.pi, 0.0]])
@@ -99,6 +99,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         self.close()
         scenario_seed = seed if seed is not None else int(self.np_random.integers(2**31 - 1))
         spec = self.scenario.with_seed(scenario_seed)
+        self.road = make_road(spec, self.cache_dir)  # a network route depends on the seed
         self._world = make_world(spec, self.road, self.cache_dir)
         self._sim = Simulation(spec, self._world, spec.controller.params.look_ahead_m)
         self._sim.start()
@@ -148,7 +149,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
-    lane_lines, edges = road_lines(road)
+    lane_lines, edges = road_lines(road, road.to_plain().get("edge_segments"))
     scene = Scene(
         t_s=np.array([sim.k * sim.step_s]), step=np.array([sim.k]), ego=sim.box[None],
         traffic=[snapshot.traffic_boxes], obstacles=snapshot.obstacle_boxes,

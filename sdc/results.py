@@ -14,7 +14,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from sdc.files import write_atomic
+from scenarios.files import write_atomic
 
 #: the result row of DESIGN.md section 4, in order, plus sdc's own columns
 RESULT_FIELDS = [
@@ -41,6 +41,7 @@ RESULT_FIELDS = [
     ("sim_time_s", pa.float64()),
     ("steps", pa.int64()),
     ("wall_time_s", pa.float64()),
+    ("network_vehicles", pa.int64()),  # traffic in the whole network as the ego entered
     ("trace_sha256", pa.string()),
     ("traceback", pa.string()),
 ]

@@ -21,8 +21,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.errors import SdcError
-from scenarios.network import build_network
 from scenarios.sweep import PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.worlds import prepare_network
 from sdc.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
 from sdc.results import ResultStore, result_schema
 from sdc.task import RunTask, TraceMode
@@ -119,7 +119,7 @@ def _build_networks(tasks: list[RunTask], workers: int) -> None:
     """Build each distinct SUMO road network once, before any worker needs it."""
     roads = list({task.spec.road: None for task in tasks if task.spec.scenario.backend == "sumo"})
     with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
-        list(pool.map(build_network, roads))
+        list(pool.map(prepare_network, roads))
 
 
 def _tally(table: pa.Table) -> tuple[Counter, int]:

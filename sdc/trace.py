@@ -14,7 +14,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.errors import SdcError
-from sdc.files import write_atomic
+from scenarios.files import write_atomic
 
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (

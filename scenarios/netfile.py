@@ -1,0 +1,126 @@
+"""Reading a SUMO ``.net.xml`` into plain data: lanes, connections, junction shapes.
+
+Only what sdc needs is read: every lane's centre-line shape, width and SUMO
+length, which lanes follow which (through the junction's internal lanes), and
+the junction outlines. Works for any network SUMO writes (netconvert,
+netgenerate, OpenStreetMap imports).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.errors import SdcError
+
+DEFAULT_LANE_WIDTH_M = 3.2  # SUMO's default when a lane names none
+STRAIGHT, U_TURN = "s", "t"  # SUMO's connection directions (dir) straight on and turnaround
+
+
+@dataclass(frozen=True)
+class NetLane:
+    id: str
+    edge: str
+    index: int  # 0 = rightmost
+    shape_xy: np.ndarray  # (P, 2) centre line [m]
+    width_m: float
+    sumo_length_m: float  # SUMO's lane positions run from 0 to this
+    internal: bool  # inside a junction
+    passenger: bool  # open to passenger cars
+
+    @property
+    def length_m(self) -> float:
+        """Length of the shape polyline (may differ slightly from SUMO's)."""
+        return float(np.hypot(*np.diff(self.shape_xy, axis=0).T).sum())
+
+
+@dataclass(frozen=True)
+class Turn:
+    """Leaving a lane: the junction lanes driven through (``via``), then ``to``."""
+
+    to: str
+    via: tuple[str, ...]
+    direction: str  # SUMO's dir: s, l, r, t, ...
+
+
+@dataclass(frozen=True)
+class NetFile:
+    path: Path
+    sha256: str
+    lanes: dict[str, NetLane]
+    turns: dict[str, tuple[Turn, ...]]  # by normal lane id
+    junction_shapes: tuple[np.ndarray, ...]  # outlines (P, 2) of the non-internal junctions
+
+    def trip_edges(self) -> list[tuple[str, float]]:
+        """Edges a passenger car may start or end a trip on, with their lengths [m]."""
+        edges: dict[str, float] = {}
+        for lane in self.normal_lanes():
+            edges.setdefault(lane.edge, lane.length_m)
+        return list(edges.items())
+
+    def normal_lanes(self) -> list[NetLane]:
+        """Lanes outside junctions open to passenger cars, in file order."""
+        return [lane for lane in self.lanes.values() if not lane.internal and lane.passenger]
+
+
+def _shape(text: str) -> np.ndarray:
+    return np.array([[float(v) for v in p.split(",")[:2]] for p in text.split()])
+
+
+def _passenger(element: ET.Element) -> bool:
+    allow, disallow = element.get("allow"), element.get("disallow", "")
+    if allow is not None and allow != "all" and "passenger" not in allow.split():
+        return False
+    return disallow != "all" and "passenger" not in disallow.split()
+
+
+def read_net(path: str | Path) -> NetFile:
+    """Parse ``path``; an unreadable or malformed file is an :class:`SdcError`."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+        root = ET.fromstring(data)
+    except (OSError, ET.ParseError) as e:
+        raise SdcError(f"cannot read SUMO network {path}: {e}") from None
+    if root.tag != "net":
+        raise SdcError(f"{path} is not a SUMO network (root element <{root.tag}>)")
+    lanes: dict[str, NetLane] = {}
+    for edge in root.iter("edge"):
+        function = edge.get("function", "normal")
+        if function not in ("normal", "internal"):
+            continue  # crossings, walking areas, connectors
+        for lane in edge.iter("lane"):
+            lanes[lane.get("id")] = NetLane(
+                id=lane.get("id"), edge=edge.get("id"), index=int(lane.get("index")),
+                shape_xy=_shape(lane.get("shape")),
+                width_m=float(lane.get("width", DEFAULT_LANE_WIDTH_M)),
+                sumo_length_m=float(lane.get("length")), internal=function == "internal",
+                passenger=_passenger(lane) and _passenger(edge))
+    successor: dict[str, list[tuple[str, str | None, str]]] = {}
+    for c in root.iter("connection"):
+        source = f"{c.get('from')}_{c.get('fromLane')}"
+        successor.setdefault(source, []).append(
+            (f"{c.get('to')}_{c.get('toLane')}", c.get("via"), c.get("dir", "")))
+    turns: dict[str, tuple[Turn, ...]] = {}
+    for lane in lanes.values():
+        if lane.internal:
+            continue
+        found = []
+        for to, via, direction in successor.get(lane.id, []):
+            chain = []
+            while via is not None and via in lanes and len(chain) < 8:
+                chain.append(via)  # a junction lane may lead on to another (internal junction)
+                via = next((v for t, v, _ in successor.get(via, []) if t == to), None)
+            if to in lanes:
+                found.append(Turn(to, tuple(chain), direction))
+        turns[lane.id] = tuple(found)
+    junctions = tuple(
+        _shape(j.get("shape")) for j in root.iter("junction")
+        if j.get("type") != "internal" and len(j.get("shape", "").split()) >= 3)
+    if not any(not lane.internal for lane in lanes.values()):
+        raise SdcError(f"{path} holds no lanes")
+    return NetFile(path, hashlib.sha256(data).hexdigest(), lanes, turns, junctions)

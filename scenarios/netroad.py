@@ -1,0 +1,194 @@
+"""A SUMO network as the ego's road: its route's lane as the road, the network's
+drivable area for road edges.
+
+The route is drawn from the seed: a lane outside junctions (chance in
+proportion to its length), then at every junction one of the lane's turns
+(straight on where it can with ``road.route_turns = "straight"``; U-turns
+never), through the junction's own lanes, until the route is ``road.length_m``
+long. Along it, the ego's lane is the road of
+:class:`~scenarios.road.RoadGeometry` (one lane: ``s`` along the route, ``d``
+from its centre), so lane sensing, positions and route end work as on the
+built-in roads; road edges come from the whole network
+(:class:`~scenarios.drivable.DrivableArea`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.drivable import DrivableArea
+from scenarios.errors import SdcError, SpecError
+from scenarios.files import write_atomic
+from scenarios.netfile import STRAIGHT, U_TURN, NetFile, NetLane, read_net
+from scenarios.network import default_cache_dir
+from scenarios.road import RoadGeometry
+from scenarios.spec import ScenarioSpec
+
+#: tries at drawing a route that long before giving up (dead ends cut walks short)
+ROUTE_TRIES = 50
+#: the road edges kept in a trace for drawing: those within this of the route [m]
+DRAW_MARGIN_M = 120.0
+
+
+@dataclass(frozen=True)
+class RoutePiece:
+    lane: NetLane
+    start_s_m: float  # where the lane starts along the route
+    length_m: float  # its shape's length
+
+    def sumo_pos_m(self, s_m: float) -> float:
+        """SUMO's lane position of route position ``s_m`` on this lane."""
+        return (s_m - self.start_s_m) * self.lane.sumo_length_m / self.length_m
+
+
+ROUTE, DEMAND = 1, 2  # the random streams a seed gives a sumo_net scenario
+
+
+def scenario_stream(seed: int, purpose: int) -> np.random.Generator:
+    """A random stream of a sumo_net scenario (``ROUTE`` or ``DEMAND``), apart
+    from the lidar's noise and SUMO's own, which the seed also drives."""
+    return np.random.default_rng([seed, purpose])
+
+
+def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
+               turns: str = "straight") -> list[NetLane]:
+    """Lanes (junction lanes included) of a route at least ``length_m`` long;
+    ``turns`` is ``road.route_turns``."""
+    starts = net.normal_lanes()
+    weights = np.array([lane.length_m for lane in starts])
+    for _ in range(ROUTE_TRIES):
+        lane = starts[rng.choice(len(starts), p=weights / weights.sum())]
+        route, total_m = [lane], lane.length_m
+        while total_m < length_m:
+            options = [t for t in net.turns.get(lane.id, ()) if t.direction != U_TURN
+                       and net.lanes[t.to].passenger]
+            if turns == "straight":
+                options = [t for t in options if t.direction == STRAIGHT] or options
+            if not options:
+                break
+            turn = options[rng.integers(len(options))]
+            lane = net.lanes[turn.to]
+            route += [*(net.lanes[v] for v in turn.via), lane]
+            total_m = sum(piece.length_m for piece in route)
+        if total_m >= length_m:
+            return route
+    raise SdcError(f"{net.path}: found no route of {length_m:g} m in {ROUTE_TRIES} tries "
+                   "(dead ends everywhere?); try a shorter road.length_m")
+
+
+def _joined(shapes: list[np.ndarray]) -> np.ndarray:
+    """One polyline through consecutive shapes, repeated points dropped."""
+    points = np.vstack(shapes)
+    step = np.hypot(*np.diff(points, axis=0).T)
+    return points[np.concatenate([[True], step > 1e-6])]
+
+
+class NetworkRoad(RoadGeometry):
+    """The ego's route through a SUMO network, one lane wide, with the network's
+    road edges (``edge_segments``, ``edge_gaps_m``)."""
+
+    def __init__(self, net: NetFile, route: list[NetLane], area: DrivableArea):
+        super().__init__(_joined([lane.shape_xy for lane in route]), 1, route[0].width_m)
+        self.net, self.area = net, area
+        starts = np.concatenate([[0.0], np.cumsum([lane.length_m for lane in route])[:-1]])
+        self.pieces = [RoutePiece(lane, float(s), lane.length_m)
+                       for lane, s in zip(route, starts, strict=True)]
+
+    def piece_at(self, s_m: float) -> RoutePiece:
+        """The route lane holding route position ``s_m``."""
+        index = np.searchsorted([p.start_s_m for p in self.pieces], s_m, side="right") - 1
+        return self.pieces[int(np.clip(index, 0, len(self.pieces) - 1))]
+
+    def place_s_m(self, s_m: float, length_m: float) -> float:
+        """Where a body ``length_m`` long centred at ``s_m`` can stand: moved ahead
+        off a junction onto the next lane (SUMO holds stops on lanes only)."""
+        piece = self.piece_at(s_m)
+        if not piece.lane.internal:
+            return s_m
+        following = [p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal]
+        if not following:
+            return s_m
+        return following[0].start_s_m + min(length_m / 2 + 0.5, following[0].length_m / 2)
+
+    def sumo_place(self, s_m: float) -> tuple[str, int, float]:
+        """SUMO's edge, lane index and lane position of route position ``s_m``
+        (the start of the next lane when ``s_m`` is inside a junction)."""
+        piece = self.piece_at(s_m)
+        if piece.lane.internal:
+            piece = next((p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal),
+                         piece)
+            s_m = piece.start_s_m
+        pos_m = float(np.clip(piece.sumo_pos_m(s_m), 0.0, piece.lane.sumo_length_m))
+        return piece.lane.edge, piece.lane.index, pos_m
+
+    def route_edges(self, s_m: float) -> list[str]:
+        """The route's SUMO edges from the lane at ``s_m`` on (junctions aside)."""
+        edges = [p.lane.edge for p in self.pieces
+                 if not p.lane.internal and p.start_s_m + p.length_m > s_m]
+        return [e for i, e in enumerate(edges) if i == 0 or edges[i - 1] != e]
+
+    def edge_segments(self) -> np.ndarray:
+        return self.area.edges
+
+    def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
+        return self.area.edge_gaps_m(points)
+
+    def off_road(self, points: np.ndarray) -> np.ndarray:
+        return ~self.area.contains(points)
+
+    def to_plain(self) -> dict:
+        lo = self.center_xy.min(axis=0) - DRAW_MARGIN_M
+        hi = self.center_xy.max(axis=0) + DRAW_MARGIN_M
+        edges = self.area.edges
+        near = np.all((edges[:, :2] >= lo) & (edges[:, :2] <= hi), axis=1)
+        return {
+            **super().to_plain(),
+            "net_file": str(self.net.path),
+            "net_sha256": self.net.sha256,
+            "route_lanes": [p.lane.id for p in self.pieces],
+            "edge_segments": edges[near].round(3).tolist(),
+        }
+
+
+def network_area(net: NetFile, cache_dir: Path | None = None) -> DrivableArea:
+    """The network's drivable area; its road edges are cached by the file's hash."""
+    lanes = list(net.lanes.values())
+    cached = Path(cache_dir or default_cache_dir()) / f"{net.sha256[:20]}.edges.npy"
+    edges = np.load(cached) if cached.exists() else None
+    area = DrivableArea([lane.shape_xy for lane in lanes], [lane.width_m for lane in lanes],
+                        [i for i, lane in enumerate(lanes) if not lane.internal],
+                        list(net.junction_shapes), edges)
+    if edges is None:
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(cached, lambda tmp: _save(tmp, area.edges))
+    return area
+
+
+def _save(path: Path, array: np.ndarray) -> None:
+    with path.open("wb") as f:
+        np.save(f, array)
+
+
+def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRoad:
+    """The road of a ``sumo_net`` scenario: its route drawn from ``scenario.seed``.
+
+    Raises :class:`SpecError` naming the field when the network cannot hold the
+    scenario (an obstacle off the drivable area, no route that long).
+    """
+    path = Path(spec.road.net_file)
+    if not path.is_file():
+        raise SpecError("road.net_file", f"no such file: {path}")
+    net = read_net(path)
+    route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
+                       spec.road.route_turns)
+    road = NetworkRoad(net, route, network_area(net, cache_dir))
+    for i, obstacle in enumerate(spec.obstacles):
+        s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
+        if road.off_road(road.xy_at(s_m, obstacle.lateral_offset_m)[None]).any():
+            raise SpecError(f"obstacles[{i}].lateral_offset_m",
+                            f"{obstacle.lateral_offset_m} puts the {obstacle.kind}'s centre "
+                            "off the road")
+    return road

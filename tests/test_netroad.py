@@ -1,0 +1,153 @@
+"""SUMO network files as roads: reading, drivable area and road edges, routes.
+No simulation runs here (netconvert builds one small network)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from scenarios import CATALOG_DIR, RoadSpec, SpecError
+from scenarios.netfile import STRAIGHT, U_TURN, read_net
+from scenarios.netroad import ROUTE, draw_route, network_area, network_road, scenario_stream
+from scenarios.network import build_network
+from scenarios.road import RoadGeometry
+from scenarios.snapshot import NO_BOXES, Snapshot
+from scenarios.toml_io import load_spec
+from sdc.collision import ROAD_EDGE, collision_with
+
+GRID_TOWN = CATALOG_DIR / "grid-town.toml"
+
+
+@pytest.fixture(scope="module")
+def town():
+    spec = load_spec(GRID_TOWN)
+    net = read_net(spec.road.net_file)
+    return spec, net, network_area(net)
+
+
+def test_the_catalog_grid_has_ten_by_ten_junctions_with_two_lanes_each_way(town):
+    _, net, _ = town
+    assert len(net.junction_shapes) == 100
+    normal = net.normal_lanes()
+    assert len({lane.edge for lane in normal}) == 2 * 2 * 10 * 9  # both ways, both axes
+    assert {lane.index for lane in normal} == {0, 1}
+    assert all(turn.via for turns in net.turns.values() for turn in turns)  # through a junction
+
+
+def test_our_own_straight_network_has_exactly_the_built_in_roads_edges(tmp_path):
+    road_spec = RoadSpec(length_m=200.0, lanes=3, lane_width_m=3.5)
+    area = network_area(read_net(build_network(road_spec, tmp_path)), tmp_path)
+    road = RoadGeometry.from_spec(road_spec)
+    points = np.random.default_rng(0).uniform([20.0, -10.0], [180.0, 10.0], size=(2000, 2))
+    np.testing.assert_allclose(area.edge_gaps_m(points), road.edge_gaps_m(points), atol=1e-6)
+    np.testing.assert_array_equal(area.contains(points), ~road.off_road(points))
+
+
+def test_the_line_between_the_two_directions_is_not_a_road_edge(town):
+    _, _, area = town
+    # the street x = 0..1350 at y = 150: two lanes each way, 3.2 m wide, between junctions
+    between_directions = np.array([[75.0, 150.0]])
+    assert area.contains(between_directions).all()
+    assert area.edge_gaps_m(between_directions)[0] == pytest.approx(6.4)
+    kerb_side = np.array([[75.0, 150.0 + 6.3], [75.0, 150.0 + 6.5]])
+    np.testing.assert_allclose(area.edge_gaps_m(kerb_side), [0.1, -0.1], atol=1e-9)
+
+
+def test_collision_finds_a_kerb_but_not_the_opposite_lanes_or_a_junction(town):
+    _, _, area = town
+    spec = load_spec(GRID_TOWN)
+    road = network_road(spec)
+
+    def hit(cx, cy, yaw):
+        snapshot = Snapshot(0.0, NO_BOXES, NO_BOXES, np.zeros(0))
+        return collision_with(np.array([cx, cy, yaw, 4.85, 1.93]), snapshot, road)
+
+    assert hit(75.0, 150.0 - 1.6, 0.0) is None  # in a lane
+    assert hit(75.0, 150.0, 0.0) is None  # astride the two directions
+    assert hit(150.0, 150.0, 0.7) is None  # diagonally in a junction
+    assert hit(75.0, 150.0 - 6.0, 0.0) == ROAD_EDGE  # over the kerb
+    assert hit(75.0, 75.0, 0.0) == ROAD_EDGE  # inside a block
+
+
+def test_routes_are_connected_long_enough_seeded_and_without_u_turns(town):
+    _, net, _ = town
+    routes = {}
+    for seed in range(8):
+        route = draw_route(net, scenario_stream(seed, ROUTE), 400.0, "any")
+        assert sum(lane.length_m for lane in route) >= 400.0
+        for a, b in zip(route, route[1:], strict=False):
+            assert np.hypot(*(a.shape_xy[-1] - b.shape_xy[0])) < 0.01  # end meets start
+        normal = [lane for lane in route if not lane.internal]
+        for a, b in zip(normal, normal[1:], strict=False):
+            (turn,) = [t for t in net.turns[a.id] if t.to == b.id]
+            assert turn.direction != U_TURN
+        routes[seed] = [lane.id for lane in route]
+        again = draw_route(net, scenario_stream(seed, ROUTE), 400.0, "any")
+        assert [lane.id for lane in again] == routes[seed]
+    assert len({tuple(r) for r in routes.values()}) == len(routes)
+
+
+def test_straight_routes_turn_only_where_they_must(town):
+    _, net, _ = town
+    turned = 0
+    for seed in range(20):
+        route = draw_route(net, scenario_stream(seed, ROUTE), 600.0, "straight")
+        normal = [lane for lane in route if not lane.internal]
+        for a, b in zip(normal, normal[1:], strict=False):
+            (turn,) = [t for t in net.turns[a.id] if t.to == b.id]
+            if turn.direction != STRAIGHT:
+                turned += 1
+                assert not any(t.direction == STRAIGHT for t in net.turns[a.id])
+    assert turned > 0  # some routes meet the town's edge
+
+
+def test_an_obstacle_on_a_junction_moves_onto_the_next_lane(town):
+    spec = load_spec(GRID_TOWN)
+    road = network_road(spec)
+    junction = next(p for p in road.pieces if p.lane.internal)
+    inside = junction.start_s_m + junction.length_m / 2
+    placed = road.place_s_m(inside, 4.5)
+    assert not road.piece_at(placed).lane.internal
+    assert placed > inside
+    lane_s = 0.5 * (road.pieces[0].start_s_m + road.pieces[0].length_m)
+    assert road.place_s_m(lane_s, 4.5) == lane_s
+
+
+def test_a_relative_net_file_is_read_from_the_scenario_folder(tmp_path):
+    spec = load_spec(GRID_TOWN)
+    assert spec.road.net_file == str((CATALOG_DIR / "networks" / "grid-10x10.net.xml").resolve())
+    moved = tmp_path / "town.toml"
+    moved.write_text(GRID_TOWN.read_text())
+    with pytest.raises(SpecError, match=r"road\.net_file: no such file"):
+        network_road(load_spec(moved))
+
+
+@pytest.mark.parametrize("change, field", [
+    ({"road": {"net_file": None}}, "road.net_file"),
+    ({"road": {"lanes": 2}}, "road.lanes"),
+    ({"traffic": {"flow_vph_per_lane": 300.0}}, "traffic.flow_vph_per_lane"),
+    ({"scenario": {"backend": "highway"}}, "scenario.backend"),
+    ({"ego": {"lane": 1}}, "ego.lane"),
+])
+def test_sumo_net_spec_errors_name_the_field(change, field):
+    spec = load_spec(GRID_TOWN)
+    plain = spec.to_plain()
+    for table, values in change.items():
+        plain[table].update(values)
+        plain[table] = {k: v for k, v in plain[table].items() if v is not None}
+    with pytest.raises(SpecError, match=field.replace(".", r"\.")):
+        type(spec).from_plain(plain)
+
+
+def test_built_in_roads_refuse_network_fields():
+    spec = load_spec(CATALOG_DIR / "seed-lesson.toml")
+    for table, values, field in [("traffic", {"vehicles": 10}, "traffic.vehicles"),
+                                 ("road", {"net_file": "x.net.xml"}, "road.net_file")]:
+        plain = spec.to_plain()
+        plain[table].update(values)
+        with pytest.raises(SpecError, match=field.replace(".", r"\.")):
+            type(spec).from_plain(plain)
+    plain = spec.to_plain()
+    del plain["road"]["lanes"]
+    with pytest.raises(SpecError, match=r"road\.lanes: is required"):
+        type(spec).from_plain(plain)
