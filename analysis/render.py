@@ -29,7 +29,7 @@ from sdc.geometry import box_corners  # noqa: E402
 from sdc.sensors import beam_angles_rad  # noqa: E402
 from sdc.trace import Trace  # noqa: E402
 
-VIEW_BEHIND_M, VIEW_AHEAD_M = 20.0, 45.0
+VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -123,6 +123,17 @@ def _finite_or_nan(values: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(values), values, np.nan)
 
 
+def view_limits_m(center_m: float, yaw_rad: float) -> tuple[float, float]:
+    """The view's extent along x around ``center_m`` for a heading ``yaw_rad``
+    (along y: pass ``yaw_rad - pi/2``): ``VIEW_AHEAD_M`` ahead and ``VIEW_BEHIND_M``
+    behind when the heading, rounded to a quarter turn, runs along the axis,
+    ``VIEW_SIDE_M`` each side across it."""
+    quarter = round(yaw_rad / (math.pi / 2)) % 4
+    return {0: (center_m - VIEW_BEHIND_M, center_m + VIEW_AHEAD_M),
+            2: (center_m - VIEW_AHEAD_M, center_m + VIEW_BEHIND_M)}.get(
+        quarter, (center_m - VIEW_SIDE_M, center_m + VIEW_SIDE_M))
+
+
 def _scene_axes(ax, scene: Scene):
     """Draw the static road and obstacles on ``ax``; return ``draw(k)`` for step k."""
     for line in scene.lane_lines:
@@ -149,8 +160,15 @@ def _scene_axes(ax, scene: Scene):
         traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
         ego.set_verts(box_corners(scene.ego[k : k + 1]))
         cx, cy, yaw = scene.ego[k, :3]
-        ax.set_xlim(cx - VIEW_BEHIND_M, cx + VIEW_AHEAD_M)
-        ax.set_ylim(cy - 12.0, cy + 12.0)
+        (x0, x1), (y0, y1) = view_limits_m(cx, yaw), view_limits_m(cy, yaw - math.pi / 2)
+        box = ax.get_window_extent()
+        grow = (x1 - x0) * box.height / ((y1 - y0) * box.width)  # > 1: the view is too wide
+        if grow > 1:
+            y0, y1 = (y0 + y1) / 2 - grow * (y1 - y0) / 2, (y0 + y1) / 2 + grow * (y1 - y0) / 2
+        else:
+            x0, x1 = (x0 + x1) / 2 - (x1 - x0) / grow / 2, (x0 + x1) / 2 + (x1 - x0) / grow / 2
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
         label.set_text(f"t {scene.t_s[k]:6.2f} s  step {scene.step[k]}  {scene.phase[k]}\n"
                        f"v {scene.speed_mps[k]:5.2f} m/s  yaw {math.degrees(yaw):6.1f} deg")
 

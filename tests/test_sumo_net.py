@@ -95,3 +95,28 @@ def test_a_2000_vehicle_town_runs_end_to_end_in_a_sweep(tmp_path):
                             capture_output=True, text=True, timeout=300)
     assert report.returncode == 0, report.stderr
     assert (out / "report.html").stat().st_size > 10_000
+
+
+def test_a_network_converted_from_openstreetmap_runs(tmp_path):
+    """netconvert a small hand-written OpenStreetMap town (a curved four-lane
+    primary road, a residential street, a one-way) and run in it."""
+    from pathlib import Path
+
+    from scenarios.network import sumo_binary
+
+    osm = Path(__file__).parent / "data" / "osm-town.osm"
+    net = tmp_path / "osm-town.net.xml"
+    subprocess.run([sumo_binary("netconvert"), "--osm-files", str(osm), "-o", str(net),
+                    "--geometry.remove", "--junctions.join", "--no-turnarounds"],
+                   capture_output=True, check=True, timeout=120)
+    plain = town(1, vehicles=40).to_plain()
+    plain["road"].update(net_file=str(net), length_m=200.0, route_turns="any")
+    plain["obstacles"][0]["position_m"] = 60.0
+    for seed in range(1, 5):
+        plain["scenario"]["seed"] = seed
+        spec = ScenarioSpec.from_plain(plain)
+        road = network_road(spec)
+        assert road.area.contains(road.center_xy).all()  # the route runs on the road
+        row = run_episode(spec).row
+        assert row["status"] == "ok" and row["network_vehicles"] >= 35
+        assert row["maneuver_started"]  # it met the barrel
