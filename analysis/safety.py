@@ -37,7 +37,8 @@ def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.nda
     gap_m = ahead_m - extent_x_m - length / 2
     in_path = (np.abs(lateral_m) < extent_y_m + width / 2) & (ahead_m + extent_x_m > length / 2)
     closing_mps = ego_speed_mps - speeds_mps * np.cos(rel_yaw)
-    ttc = np.where(gap_m <= 0, 0.0, gap_m / np.where(closing_mps > 0, closing_mps, np.nan))
+    with np.errstate(over="ignore"):  # closing at a crawl: inf, which is right
+        ttc = np.where(gap_m <= 0, 0.0, gap_m / np.where(closing_mps > 0, closing_mps, np.nan))
     ttc = ttc[in_path & ((gap_m <= 0) | (closing_mps > 0))]
     return float(ttc.min()) if ttc.size else math.inf
 

@@ -16,6 +16,8 @@ from scenarios.spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
 CHORD_TOLERANCE_M = 0.001
+#: up to this many points, a straight road projects them in plain float arithmetic
+SCALAR_POINTS = 8
 
 
 def centre_line_xy(road: RoadSpec) -> np.ndarray:
@@ -45,6 +47,7 @@ class RoadGeometry:
         self._seg_dir = delta / self._seg_len_m[:, None]
         self._seg_start_s_m = np.concatenate([[0.0], np.cumsum(self._seg_len_m)[:-1]])
         self.length_m = float(self._seg_len_m.sum())
+        self._straight_heading_rad = float(np.arctan2(self._seg_dir[0, 1], self._seg_dir[0, 0]))
 
     @classmethod
     def from_spec(cls, road: RoadSpec) -> RoadGeometry:
@@ -65,10 +68,7 @@ class RoadGeometry:
         """
         xy = np.atleast_2d(np.asarray(xy, dtype=float))
         if len(self._seg_len_m) == 1:  # a straight road: one segment, extended both ways
-            rel = xy - self.center_xy[0]
-            direction = self._seg_dir[0]
-            return (rel[:, 0] * direction[0] + rel[:, 1] * direction[1],
-                    direction[0] * rel[:, 1] - direction[1] * rel[:, 0])
+            return self._straight_frenet(xy)
         rel = xy[:, None, :] - self.center_xy[None, :-1, :]  # (K, S, 2)
         along = np.einsum("ksj,sj->ks", rel, self._seg_dir)
         low = np.zeros_like(self._seg_len_m)
@@ -85,12 +85,23 @@ class RoadGeometry:
         d_m = direction[:, 0] * r[:, 1] - direction[:, 1] * r[:, 0]
         return s_m, d_m
 
+    def _straight_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        (x0, y0), (dx, dy) = self.center_xy[0].tolist(), self._seg_dir[0].tolist()
+        if len(xy) <= SCALAR_POINTS:  # the few points of one step: plain floats are quicker
+            rel = [(x - x0, y - y0) for x, y in xy.tolist()]
+            return (np.array([rx * dx + ry * dy for rx, ry in rel]),
+                    np.array([dx * ry - dy * rx for rx, ry in rel]))
+        rel = xy - self.center_xy[0]
+        return rel[:, 0] * dx + rel[:, 1] * dy, dx * rel[:, 1] - dy * rel[:, 0]
+
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
                        0, len(self._seg_len_m) - 1)
 
     def heading_at(self, s_m) -> np.ndarray:
         """Heading of the centre line at ``s_m`` [rad, CCW from +x]."""
+        if len(self._seg_len_m) == 1:
+            return np.full(np.shape(s_m), self._straight_heading_rad)
         direction = self._seg_dir[self._segment_at(np.asarray(s_m, dtype=float))]
         return np.arctan2(direction[..., 1], direction[..., 0])
 
@@ -115,8 +126,9 @@ class RoadGeometry:
         return np.where(alongside, self.half_width_m - np.abs(d_m), np.inf)
 
     def off_road(self, points: np.ndarray) -> np.ndarray:
-        """Which points lie beyond a road edge (a bool mask)."""
-        return self.edge_gaps_m(points) < 0
+        """Which points lie beyond a road edge, alongside the road (a bool mask)."""
+        s_m, d_m = self.to_frenet(points)
+        return (s_m >= 0) & (s_m <= self.length_m) & (np.abs(d_m) > self.half_width_m)
 
     def offset_polyline(self, d_m: float) -> np.ndarray:
         """The polyline at constant lateral offset ``d_m`` (vertices on the bisectors)."""

@@ -36,7 +36,9 @@ EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
 SUBSCRIPTION_SLACK_M = 30.0
-_TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED, tc.VAR_LENGTH, tc.VAR_WIDTH)
+#: what is read of each nearby vehicle; every traffic vehicle is of our type "traffic",
+#: so its size is known (each variable read costs, and a step may read dozens)
+_TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
 
 
 def _sumo_place(road: RoadGeometry, lane: int, s_m: float) -> tuple[str, int, float]:
@@ -215,18 +217,17 @@ class SumoWorld:
         """Boxes and speeds of the vehicles within the sensing radius, ego and
         obstacles aside, in SUMO's order."""
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
-        rows, speeds = [], []
-        for vid, v in nearby.items():
-            if not _is_traffic(vid):
-                continue
-            (fx, fy), length = v[tc.VAR_POSITION], v[tc.VAR_LENGTH]
-            yaw = math.radians(90.0 - v[tc.VAR_ANGLE])
-            rows.append((fx - length / 2 * math.cos(yaw), fy - length / 2 * math.sin(yaw),
-                         yaw, length, v[tc.VAR_WIDTH]))
-            speeds.append(v[tc.VAR_SPEED])
+        rows = [(*v[tc.VAR_POSITION], v[tc.VAR_ANGLE], v[tc.VAR_SPEED])
+                for vid, v in nearby.items() if _is_traffic(vid)]
         if not rows:
             return NO_BOXES, np.zeros(0)
-        boxes, speeds = np.array(rows), np.array(speeds)
+        read = np.array(rows)  # front x, front y, SUMO angle, speed
+        yaw = np.radians(90.0 - read[:, 2])
+        boxes = np.empty((len(rows), 5))
+        boxes[:, 0] = read[:, 0] - TRAFFIC_LENGTH_M / 2 * np.cos(yaw)
+        boxes[:, 1] = read[:, 1] - TRAFFIC_LENGTH_M / 2 * np.sin(yaw)
+        boxes[:, 2], boxes[:, 3], boxes[:, 4] = yaw, TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M
+        speeds = read[:, 3]
         keep = within_m(boxes, ego_box[:2], self._radius_m)
         return boxes[keep], speeds[keep]
 

@@ -7,7 +7,8 @@ import numpy as np
 
 from scenarios.road import RoadGeometry
 from scenarios.snapshot import Snapshot
-from sdc.geometry import box_corners, boxes_overlap, boxes_within_m
+from sdc.geometry import one_box_corners
+from sdc.kernels import first_overlap
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
 
@@ -18,11 +19,9 @@ def collision_with(ego_box: np.ndarray, snapshot: Snapshot, road: RoadGeometry) 
     A body corner off the road (beyond either edge, while alongside it; off the
     drivable area of a network) counts as a road-edge collision.
     """
-    ego_half_diag_m = 0.5 * float(np.hypot(ego_box[3], ego_box[4]))
     for kind, boxes in ((OBSTACLE, snapshot.obstacle_boxes), (VEHICLE, snapshot.traffic_boxes)):
-        near = boxes[boxes_within_m(ego_box[:2], boxes, ego_half_diag_m)]
-        if len(near) and boxes_overlap(ego_box, near).any():
+        if first_overlap(ego_box, boxes) >= 0:
             return kind
-    if road.off_road(box_corners(ego_box[None])[0]).any():
+    if road.off_road(one_box_corners(ego_box)).any():
         return ROAD_EDGE
     return None

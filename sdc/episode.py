@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.metrics import trace_metrics
-from analysis.safety import road_edge_gaps_m, time_to_collision_s
+from analysis.safety import road_edge_gaps_m
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road import RoadGeometry
 from scenarios.spec import ScenarioSpec
@@ -24,6 +24,7 @@ from scenarios.worlds import make_road, make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
 from sdc.geometry import box_gap_m
+from sdc.kernels import time_to_collision_s
 from sdc.sensors import LaneSensor, Lidar
 from sdc.trace import Trace, TraceRecorder
 from sdc.vehicle import Command, Vehicle, VehicleState

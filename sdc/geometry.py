@@ -18,6 +18,8 @@ No function loops in Python over beams, boxes or segments.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 # Local corner signs (length, width) in the order front-left, rear-left, rear-right, front-right.
@@ -42,6 +44,21 @@ def box_corners(boxes: np.ndarray) -> np.ndarray:
     x_m = b[:, 0, None] + cos_yaw[:, None] * half_len_m - sin_yaw[:, None] * half_wid_m
     y_m = b[:, 1, None] + sin_yaw[:, None] * half_len_m + cos_yaw[:, None] * half_wid_m
     return np.stack([x_m, y_m], axis=-1)
+
+
+def one_box_corners(box: np.ndarray) -> np.ndarray:
+    """:func:`box_corners` of a single box ``(5,)``, as (4, 2), bit for bit, in
+    scalar arithmetic (a step needs the ego's corners; numpy's broadcasting costs
+    more than the arithmetic there)."""
+    cx, cy, yaw, length, width = (float(v) for v in box)
+    c, s = math.cos(yaw), math.sin(yaw)
+    half_len, half_wid = 0.5 * length, 0.5 * width
+    return np.array([
+        [cx + c * half_len - s * half_wid, cy + s * half_len + c * half_wid],
+        [cx + c * -half_len - s * half_wid, cy + s * -half_len + c * half_wid],
+        [cx + c * -half_len - s * -half_wid, cy + s * -half_len + c * -half_wid],
+        [cx + c * half_len - s * -half_wid, cy + s * half_len + c * -half_wid],
+    ])
 
 
 def box_edges(boxes: np.ndarray) -> np.ndarray:
@@ -102,41 +119,6 @@ def ray_box_ranges(
                            angles[:, None] - b[None, :, 2],  # (B, N); exact 0 stays exact
                            0.5 * b[None, :, 3], 0.5 * b[None, :, 4])
     nearest_m = np.min(range_m, axis=1, initial=np.inf)
-    return np.where(nearest_m <= max_range_m, nearest_m, np.inf)
-
-
-def ray_box_ranges_culled(
-    origin_xy: np.ndarray, angles_rad: np.ndarray, boxes: np.ndarray, max_range_m: float
-) -> np.ndarray:
-    """:func:`ray_box_ranges`, bit for bit, testing only the ray-box pairs that can meet.
-
-    A ray can hit a box only if it passes within the box's bounding circle: its angle
-    is within ``asin(radius / distance)`` of the bearing of the box's centre (any
-    angle when the origin is inside the circle), and the circle starts within range.
-    The exact slab test then runs on those pairs alone, which for a 180-beam scan of
-    boxes spread around is a small fraction of all pairs.
-    """
-    origin_m = np.asarray(origin_xy, dtype=np.float64).reshape(2)
-    angles = np.atleast_1d(np.asarray(angles_rad, dtype=np.float64))
-    b = _as_boxes(boxes)
-    dx_m, dy_m = b[:, 0] - origin_m[0], b[:, 1] - origin_m[1]
-    dist_m = np.hypot(dx_m, dy_m)
-    radius_m = 0.5 * np.hypot(b[:, 3], b[:, 4])
-    # within the half angle: cos(ray angle - bearing) >= cos(half angle), as one
-    # (B, 2) @ (2, N) product; an origin inside the circle sees the box at any angle
-    inside = dist_m <= radius_m
-    safe_dist_m = np.where(inside, 1.0, dist_m)
-    cos_half = np.sqrt(np.maximum(1.0 - (radius_m / safe_dist_m) ** 2, 0.0))
-    ray_dirs = np.column_stack([np.cos(angles), np.sin(angles)])
-    toward = ray_dirs @ (np.vstack([dx_m, dy_m]) / safe_dist_m) >= cos_half[None, :] - 1e-9
-    can_hit = (inside[None, :] | toward) & (dist_m - radius_m <= max_range_m)[None, :]
-    beam, box = np.nonzero(can_hit)
-    local_x_m, local_y_m = _origin_in_box_frames(origin_m, b)
-    range_m = _slab_ranges(local_x_m[box], local_y_m[box], angles[beam] - b[box, 2],
-                           0.5 * b[box, 3], 0.5 * b[box, 4])
-    pair_m = np.full(can_hit.shape, np.inf)
-    pair_m[beam, box] = range_m
-    nearest_m = np.min(pair_m, axis=1, initial=np.inf)
     return np.where(nearest_m <= max_range_m, nearest_m, np.inf)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from scenarios.road import RoadGeometry
 from scenarios.spec import LidarSpec
-from sdc.geometry import ray_box_ranges_culled, ray_segment_ranges
+from sdc.kernels import lidar_ranges_m
 
 
 def beam_angles_rad(beams: int, fov_deg: float) -> np.ndarray:
@@ -30,23 +30,14 @@ class Lidar:
     def __init__(self, spec: LidarSpec, edge_segments: np.ndarray, rng: np.random.Generator):
         self.spec = spec
         self.angles_rad = beam_angles_rad(spec.beams, spec.fov_deg)
-        self.edge_segments = edge_segments
-        seg = edge_segments
-        self._seg_mid = (seg[:, :2] + seg[:, 2:]) / 2
-        self._seg_half_len = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]) / 2
+        self.edge_segments = np.ascontiguousarray(edge_segments, dtype=np.float64)
         self._rng = rng
 
     def scan(self, origin_xy: np.ndarray, yaw_rad: float, boxes: np.ndarray) -> np.ndarray:
         """Range image [m] from a sensor at ``origin_xy`` heading ``yaw_rad``:
         ``beams`` floats, ``inf`` where nothing is hit within ``max_range_m``."""
-        max_range = self.spec.max_range_m
-        angles = yaw_rad + self.angles_rad
-        ranges = ray_box_ranges_culled(origin_xy, angles, boxes, max_range)  # culls by range
-        if len(self.edge_segments):
-            dist = np.hypot(*(self._seg_mid - origin_xy).T)
-            near_seg = dist <= max_range + self._seg_half_len
-            edges = ray_segment_ranges(origin_xy, angles, self.edge_segments[near_seg], max_range)
-            ranges = np.minimum(ranges, edges)
+        ranges = lidar_ranges_m(origin_xy, yaw_rad + self.angles_rad, boxes,
+                                self.edge_segments, self.spec.max_range_m)
         if self.spec.noise_std_m > 0:
             noise = self._rng.normal(0.0, self.spec.noise_std_m, size=ranges.shape)
             ranges = np.where(np.isfinite(ranges), np.maximum(ranges + noise, 0.0), ranges)
@@ -79,8 +70,10 @@ class LaneSensor:
     def measure(self, center_xy: np.ndarray, yaw_rad: float,
                 look_ahead_m: float) -> LaneReading | None:
         """The reading for a body centre and heading; ``None`` past either end of the road."""
-        ahead = center_xy + look_ahead_m * np.array([math.cos(yaw_rad), math.sin(yaw_rad)])
-        s_m, d_m = self.road.to_frenet(np.vstack([center_xy, ahead]))
+        cx, cy = float(center_xy[0]), float(center_xy[1])
+        s_m, d_m = self.road.to_frenet(np.array([
+            [cx, cy],
+            [cx + look_ahead_m * math.cos(yaw_rad), cy + look_ahead_m * math.sin(yaw_rad)]]))
         if not 0.0 <= s_m[0] <= self.road.length_m:
             return None
         heading_error = yaw_rad - float(self.road.heading_at(s_m[0]))

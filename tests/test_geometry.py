@@ -15,9 +15,9 @@ from sdc.geometry import (
     box_edges,
     box_gap_m,
     boxes_overlap,
+    one_box_corners,
     point_segment_distance,
     ray_box_ranges,
-    ray_box_ranges_culled,
     ray_segment_ranges,
 )
 
@@ -378,23 +378,9 @@ def test_axis_aligned_gap_closed_form(a, b):
         assert boxes_overlap(a, b[None])[0] == (max(sep_x, sep_y) < 0.0)
 
 
+
 @PROPS
-@given(scene=ray_scene(), max_range=st.sampled_from([5.0, 30.0, 80.0]))
-def test_culled_ray_box_ranges_equal_the_straightforward_ones(scene, max_range):
-    """The lidar's kernel skips ray-box pairs that cannot meet; the ranges are the same
-    bit for bit, including rays from inside a box, touching ones and cut-offs."""
-    boxes, origin, angles = scene
-    np.testing.assert_array_equal(ray_box_ranges_culled(origin, angles, boxes, max_range),
-                                  ray_box_ranges(origin, angles, boxes, max_range))
-
-
-def test_culled_ray_box_ranges_on_a_dense_scan():
-    rng = np.random.default_rng(5)
-    boxes = np.column_stack([rng.uniform(-70, 70, (60, 2)), rng.uniform(-3, 3, 60),
-                             rng.uniform(0.5, 12, 60), rng.uniform(0.5, 3, 60)])
-    angles = np.linspace(np.pi, -np.pi, 720, endpoint=False)
-    for origin in (np.zeros(2), boxes[0, :2], np.array([100.0, 0.0])):
-        expected = ray_box_ranges(origin, angles, boxes, 80.0)
-        np.testing.assert_array_equal(ray_box_ranges_culled(origin, angles, boxes, 80.0),
-                                      expected)
-        assert np.isfinite(expected).any()
+@given(box=box_st)
+def test_one_box_corners_equal_box_corners_bit_for_bit(box):
+    box = np.array(box)
+    np.testing.assert_array_equal(one_box_corners(box), box_corners(box[None])[0])

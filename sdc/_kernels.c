@@ -1,0 +1,241 @@
+/*
+ * Compiled kernels for the per-step hot path: the lidar scan, the ego's overlap
+ * test and its time to collision. Each is the exact counterpart of a numpy
+ * function in sdc/geometry.py or analysis/safety.py (same formulas, same order
+ * of operations, no fused multiply-adds), which stays the reference the tests
+ * compare against.
+ *
+ * Arrays arrive as C-contiguous float64 buffers (the Python wrappers in
+ * sdc/kernels.py make sure of that): boxes are rows [cx, cy, yaw, length, width],
+ * segments rows [x0, y0, x1, y1], all in metres and radians.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <string.h>
+
+/* numpy's maximum/minimum for non-NaN input: the first argument wins ties */
+static inline double np_max(double a, double b) { return a >= b ? a : b; }
+static inline double np_min(double a, double b) { return a <= b ? a : b; }
+
+/* entry and exit of a ray o + t d into the slab |s| <= half */
+static inline void slab(double o, double d, double half, double *t_in, double *t_out) {
+    if (d == 0.0) {
+        int inside = fabs(o) <= half;
+        *t_in = inside ? -INFINITY : INFINITY;
+        *t_out = inside ? INFINITY : -INFINITY;
+    } else {
+        double ta = (-half - o) / d, tb = (half - o) / d;
+        *t_in = np_min(ta, tb);
+        *t_out = np_max(ta, tb);
+    }
+}
+
+/* range along a ray into one box given in its frame (inf: a miss) */
+static inline double slab_range(double lx, double ly, double local_angle, double half_len,
+                                double half_wid) {
+    double tx_in, tx_out, ty_in, ty_out;
+    slab(lx, cos(local_angle), half_len, &tx_in, &tx_out);
+    slab(ly, sin(local_angle), half_wid, &ty_in, &ty_out);
+    double t_in = np_max(tx_in, ty_in), t_out = np_min(tx_out, ty_out);
+    return (t_in <= t_out && t_out >= 0.0) ? np_max(t_in, 0.0) : INFINITY;
+}
+
+static int get_doubles(PyObject *obj, Py_buffer *view, int writable, Py_ssize_t row,
+                       Py_ssize_t *count, const char *name) {
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0) return -1;
+    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
+        || (view->len / 8) % row != 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous float64 array with rows of %zd",
+                     name, row);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    *count = view->len / 8 / row;
+    return 0;
+}
+
+/* scan(origin_x, origin_y, angles, boxes, segments, max_range, out): the nearest
+ * box or segment along each ray, inf beyond max_range (ray_box_ranges and
+ * ray_segment_ranges of sdc/geometry.py, then their minimum) */
+static PyObject *scan(PyObject *self, PyObject *args) {
+    double ox, oy, max_range;
+    PyObject *a_obj, *b_obj, *s_obj, *o_obj;
+    if (!PyArg_ParseTuple(args, "ddOOOdO", &ox, &oy, &a_obj, &b_obj, &s_obj, &max_range,
+                          &o_obj))
+        return NULL;
+    Py_buffer av, bv, sv, ov;
+    Py_ssize_t n_rays, n_boxes, n_segs, n_out;
+    if (get_doubles(a_obj, &av, 0, 1, &n_rays, "angles") < 0) return NULL;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_boxes, "boxes") < 0) goto fail_a;
+    if (get_doubles(s_obj, &sv, 0, 4, &n_segs, "segments") < 0) goto fail_b;
+    if (get_doubles(o_obj, &ov, 1, 1, &n_out, "out") < 0) goto fail_s;
+    if (n_out != n_rays) {
+        PyErr_SetString(PyExc_ValueError, "out: one range per angle");
+        goto fail_o;
+    }
+    const double *angles = av.buf, *boxes = bv.buf, *segs = sv.buf;
+    double *out = ov.buf;
+    double *ray_cos = PyMem_Malloc(2 * (n_rays ? n_rays : 1) * sizeof(double));
+    if (ray_cos == NULL) {
+        PyErr_NoMemory();
+        goto fail_o;
+    }
+    double *ray_sin = ray_cos + n_rays;
+    for (Py_ssize_t i = 0; i < n_rays; i++) {
+        out[i] = INFINITY;
+        ray_cos[i] = cos(angles[i]);
+        ray_sin[i] = sin(angles[i]);
+    }
+
+    for (Py_ssize_t k = 0; k < n_boxes; k++) {
+        const double *b = boxes + 5 * k;
+        double dx = b[0] - ox, dy = b[1] - oy;
+        double dist = hypot(dx, dy), radius = 0.5 * hypot(b[3], b[4]);
+        if (dist - radius > max_range) continue;
+        int inside = dist <= radius;
+        double ux = inside ? 0.0 : dx / dist, uy = inside ? 0.0 : dy / dist;
+        double cos_half = inside ? 0.0 : sqrt(fmax(1.0 - (radius / dist) * (radius / dist), 0.0));
+        double cy = cos(b[2]), sy = sin(b[2]);
+        double rx = ox - b[0], ry = oy - b[1];
+        double lx = cy * rx + sy * ry, ly = -sy * rx + cy * ry;
+        for (Py_ssize_t i = 0; i < n_rays; i++) {
+            /* only rays that pass the box's bounding circle can hit it */
+            if (!inside && ray_cos[i] * ux + ray_sin[i] * uy < cos_half - 1e-9) continue;
+            double r = slab_range(lx, ly, angles[i] - b[2], 0.5 * b[3], 0.5 * b[4]);
+            out[i] = np_min(out[i], r);
+        }
+    }
+    for (Py_ssize_t k = 0; k < n_segs; k++) {
+        const double *s = segs + 4 * k;
+        double ex = s[2] - s[0], ey = s[3] - s[1];
+        double mx = 0.5 * (s[0] + s[2]) - ox, my = 0.5 * (s[1] + s[3]) - oy;
+        if (hypot(mx, my) > max_range + 0.5 * hypot(ex, ey)) continue;
+        double rx = s[0] - ox, ry = s[1] - oy;
+        for (Py_ssize_t i = 0; i < n_rays; i++) {
+            double dxr = ray_cos[i], dyr = ray_sin[i];
+            double denom = dxr * ey - dyr * ex;
+            if (denom == 0.0) continue;
+            double t = (rx * ey - ry * ex) / denom, u = (rx * dyr - ry * dxr) / denom;
+            if (t >= 0.0 && u >= 0.0 && u <= 1.0) out[i] = np_min(out[i], t);
+        }
+    }
+    for (Py_ssize_t i = 0; i < n_rays; i++)
+        if (!(out[i] <= max_range)) out[i] = INFINITY;
+    PyMem_Free(ray_cos);
+
+    PyBuffer_Release(&ov);
+    PyBuffer_Release(&sv);
+    PyBuffer_Release(&bv);
+    PyBuffer_Release(&av);
+    Py_RETURN_NONE;
+fail_o:
+    PyBuffer_Release(&ov);
+fail_s:
+    PyBuffer_Release(&sv);
+fail_b:
+    PyBuffer_Release(&bv);
+fail_a:
+    PyBuffer_Release(&av);
+    return NULL;
+}
+
+/* first_overlap(box, boxes): index of the first of the boxes the box overlaps
+ * (separating axes, touching counts), or -1 (boxes_overlap of sdc/geometry.py) */
+static PyObject *first_overlap(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *b_obj;
+    if (!PyArg_ParseTuple(args, "OO", &a_obj, &b_obj)) return NULL;
+    Py_buffer av, bv;
+    Py_ssize_t n_a, n_b;
+    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) {
+        PyBuffer_Release(&av);
+        return NULL;
+    }
+    const double *a = av.buf;
+    long found = -1;
+    double ac = cos(a[2]), as = sin(a[2]);
+    double a_axes[2][2] = {{ac, as}, {-as, ac}};
+    double ha[2] = {0.5 * a[3], 0.5 * a[4]};
+    for (Py_ssize_t k = 0; n_a == 1 && k < n_b && found < 0; k++) {
+        const double *b = (const double *)bv.buf + 5 * k;
+        double bc = cos(b[2]), bs = sin(b[2]);
+        double b_axes[2][2] = {{bc, bs}, {-bs, bc}};
+        double hb[2] = {0.5 * b[3], 0.5 * b[4]};
+        double gx = b[0] - a[0], gy = b[1] - a[1];
+        int separated = 0;
+        for (int j = 0; j < 4 && !separated; j++) {
+            const double *axis = j < 2 ? a_axes[j] : b_axes[j - 2];
+            double ra = fabs(axis[0] * a_axes[0][0] + axis[1] * a_axes[0][1]) * ha[0]
+                        + fabs(axis[0] * a_axes[1][0] + axis[1] * a_axes[1][1]) * ha[1];
+            double rb = fabs(axis[0] * b_axes[0][0] + axis[1] * b_axes[0][1]) * hb[0]
+                        + fabs(axis[0] * b_axes[1][0] + axis[1] * b_axes[1][1]) * hb[1];
+            separated = !(fabs(axis[0] * gx + axis[1] * gy) <= ra + rb);
+        }
+        if (!separated) found = (long)k;
+    }
+    PyBuffer_Release(&bv);
+    PyBuffer_Release(&av);
+    return PyLong_FromLong(found);
+}
+
+/* ttc(box, speed, boxes, speeds): the constant-velocity time to collision with
+ * anything in the box's lateral corridor ahead (time_to_collision_s of
+ * analysis/safety.py) */
+static PyObject *ttc(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *b_obj, *v_obj;
+    double speed;
+    if (!PyArg_ParseTuple(args, "OdOO", &a_obj, &speed, &b_obj, &v_obj)) return NULL;
+    Py_buffer av, bv, vv;
+    Py_ssize_t n_a, n_b, n_v;
+    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_a;
+    if (get_doubles(v_obj, &vv, 0, 1, &n_v, "speeds") < 0) goto fail_b;
+    if (n_a != 1 || n_v != n_b) {
+        PyErr_SetString(PyExc_ValueError, "one box, and a speed per box");
+        goto fail_v;
+    }
+    const double *a = av.buf, *speeds = vv.buf;
+    double cx = a[0], cy = a[1], yaw = a[2], length = a[3], width = a[4];
+    double cos_yaw = cos(yaw), sin_yaw = sin(yaw);
+    double best = INFINITY;
+    for (Py_ssize_t k = 0; k < n_b; k++) {
+        const double *b = (const double *)bv.buf + 5 * k;
+        double dx = b[0] - cx, dy = b[1] - cy;
+        double ahead = dx * cos_yaw + dy * sin_yaw;
+        double lateral = -dx * sin_yaw + dy * cos_yaw;
+        double rel_yaw = b[2] - yaw;
+        double half_len = b[3] / 2, half_wid = b[4] / 2;
+        double extent_x = fabs(half_len * cos(rel_yaw)) + fabs(half_wid * sin(rel_yaw));
+        double extent_y = fabs(half_len * sin(rel_yaw)) + fabs(half_wid * cos(rel_yaw));
+        double gap = ahead - extent_x - length / 2;
+        int in_path = fabs(lateral) < extent_y + width / 2 && ahead + extent_x > length / 2;
+        double closing = speed - speeds[k] * cos(rel_yaw);
+        if (!in_path || !(gap <= 0.0 || closing > 0.0)) continue;
+        double t = gap <= 0.0 ? 0.0 : gap / closing;
+        best = np_min(best, t);
+    }
+    PyBuffer_Release(&vv);
+    PyBuffer_Release(&bv);
+    PyBuffer_Release(&av);
+    return PyFloat_FromDouble(best);
+fail_v:
+    PyBuffer_Release(&vv);
+fail_b:
+    PyBuffer_Release(&bv);
+fail_a:
+    PyBuffer_Release(&av);
+    return NULL;
+}
+
+static PyMethodDef methods[] = {
+    {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
+    {"first_overlap", first_overlap, METH_VARARGS, "Index of the first overlapping box, or -1."},
+    {"ttc", ttc, METH_VARARGS, "Constant-velocity time to collision [s]."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
+
+PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
