@@ -35,7 +35,10 @@ from scenarios.spec import ScenarioSpec
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
-SUBSCRIPTION_SLACK_M = 30.0
+#: SUMO measures the context radius between front bumpers: a body centre within the
+#: sensing radius has its front bumper within it plus half of each body's length [m]
+SUBSCRIPTION_SLACK_M = 1.0 + (TRAFFIC_LENGTH_M
+                              + max(model.length_m for model in VEHICLE_MODELS.values())) / 2
 #: what is read of each nearby vehicle; every traffic vehicle is of our type "traffic",
 #: so its size is known (each variable read costs, and a step may read dozens)
 _TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
@@ -189,8 +192,7 @@ class SumoWorld:
                         departPos=f"{front_m:.6f}", departSpeed="0")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
-        # only the vehicles around the ego are read, whatever the size of the network;
-        # SUMO measures from front bumpers, so its radius has a body length to spare
+        # only the vehicles around the ego are read, whatever the size of the network
         sim.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
                                      self._radius_m + SUBSCRIPTION_SLACK_M, _TRAFFIC_VARS)
         return self.step(ego_box, ego_speed_mps)
