@@ -15,6 +15,10 @@ Prints ``name value`` lines (medians of REPETITIONS), then the raw timings:
   per env step at our step length).
 - ``lidar_speedup_vs_highway_env``: a 180-beam, 360-degree scan of 50 boxes in
   range, ours over highway-env's ``LidarObservation.trace`` on the same boxes.
+
+The raw timings add ``town_2000``: the catalog's ``grid-town`` (a SUMO network of
+10 x 10 junctions, 2000 cars) under lane keeping, where the road edges come
+from the network's drivable area.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from scenarios import CATALOG_DIR
 from scenarios.spec import LidarSpec, ScenarioSpec
-from scenarios.toml_io import read_toml
+from scenarios.toml_io import load_spec, read_toml
 from scenarios.worlds import make_road, make_world
 from sdc.controllers import make_controller
 from sdc.episode import Simulation
@@ -82,14 +86,24 @@ def closed_loop(spec: ScenarioSpec) -> dict:
                 start = time.perf_counter()
                 command, phase = controller.step(sim.ranges, sim.lane)
                 sim.record(command, phase)
-                assert sim.end_reason() is None, sim.hit
+                if sim.end_reason() is not None:
+                    break
                 sim.advance(command)
                 steps_s.append(time.perf_counter() - start)
         finally:
             libsumo.simulationStep = real_step
-    step_s, sumo_step_s = np.array(steps_s), np.array(sumo_s)
+    step_s, sumo_step_s = np.array(steps_s), np.array(sumo_s[: len(steps_s)])
     return {"step_ms": 1e3 * np.median(step_s), "sumo_ms": 1e3 * np.median(sumo_step_s),
-            "agent_ms": 1e3 * np.median(step_s - sumo_step_s), "vehicles": vehicles}
+            "agent_ms": 1e3 * np.median(step_s - sumo_step_s), "vehicles": vehicles,
+            "steps": len(step_s)}
+
+
+def town_spec() -> ScenarioSpec:
+    """The catalog's town of 10 x 10 junctions with 2000 cars, lane keeping, no obstacle."""
+    plain = load_spec(CATALOG_DIR / "grid-town.toml").to_plain()
+    plain.pop("obstacles")
+    plain["controller"] = {"name": "lane-keep"}
+    return ScenarioSpec.from_plain(plain)
 
 
 def median_of(runs: list[dict], key: str) -> float:
@@ -165,6 +179,7 @@ def main() -> None:
     # the warm-up fills 6 lanes x 18 km: one repetition (its warm-up takes most of a minute)
     two_thousand = [closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0))]
     twenty = [closed_loop(traffic_spec(3, 2500.0, 240.0, 100.0)) for _ in range(REPETITIONS)]
+    town = [closed_loop(town_spec())]
     step_s = traffic_spec(3, 2500.0, 240.0, 0.0).scenario.step_s
     vehicles_20 = round(median_of(twenty, "vehicles"))
     reference = highway_v0_steps_per_s(vehicles_20, step_s)
@@ -177,8 +192,8 @@ def main() -> None:
     print(f"speedup_vs_highway_env {1e3 / median_of(twenty, 'step_ms') / reference:.2f}")
     print(f"lidar_speedup_vs_highway_env {lidar_theirs_ms / lidar_ours_ms:.2f}")
     for name, runs in (("100", hundred), ("100_6_lanes", short), ("2000_6_lanes", two_thousand),
-                       ("20", twenty)):
-        for key in ("vehicles", "step_ms", "sumo_ms", "agent_ms"):
+                       ("20", twenty), ("town_2000", town)):
+        for key in ("vehicles", "steps", "step_ms", "sumo_ms", "agent_ms"):
             print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
     print(f"raw.highway_v0_steps_per_s_{vehicles_20}_vehicles {reference:.1f}")
     print(f"raw.lidar_ms_ours {lidar_ours_ms:.3f}")
