@@ -160,10 +160,12 @@ def _wait_for(predicate, timeout_s: float) -> None:
         time.sleep(0.05)
 
 
-# 24 lesson runs of about half a second each
+# 96 lesson runs of a few tenths of a second each: still running when interrupted
 LONGER = TINY.replace('"scenario.duration_s" = { choice = [12.0] }',
                       '"scenario.duration_s" = { choice = [30.0] }\n'
-                      '"obstacles[0].kind" = { choice = ["barrel", "car"] }')
+                      '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
+                      '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
+LONGER_RUNS = 96
 
 
 @pytest.mark.parametrize("how", ["kill -9", "ctrl-c"])
@@ -187,15 +189,15 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
         manifest = json.loads((out / "manifest.json").read_text())
         assert manifest["status"] == "interrupted" and manifest["counts"]["missing"] > 0
         partial = pd.read_parquet(out / "results.parquet")
-        assert 0 < len(partial) < 24 and partial.run_id.is_unique
+        assert 0 < len(partial) < LONGER_RUNS and partial.run_id.is_unique
 
     again = sweep_cli(path, "--out", out, "--workers", "2")
     assert again.returncode == 2 and "--resume" in again.stderr  # no silent overwrite
     resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
     assert resumed.returncode == 0, resumed.stderr
     manifest = json.loads((out / "manifest.json").read_text())
-    assert [s["runs_to_do"] for s in manifest["sessions"]][0] == 24
-    assert 0 < manifest["sessions"][1]["runs_to_do"] < 24
+    assert [s["runs_to_do"] for s in manifest["sessions"]][0] == LONGER_RUNS
+    assert 0 < manifest["sessions"][1]["runs_to_do"] < LONGER_RUNS
     pd.testing.assert_frame_equal(comparable(out), comparable(reference))
 
 
