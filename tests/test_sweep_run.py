@@ -174,9 +174,12 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
     reference, out = tmp_path / "reference", tmp_path / "out"
     assert sweep_cli(path, "--out", reference, "--workers", "2").returncode == 0
 
+    # a shell starts a background job with SIGINT ignored, and children inherit that:
+    # the sweep gets the disposition of a foreground command, as for a user's Ctrl-C
     proc = subprocess.Popen([*SDC, "sweep", str(path), "--out", str(out), "--workers", "2",
                              "--quiet"], start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     _wait_for(lambda: any((out / "parts").glob("part-*.parquet")), 120)
     if how == "kill -9":  # the driver and its workers, all at once
         os.killpg(proc.pid, signal.SIGKILL)
