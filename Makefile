@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench clean system-packages
 
-$(STAMP): pyproject.toml sdc/_kernels.c  # the C kernels build at install
+$(STAMP): pyproject.toml setup.py sdc/_kernels.c  # the C kernels build at install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
