@@ -48,6 +48,7 @@ class Scene:
     phase: list[str]
     speed_mps: np.ndarray
     lane_offset_m: np.ndarray
+    view_yaw_rad: np.ndarray  # (N,) the road's heading at the ego (its own off the road)
     central_range_m: np.ndarray  # the detection beams' shortest range (inf: none)
     lane_lines: list[np.ndarray]  # polylines (P, 2): lane separators
     edges: list[np.ndarray]  # the two road edges
@@ -64,6 +65,13 @@ def road_lines(road: RoadGeometry, edge_segments=None) -> tuple[list[np.ndarray]
     half = road.half_width_m
     return ([road.offset_polyline(d) for d in separators],
             [road.offset_polyline(-half), road.offset_polyline(half)])
+
+
+def road_heading_rad(yaw_rad: np.ndarray, heading_error_rad: np.ndarray) -> np.ndarray:
+    """The road's heading under the ego, from its yaw and heading error; its yaw
+    where the lane was not sensed. Views look along it, not along the car, which
+    may turn far away from the road in a maneuver."""
+    return np.where(np.isfinite(heading_error_rad), yaw_rad - heading_error_rad, yaw_rad)
 
 
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
@@ -91,6 +99,7 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
         lane_offset_m=f["lane_offset_m"],
+        view_yaw_rad=road_heading_rad(f["yaw_rad"], f["heading_error_rad"]),
         central_range_m=np.array([central_range_m(r, spec.controller.detect_beams)
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
@@ -124,7 +133,7 @@ def _finite_or_nan(values: np.ndarray) -> np.ndarray:
 
 
 def view_limits_m(center_m: float, yaw_rad: float) -> tuple[float, float]:
-    """The view's extent along x around ``center_m`` for a heading ``yaw_rad``
+    """The view's extent along x around ``center_m`` for a road heading ``yaw_rad``
     (along y: pass ``yaw_rad - pi/2``): ``VIEW_AHEAD_M`` ahead and ``VIEW_BEHIND_M``
     behind when the heading, rounded to a quarter turn, runs along the axis,
     ``VIEW_SIDE_M`` each side across it."""
@@ -160,7 +169,8 @@ def _scene_axes(ax, scene: Scene):
         traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
         ego.set_verts(box_corners(scene.ego[k : k + 1]))
         cx, cy, yaw = scene.ego[k, :3]
-        (x0, x1), (y0, y1) = view_limits_m(cx, yaw), view_limits_m(cy, yaw - math.pi / 2)
+        view = scene.view_yaw_rad[k]
+        (x0, x1), (y0, y1) = view_limits_m(cx, view), view_limits_m(cy, view - math.pi / 2)
         box = ax.get_window_extent()
         grow = (x1 - x0) * box.height / ((y1 - y0) * box.width)  # > 1: the view is too wide
         if grow > 1:
@@ -238,6 +248,7 @@ def html_data(scene: Scene, every: int = 1) -> dict:
             "k": k, "t": round(float(scene.t_s[k]), 3), "phase": scene.phase[k],
             "ego": _round(scene.ego[k]), "traffic": _round(scene.traffic[k]),
             "mount": _round(scene.mount_xy[k]), "ranges": _round(scene.ranges_m[k], 2),
+            "view": round(float(scene.view_yaw_rad[k]), 4),
         } for k in steps],
     }
 

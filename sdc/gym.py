@@ -144,7 +144,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
 def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     """sdc's drawing of the simulation's current step."""
     from analysis.metrics import central_range_m
-    from analysis.render import Scene, frame_rgb, road_lines
+    from analysis.render import Scene, frame_rgb, road_heading_rad, road_lines
     from sdc.sensors import beam_angles_rad
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
@@ -158,6 +158,8 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
         max_range_m=spec.lidar.max_range_m, phase=["agent"],
         speed_mps=np.array([state.speed_mps]),
         lane_offset_m=np.array([lane.offset_m if lane else math.nan]),
+        view_yaw_rad=road_heading_rad(np.array([state.yaw_rad]),
+                                      np.array([lane.heading_error_rad if lane else math.nan])),
         central_range_m=np.array([central_range_m(sim.ranges, spec.controller.detect_beams)]),
         lane_lines=lane_lines, edges=edges, title=spec.scenario.name)
     return frame_rgb(scene, 0)
