@@ -173,31 +173,38 @@ def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
 
 
 def main() -> None:
+    """Each ratio pairs measurements taken one right after the other, and the median
+    of those paired ratios is printed: this machine's speed drifts between minutes."""
     hundred = [closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)) for _ in range(REPETITIONS)]
-    short = [closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0))
-             for _ in range(REPETITIONS)]
-    # the warm-up fills 6 lanes x 18 km: one repetition (its warm-up takes most of a minute)
-    two_thousand = [closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0))]
-    twenty = [closed_loop(traffic_spec(3, 2500.0, 240.0, 100.0)) for _ in range(REPETITIONS)]
-    town = [closed_loop(town_spec())]
+    short, two_thousand = [], []
+    for _ in range(2):  # the 2000-vehicle warm-up fills 6 lanes x 18 km: two pairs
+        short.append(closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0)))
+        two_thousand.append(closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0)))
     step_s = traffic_spec(3, 2500.0, 240.0, 0.0).scenario.step_s
-    vehicles_20 = round(median_of(twenty, "vehicles"))
-    reference = highway_v0_steps_per_s(vehicles_20, step_s)
-    lidar_ours_ms, lidar_theirs_ms = lidar_ratio()
+    twenty, reference = [], []
+    for _ in range(REPETITIONS):
+        twenty.append(closed_loop(traffic_spec(3, 2500.0, 240.0, 100.0)))
+        reference.append(highway_v0_steps_per_s(twenty[-1]["vehicles"], step_s))
+    town = [closed_loop(town_spec())]
+    lidar = [lidar_ratio() for _ in range(REPETITIONS)]
 
-    print(f"overhead_vs_bare_sumo "
-          f"{median_of(hundred, 'step_ms') / median_of(hundred, 'sumo_ms'):.2f}")
-    print(f"agent_cost_ratio_2000_vs_100 "
-          f"{median_of(two_thousand, 'agent_ms') / median_of(short, 'agent_ms'):.2f}")
-    print(f"speedup_vs_highway_env {1e3 / median_of(twenty, 'step_ms') / reference:.2f}")
-    print(f"lidar_speedup_vs_highway_env {lidar_theirs_ms / lidar_ours_ms:.2f}")
+    def paired(ratios) -> float:
+        return statistics.median(list(ratios))
+
+    print(f"overhead_vs_bare_sumo {paired(r['step_ms'] / r['sumo_ms'] for r in hundred):.2f}")
+    agent_ratios = [b["agent_ms"] / a["agent_ms"]
+                    for a, b in zip(short, two_thousand, strict=True)]
+    speedups = [1e3 / r["step_ms"] / h for r, h in zip(twenty, reference, strict=True)]
+    print(f"agent_cost_ratio_2000_vs_100 {paired(agent_ratios):.2f}")
+    print(f"speedup_vs_highway_env {paired(speedups):.2f}")
+    print(f"lidar_speedup_vs_highway_env {paired(theirs / ours for ours, theirs in lidar):.2f}")
     for name, runs in (("100", hundred), ("100_6_lanes", short), ("2000_6_lanes", two_thousand),
                        ("20", twenty), ("town_2000", town)):
         for key in ("vehicles", "steps", "step_ms", "sumo_ms", "agent_ms"):
             print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
-    print(f"raw.highway_v0_steps_per_s_{vehicles_20}_vehicles {reference:.1f}")
-    print(f"raw.lidar_ms_ours {lidar_ours_ms:.3f}")
-    print(f"raw.lidar_ms_highway_env {lidar_theirs_ms:.3f}")
+    print(f"raw.highway_v0_steps_per_s {statistics.median(reference):.1f}")
+    print(f"raw.lidar_ms_ours {statistics.median(o for o, _ in lidar):.3f}")
+    print(f"raw.lidar_ms_highway_env {statistics.median(t for _, t in lidar):.3f}")
 
 
 if __name__ == "__main__":
