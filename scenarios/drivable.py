@@ -14,13 +14,15 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
+#: cached road edges carry this number: change it when the search for edges changes
+EDGE_SEARCH_VERSION = 2
 #: lane and edge polylines are cut into pieces no longer than this for the spatial index [m]
 INDEX_PIECE_M = 5.0
 #: a border is probed this far outside itself, every PROBE_STEP_M along it [m]
 PROBE_OUT_M, PROBE_STEP_M = 0.25, 1.0
 #: road edges farther than this from a point do not count for its gap [m]
 GAP_HORIZON_M = 30.0
-#: index pieces examined per point: more than can overlap any point of a road [count]
+#: index pieces looked up per point at once; a point with more within reach gets all
 NEAREST_PIECES = 16
 
 
@@ -97,11 +99,7 @@ class DrivableArea:
         inside = np.zeros(len(points), bool)
         if len(points) == 0:
             return inside
-        _, seg = self._lane_tree.query(points, k=NEAREST_PIECES,
-                                       distance_upper_bound=self._lane_reach_m)
-        found = seg < len(self._lane_a)  # missing neighbours come back as n
-        which = np.broadcast_to(np.arange(len(points))[:, None], seg.shape)[found]
-        seg = seg[found]
+        which, seg = _pieces_near(self._lane_tree, points, self._lane_reach_m)
         near = _segment_distance_m(points[which], self._lane_a[seg], self._lane_b[seg])
         inside[which[near <= self._lane_half_w[seg] + 1e-9]] = True
         rest = np.flatnonzero(~inside)
@@ -149,15 +147,28 @@ class DrivableArea:
         gaps = np.full(len(points), math.inf)
         if self._edge_tree is None or len(points) == 0:
             return gaps
-        _, seg = self._edge_tree.query(points, k=NEAREST_PIECES,
-                                       distance_upper_bound=GAP_HORIZON_M + INDEX_PIECE_M / 2)
-        found = seg < len(self._edge_a)
-        which = np.broadcast_to(np.arange(len(points))[:, None], seg.shape)[found]
-        seg = seg[found]
+        which, seg = _pieces_near(self._edge_tree, points, GAP_HORIZON_M + INDEX_PIECE_M / 2)
         d = _segment_distance_m(points[which], self._edge_a[seg], self._edge_b[seg])
         np.minimum.at(gaps, which, d)
         gaps[gaps > GAP_HORIZON_M] = math.inf
         return np.where(self.contains(points), gaps, -np.abs(gaps))
+
+
+def _pieces_near(tree: cKDTree, points: np.ndarray, reach_m: float):
+    """Every (point index, piece index) pair with the piece's midpoint within
+    ``reach_m`` of the point: the ``NEAREST_PIECES`` nearest at once, and the
+    whole neighbourhood of a point where that many are all within reach."""
+    dist, seg = tree.query(points, k=NEAREST_PIECES, distance_upper_bound=reach_m)
+    full = np.isfinite(dist[:, -1])  # maybe more within reach than were asked for
+    found = np.isfinite(dist) & ~full[:, None]  # a missing neighbour comes back as inf
+    which = np.broadcast_to(np.arange(len(points))[:, None], seg.shape)[found]
+    seg = seg[found]
+    crowded = np.flatnonzero(full)
+    if len(crowded):
+        more = tree.query_ball_point(points[crowded], reach_m)
+        which = np.concatenate([which, np.repeat(crowded, [len(m) for m in more])])
+        seg = np.concatenate([seg, np.concatenate(more).astype(int)])
+    return which, seg
 
 
 def _signed_area(closed: np.ndarray) -> float:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.drivable import DrivableArea
+from scenarios.drivable import EDGE_SEARCH_VERSION, DrivableArea
 from scenarios.errors import SdcError, SpecError
 from scenarios.files import write_atomic
 from scenarios.netfile import STRAIGHT, U_TURN, NetFile, NetLane, read_net
@@ -156,7 +156,8 @@ class NetworkRoad(RoadGeometry):
 def network_area(net: NetFile, cache_dir: Path | None = None) -> DrivableArea:
     """The network's drivable area; its road edges are cached by the file's hash."""
     lanes = list(net.lanes.values())
-    cached = Path(cache_dir or default_cache_dir()) / f"{net.sha256[:20]}.edges.npy"
+    name = f"{net.sha256[:20]}.edges-v{EDGE_SEARCH_VERSION}.npy"
+    cached = Path(cache_dir or default_cache_dir()) / name
     edges = np.load(cached) if cached.exists() else None
     area = DrivableArea([lane.shape_xy for lane in lanes], [lane.width_m for lane in lanes],
                         [i for i, lane in enumerate(lanes) if not lane.internal],

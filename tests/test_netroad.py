@@ -151,3 +151,15 @@ def test_built_in_roads_refuse_network_fields():
     del plain["road"]["lanes"]
     with pytest.raises(SpecError, match=r"road\.lanes: is required"):
         type(spec).from_plain(plain)
+
+
+def test_a_crowd_of_overlapping_lanes_still_finds_the_lane_a_point_is_on():
+    """Twenty lanes stacked on one another, then a lane beside them: a point on
+    the last one has more lane pieces near it than one lookup returns."""
+    from scenarios.drivable import DrivableArea
+
+    stacked = [np.array([[47.5, 1.2], [52.5, 1.2]])] * 20  # each one piece, centred at x 50
+    beside = np.array([[0.0, 4.0], [100.0, 4.0]])  # its pieces' midpoints are farther away
+    area = DrivableArea([*stacked, beside], [3.2] * 21, [20], [])
+    assert area.contains(np.array([[50.0, 3.2], [50.0, 2.0], [50.0, 5.8]])).tolist() == [
+        True, True, False]
