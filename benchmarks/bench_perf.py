@@ -16,6 +16,12 @@ Prints ``name value`` lines (medians of REPETITIONS), then the raw timings:
 - ``lidar_speedup_vs_highway_env``: a 180-beam, 360-degree scan of 50 boxes in
   range, ours over highway-env's ``LidarObservation.trace`` on the same boxes.
 
+``agent_cost_ratio_2000_vs_100_cold_caches`` is its control: the 100-vehicle
+loop again, with every SUMO step followed by a read of 64 MB. A 2000-vehicle
+SUMO step sweeps the CPU caches, and the agent's first reads after it miss them;
+the control gives the small road the same cold caches, so the ratio shows
+whether the agent's own work grows with the network.
+
 The raw timings add ``town_2000``: the catalog's ``grid-town`` (a SUMO network of
 10 x 10 junctions, 2000 cars) under lane keeping, where the road edges come
 from the network's drivable area.
@@ -39,6 +45,8 @@ from sdc.episode import Simulation
 from sdc.sensors import Lidar
 
 REPETITIONS = 3
+#: memory read after each SUMO step of the cold-cache control: more than the CPU caches
+CACHE_WALK_BYTES = 64 << 20
 TIMED_STEPS = 400
 
 
@@ -58,10 +66,11 @@ def traffic_spec(lanes: int, length_m: float, flow_vph: float, warm_up_s: float,
     return ScenarioSpec.from_plain(plain)
 
 
-def closed_loop(spec: ScenarioSpec) -> dict:
+def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dict:
     """Medians over the timed steps of a step's wall time, of the SUMO step inside
     it, and of their difference, the agent's own cost [ms] (medians: this machine's
-    occasional stalls hit single steps)."""
+    occasional stalls hit single steps). With ``cache_walk``, every SUMO step also
+    reads that array, as a big network's step sweeps the CPU caches."""
     import libsumo
 
     controller = make_controller(spec.controller)
@@ -72,6 +81,8 @@ def closed_loop(spec: ScenarioSpec) -> dict:
     def timed_step(*args):
         start = time.perf_counter()
         real_step(*args)
+        if cache_walk is not None:
+            cache_walk.sum()
         sumo_s.append(time.perf_counter() - start)
 
     steps_s = []
@@ -176,10 +187,13 @@ def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
     hundred = [closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)) for _ in range(REPETITIONS)]
-    short, two_thousand = [], []
+    short, two_thousand, short_cold = [], [], []
+    walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(2):  # the 2000-vehicle warm-up fills 6 lanes x 18 km: two pairs
         short.append(closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0)))
         two_thousand.append(closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0)))
+        short_cold.append(closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0),
+                                      walk))
     step_s = traffic_spec(3, 2500.0, 240.0, 0.0).scenario.step_s
     twenty, reference = [], []
     for _ in range(REPETITIONS):
@@ -191,14 +205,18 @@ def main() -> None:
     def paired(ratios) -> float:
         return statistics.median(list(ratios))
 
-    print(f"overhead_vs_bare_sumo {paired(r['step_ms'] / r['sumo_ms'] for r in hundred):.2f}")
-    agent_ratios = [b["agent_ms"] / a["agent_ms"]
-                    for a, b in zip(short, two_thousand, strict=True)]
+    def agent_ratios(small_runs) -> list[float]:
+        return [b["agent_ms"] / a["agent_ms"]
+                for a, b in zip(small_runs, two_thousand, strict=True)]
+
     speedups = [1e3 / r["step_ms"] / h for r, h in zip(twenty, reference, strict=True)]
-    print(f"agent_cost_ratio_2000_vs_100 {paired(agent_ratios):.2f}")
+    print(f"overhead_vs_bare_sumo {paired(r['step_ms'] / r['sumo_ms'] for r in hundred):.2f}")
+    print(f"agent_cost_ratio_2000_vs_100 {paired(agent_ratios(short)):.2f}")
+    print(f"agent_cost_ratio_2000_vs_100_cold_caches {paired(agent_ratios(short_cold)):.2f}")
     print(f"speedup_vs_highway_env {paired(speedups):.2f}")
     print(f"lidar_speedup_vs_highway_env {paired(theirs / ours for ours, theirs in lidar):.2f}")
-    for name, runs in (("100", hundred), ("100_6_lanes", short), ("2000_6_lanes", two_thousand),
+    for name, runs in (("100", hundred), ("100_6_lanes", short),
+                       ("100_6_lanes_cold_caches", short_cold), ("2000_6_lanes", two_thousand),
                        ("20", twenty), ("town_2000", town)):
         for key in ("vehicles", "steps", "step_ms", "sumo_ms", "agent_ms"):
             print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
