@@ -1,6 +1,6 @@
 /*
  * Compiled kernels for the per-step hot path: the lidar scan, the ego's overlap
- * test and its time to collision. Each is the exact counterpart of a numpy
+ * test, its gap to the obstacles and its time to collision. Each is the exact counterpart of a numpy
  * function in sdc/geometry.py or analysis/safety.py (same formulas, same order
  * of operations, no fused multiply-adds), which stays the reference the tests
  * compare against.
@@ -141,6 +141,57 @@ fail_a:
     return NULL;
 }
 
+/* does box a overlap box b? (separating axes; touching counts) */
+static int overlaps(const double *a, const double *b) {
+    double ac = cos(a[2]), as = sin(a[2]), bc = cos(b[2]), bs = sin(b[2]);
+    double a_axes[2][2] = {{ac, as}, {-as, ac}}, b_axes[2][2] = {{bc, bs}, {-bs, bc}};
+    double ha[2] = {0.5 * a[3], 0.5 * a[4]}, hb[2] = {0.5 * b[3], 0.5 * b[4]};
+    double gx = b[0] - a[0], gy = b[1] - a[1];
+    for (int j = 0; j < 4; j++) {
+        const double *axis = j < 2 ? a_axes[j] : b_axes[j - 2];
+        double ra = fabs(axis[0] * a_axes[0][0] + axis[1] * a_axes[0][1]) * ha[0]
+                    + fabs(axis[0] * a_axes[1][0] + axis[1] * a_axes[1][1]) * ha[1];
+        double rb = fabs(axis[0] * b_axes[0][0] + axis[1] * b_axes[0][1]) * hb[0]
+                    + fabs(axis[0] * b_axes[1][0] + axis[1] * b_axes[1][1]) * hb[1];
+        if (!(fabs(axis[0] * gx + axis[1] * gy) <= ra + rb)) return 0;
+    }
+    return 1;
+}
+
+/* corners of a box, counter-clockwise from front-left (box_corners of sdc/geometry.py) */
+static void corners(const double *b, double out[4][2]) {
+    static const double sign[4][2] = {{1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}, {1.0, -1.0}};
+    double c = cos(b[2]), s = sin(b[2]);
+    for (int k = 0; k < 4; k++) {
+        double hl = 0.5 * b[3] * sign[k][0], hw = 0.5 * b[4] * sign[k][1];
+        out[k][0] = b[0] + c * hl - s * hw;
+        out[k][1] = b[1] + s * hl + c * hw;
+    }
+}
+
+/* distance from point p to the segment a-b (point_segment_distance of sdc/geometry.py) */
+static double point_segment(const double *p, const double *a, const double *b) {
+    double ex = b[0] - a[0], ey = b[1] - a[1];
+    double len2 = ex * ex + ey * ey;
+    double t = ((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / (len2 > 0.0 ? len2 : 1.0);
+    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    return hypot(p[0] - (a[0] + t * ex), p[1] - (a[1] + t * ey));
+}
+
+/* smallest corner-to-edge distance between two boxes' outlines, both ways */
+static double outline_gap(const double *a, const double *b) {
+    double ca[4][2], cb[4][2];
+    corners(a, ca);
+    corners(b, cb);
+    double best = INFINITY;
+    for (int i = 0; i < 4; i++)
+        for (int k = 0; k < 4; k++) {
+            best = np_min(best, point_segment(ca[i], cb[k], cb[(k + 1) % 4]));
+            best = np_min(best, point_segment(cb[i], ca[k], ca[(k + 1) % 4]));
+        }
+    return best;
+}
+
 /* first_overlap(box, boxes): index of the first of the boxes the box overlaps
  * (separating axes, touching counts), or -1 (boxes_overlap of sdc/geometry.py) */
 static PyObject *first_overlap(PyObject *self, PyObject *args) {
@@ -153,31 +204,43 @@ static PyObject *first_overlap(PyObject *self, PyObject *args) {
         PyBuffer_Release(&av);
         return NULL;
     }
-    const double *a = av.buf;
     long found = -1;
-    double ac = cos(a[2]), as = sin(a[2]);
-    double a_axes[2][2] = {{ac, as}, {-as, ac}};
-    double ha[2] = {0.5 * a[3], 0.5 * a[4]};
-    for (Py_ssize_t k = 0; n_a == 1 && k < n_b && found < 0; k++) {
-        const double *b = (const double *)bv.buf + 5 * k;
-        double bc = cos(b[2]), bs = sin(b[2]);
-        double b_axes[2][2] = {{bc, bs}, {-bs, bc}};
-        double hb[2] = {0.5 * b[3], 0.5 * b[4]};
-        double gx = b[0] - a[0], gy = b[1] - a[1];
-        int separated = 0;
-        for (int j = 0; j < 4 && !separated; j++) {
-            const double *axis = j < 2 ? a_axes[j] : b_axes[j - 2];
-            double ra = fabs(axis[0] * a_axes[0][0] + axis[1] * a_axes[0][1]) * ha[0]
-                        + fabs(axis[0] * a_axes[1][0] + axis[1] * a_axes[1][1]) * ha[1];
-            double rb = fabs(axis[0] * b_axes[0][0] + axis[1] * b_axes[0][1]) * hb[0]
-                        + fabs(axis[0] * b_axes[1][0] + axis[1] * b_axes[1][1]) * hb[1];
-            separated = !(fabs(axis[0] * gx + axis[1] * gy) <= ra + rb);
-        }
-        if (!separated) found = (long)k;
-    }
+    for (Py_ssize_t k = 0; n_a == 1 && k < n_b && found < 0; k++)
+        if (overlaps(av.buf, (const double *)bv.buf + 5 * k)) found = (long)k;
     PyBuffer_Release(&bv);
     PyBuffer_Release(&av);
     return PyLong_FromLong(found);
+}
+
+/* gaps(box, boxes, out): the distance between the box's outline and each box's,
+ * 0 where they overlap (box_gap_m of sdc/geometry.py) */
+static PyObject *gaps(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *b_obj, *o_obj;
+    if (!PyArg_ParseTuple(args, "OOO", &a_obj, &b_obj, &o_obj)) return NULL;
+    Py_buffer av, bv, ov;
+    Py_ssize_t n_a, n_b, n_o;
+    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_a;
+    if (get_doubles(o_obj, &ov, 1, 1, &n_o, "out") < 0) goto fail_b;
+    if (n_a != 1 || n_o != n_b) {
+        PyErr_SetString(PyExc_ValueError, "one box, and a gap per box");
+        goto fail_o;
+    }
+    for (Py_ssize_t k = 0; k < n_b; k++) {
+        const double *b = (const double *)bv.buf + 5 * k;
+        ((double *)ov.buf)[k] = overlaps(av.buf, b) ? 0.0 : outline_gap(av.buf, b);
+    }
+    PyBuffer_Release(&ov);
+    PyBuffer_Release(&bv);
+    PyBuffer_Release(&av);
+    Py_RETURN_NONE;
+fail_o:
+    PyBuffer_Release(&ov);
+fail_b:
+    PyBuffer_Release(&bv);
+fail_a:
+    PyBuffer_Release(&av);
+    return NULL;
 }
 
 /* ttc(box, speed, boxes, speeds): the constant-velocity time to collision with
@@ -232,6 +295,7 @@ fail_a:
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
     {"first_overlap", first_overlap, METH_VARARGS, "Index of the first overlapping box, or -1."},
+    {"gaps", gaps, METH_VARARGS, "Outline distances from a box to boxes into out."},
     {"ttc", ttc, METH_VARARGS, "Constant-velocity time to collision [s]."},
     {NULL, NULL, 0, NULL},
 };

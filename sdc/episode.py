@@ -23,8 +23,7 @@ from scenarios.spec import ScenarioSpec
 from scenarios.worlds import make_road, make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
-from sdc.geometry import box_gap_m
-from sdc.kernels import time_to_collision_s
+from sdc.kernels import box_gap_m, time_to_collision_s
 from sdc.sensors import LaneSensor, Lidar
 from sdc.trace import Trace, TraceRecorder
 from sdc.vehicle import Command, Vehicle, VehicleState

@@ -4,7 +4,8 @@ Each function equals its numpy reference bit for bit (the property tests in
 ``tests/test_kernels.py`` hold them to it): the lidar scan equals
 :func:`sdc.geometry.ray_box_ranges` and :func:`sdc.geometry.ray_segment_ranges`
 and their minimum, :func:`first_overlap` the first true of
-:func:`sdc.geometry.boxes_overlap`, :func:`time_to_collision_s` its namesake in
+:func:`sdc.geometry.boxes_overlap`, :func:`box_gap_m` and
+:func:`time_to_collision_s` their namesakes in :mod:`sdc.geometry` and
 :mod:`analysis.safety`. The numpy versions say plainly what is computed; these
 do it without numpy's per-call cost, which dominates a step's few small arrays.
 """
@@ -34,6 +35,15 @@ def lidar_ranges_m(origin_xy: np.ndarray, angles_rad: np.ndarray, boxes: np.ndar
 def first_overlap(box: np.ndarray, boxes: np.ndarray) -> int:
     """Index of the first of ``boxes`` that ``box`` overlaps (touching counts), or -1."""
     return _kernels.first_overlap(_rows(box, 5), _rows(boxes, 5))
+
+
+def box_gap_m(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Distance between the outline of ``box`` and each of ``boxes`` [m], 0 where
+    they overlap (see :func:`sdc.geometry.box_gap_m`)."""
+    boxes = _rows(boxes, 5)
+    out = np.empty(len(boxes))
+    _kernels.gaps(_rows(box, 5), boxes, out)
+    return out
 
 
 def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.ndarray,

@@ -10,7 +10,7 @@ from test_geometry import box_st, ray_scene
 
 from analysis import safety
 from sdc import kernels
-from sdc.geometry import boxes_overlap, ray_box_ranges, ray_segment_ranges
+from sdc.geometry import box_gap_m, boxes_overlap, ray_box_ranges, ray_segment_ranges
 
 PROPS = settings(max_examples=300, deadline=None)
 segment_st = st.tuples(*[st.floats(-60.0, 60.0, allow_nan=False)] * 4)
@@ -61,6 +61,23 @@ def test_first_overlap_is_the_first_overlapping_box(a, others):
     a, others = np.array(a), np.array(others, float).reshape(-1, 5)
     overlaps = np.flatnonzero(boxes_overlap(a, others))
     assert kernels.first_overlap(a, others) == (overlaps[0] if len(overlaps) else -1)
+
+
+@PROPS
+@given(a=box_st, others=st.lists(box_st, max_size=6))
+def test_the_gap_kernel_equals_box_gap_m(a, others):
+    a, others = np.array(a), np.array(others, float).reshape(-1, 5)
+    np.testing.assert_array_equal(kernels.box_gap_m(a, others), box_gap_m(a, others))
+
+
+def test_the_gap_kernel_on_near_misses_and_overlaps():
+    rng = np.random.default_rng(2)
+    ego = np.array([0.0, 0.0, 0.3, 4.85, 1.93])
+    others = np.column_stack([rng.uniform(-8, 8, (500, 2)), rng.uniform(-3, 3, 500),
+                              rng.uniform(0.5, 6, 500), rng.uniform(0.5, 2.5, 500)])
+    gaps = kernels.box_gap_m(ego, others)
+    np.testing.assert_array_equal(gaps, box_gap_m(ego, others))
+    assert (gaps == 0).sum() > 50 and (gaps > 0).sum() > 50  # both kinds were met
 
 
 @PROPS
