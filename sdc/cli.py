@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -143,6 +144,10 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
         spec = load_sweep(CATALOG_DIR / "sweeps" / "seed-envelope.toml")
         if samples is not None:
             spec = spec.with_samples(samples)
+        if _other_demo(out_dir, spec):
+            click.echo(f"{out_dir} holds a demo of another plan (another --samples or sdc "
+                       "version); starting anew", err=True)
+            shutil.rmtree(out_dir)
         outcome = run_sweep(spec, out_dir, LocalExecutor(workers), RichReporter(), resume=True)
     except SdcError as e:
         _bad_input(str(e))
@@ -157,6 +162,18 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     click.echo(f"report: {result.html_path}")
     sys.exit(EXIT_RUN_ERROR if outcome.counts["error"] or outcome.counts["timeout"] else EXIT_OK)
 
+
+
+def _other_demo(out_dir: Path, spec) -> bool:
+    """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
+    ``spec``'s? A half-done demo of the same plan is resumed instead."""
+    from scenarios.sweep import expand, plan_sha256
+    from sdc.manifest import read_manifest
+
+    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
+    return (manifest is not None
+            and manifest.get("sweep", {}).get("sweep", {}).get("name") == spec.name
+            and manifest.get("plan_sha256") != plan_sha256(expand(spec)))
 
 
 def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] = (),

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 
+import pandas as pd
 import pytest
 from click.testing import CliRunner
 
@@ -123,3 +124,7 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
     assert (out / "report.html").exists() and (out / "summary.json").exists()
     rerun = CliRunner().invoke(main, args)  # a finished demo is reported again, not rerun
     assert rerun.exit_code == 0 and rerun.stdout == result.stdout
+    other = CliRunner().invoke(main, [*args[:4], "2", *args[5:]])  # another plan: anew
+    assert other.exit_code == 0, other.output
+    assert "starting anew" in other.stderr
+    assert len(pd.read_parquet(out / "results.parquet")) == 2 * 2
