@@ -173,16 +173,25 @@ def _save(path: Path, array: np.ndarray) -> None:
         np.save(f, array)
 
 
-def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRoad:
-    """The road of a ``sumo_net`` scenario: its route drawn from ``scenario.seed``.
-
-    Raises :class:`SpecError` naming the field when the network cannot hold the
-    scenario (an obstacle off the drivable area, no route that long).
-    """
+def read_network_file(spec: ScenarioSpec) -> NetFile:
+    """The spec's network file; a missing, unreadable or foreign file is a
+    :class:`SpecError` naming ``road.net_file``."""
     path = Path(spec.road.net_file)
     if not path.is_file():
         raise SpecError("road.net_file", f"no such file: {path}")
-    net = read_net(path)
+    try:
+        return read_net(path)
+    except SdcError as e:
+        raise SpecError("road.net_file", str(e)) from None
+
+
+def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRoad:
+    """The road of a ``sumo_net`` scenario: its route drawn from ``scenario.seed``.
+
+    Raises :class:`SpecError` naming the field when the file is bad or the network
+    cannot hold the scenario (an obstacle off the drivable area).
+    """
+    net = read_network_file(spec)
     route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
                        spec.road.route_turns)
     road = NetworkRoad(net, route, network_area(net, cache_dir))

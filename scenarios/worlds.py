@@ -27,6 +27,15 @@ def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry
     return RoadGeometry.from_spec(spec.road)
 
 
+def check_inputs(spec: ScenarioSpec) -> None:
+    """Check what a run of ``spec`` reads besides the spec (a network file), so a
+    bad one is reported as bad input before anything runs."""
+    if spec.road.kind == "sumo_net":
+        from scenarios.netroad import read_network_file
+
+        read_network_file(spec)
+
+
 def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
     """Build and cache what SUMO runs on ``road`` need (its network; a network
     file's road edges), so parallel runs find it ready. A network file that cannot

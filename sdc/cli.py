@@ -18,6 +18,7 @@ from scenarios import CATALOG_DIR
 from scenarios.errors import SdcError
 from scenarios.spec import CONTROLLER_PARAMS, ScenarioSpec
 from scenarios.toml_io import load_spec
+from scenarios.worlds import check_inputs
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -106,6 +107,7 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
             spec = spec.with_controller(controller)
         if backend is not None:
             spec = spec.with_backend(backend)
+        check_inputs(spec)
         row = run_one(spec, trace)
     except SdcError as e:
         _bad_input(str(e))
@@ -269,6 +271,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
         spec = load_sweep(sweep_file)
         if samples is not None:
             spec = spec.with_samples(samples)
+        check_inputs(spec.base)
         if dry_run:
             for line in _plan_lines(spec, expand(spec)):
                 click.echo(line)

@@ -163,3 +163,21 @@ def test_a_crowd_of_overlapping_lanes_still_finds_the_lane_a_point_is_on():
     area = DrivableArea([*stacked, beside], [3.2] * 21, [20], [])
     assert area.contains(np.array([[50.0, 3.2], [50.0, 2.0], [50.0, 5.8]])).tolist() == [
         True, True, False]
+
+
+def test_a_bad_network_file_is_bad_input_for_run_and_sweep(tmp_path):
+    from click.testing import CliRunner
+
+    from sdc.cli import main
+
+    (tmp_path / "routes.net.xml").write_text("<routes/>\n")
+    scenario = tmp_path / "town.toml"
+    scenario.write_text(GRID_TOWN.read_text().replace("networks/grid-10x10.net.xml",
+                                                      "routes.net.xml"))
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(f'[sweep]\nname = "x"\nbase = "{scenario}"\nsamples = 2\n'
+                     '[sweep.params]\n"ego.speed_mps" = { uniform = [3.0, 5.0] }\n')
+    for args in (["run", str(scenario)], ["sweep", str(sweep), "--out", str(tmp_path / "o")]):
+        result = CliRunner().invoke(main, args)
+        assert result.exit_code == 2, result.output
+        assert "road.net_file" in result.stderr and "not a SUMO network" in result.stderr
