@@ -105,21 +105,21 @@ class NetworkRoad(RoadGeometry):
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` can stand: moved ahead
         off a junction onto the next lane (SUMO holds stops on lanes only)."""
-        piece = self.piece_at(s_m)
-        if not piece.lane.internal:
+        following = self._lane_after(s_m)
+        if not self.piece_at(s_m).lane.internal or following is None:
             return s_m
-        following = [p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal]
-        if not following:
-            return s_m
-        return following[0].start_s_m + min(length_m / 2 + 0.5, following[0].length_m / 2)
+        return following.start_s_m + min(length_m / 2 + 0.5, following.length_m / 2)
+
+    def _lane_after(self, s_m: float) -> RoutePiece | None:
+        """The first route lane outside a junction that starts after ``s_m``."""
+        return next((p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal), None)
 
     def sumo_place(self, s_m: float) -> tuple[str, int, float]:
         """SUMO's edge, lane index and lane position of route position ``s_m``
         (the start of the next lane when ``s_m`` is inside a junction)."""
         piece = self.piece_at(s_m)
         if piece.lane.internal:
-            piece = next((p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal),
-                         piece)
+            piece = self._lane_after(s_m) or piece
             s_m = piece.start_s_m
         pos_m = float(np.clip(piece.sumo_pos_m(s_m), 0.0, piece.lane.sumo_length_m))
         return piece.lane.edge, piece.lane.index, pos_m
@@ -139,17 +139,20 @@ class NetworkRoad(RoadGeometry):
     def off_road(self, points: np.ndarray) -> np.ndarray:
         return ~self.area.contains(points)
 
-    def to_plain(self) -> dict:
+    def drawn_edge_segments(self) -> np.ndarray:
+        """The network's road edges within ``DRAW_MARGIN_M`` of the route."""
         lo = self.center_xy.min(axis=0) - DRAW_MARGIN_M
         hi = self.center_xy.max(axis=0) + DRAW_MARGIN_M
         edges = self.area.edges
-        near = np.all((edges[:, :2] >= lo) & (edges[:, :2] <= hi), axis=1)
+        return edges[np.all((edges[:, :2] >= lo) & (edges[:, :2] <= hi), axis=1)]
+
+    def to_plain(self) -> dict:
         return {
             **super().to_plain(),
             "net_file": str(self.net.path),
             "net_sha256": self.net.sha256,
             "route_lanes": [p.lane.id for p in self.pieces],
-            "edge_segments": edges[near].round(3).tolist(),
+            "edge_segments": self.drawn_edge_segments().round(3).tolist(),
         }
 
 

@@ -127,8 +127,11 @@ class RoadGeometry:
 
     def off_road(self, points: np.ndarray) -> np.ndarray:
         """Which points lie beyond a road edge, alongside the road (a bool mask)."""
-        s_m, d_m = self.to_frenet(points)
-        return (s_m >= 0) & (s_m <= self.length_m) & (np.abs(d_m) > self.half_width_m)
+        return self.edge_gaps_m(points) < 0
+
+    def drawn_edge_segments(self) -> np.ndarray | None:
+        """Road edges to draw as segments; ``None``: the two edges of this road."""
+        return None
 
     def offset_polyline(self, d_m: float) -> np.ndarray:
         """The polyline at constant lateral offset ``d_m`` (vertices on the bisectors)."""

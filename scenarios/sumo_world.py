@@ -75,10 +75,11 @@ def _trips(spec: ScenarioSpec, road: NetworkRoad) -> list[str]:
         return []
     edges = road.net.trip_edges()
     weights = np.array([length_m for _, length_m in edges])
+    chance = weights / weights.sum()
     rng = scenario_stream(spec.scenario.seed, DEMAND)
-    ends = rng.choice(len(edges), size=(spec.traffic.vehicles, 2), p=weights / weights.sum())
+    ends = rng.choice(len(edges), size=(spec.traffic.vehicles, 2), p=chance)
     while np.any(same := ends[:, 0] == ends[:, 1]):
-        ends[same, 1] = rng.choice(len(edges), size=int(same.sum()), p=weights / weights.sum())
+        ends[same, 1] = rng.choice(len(edges), size=int(same.sum()), p=chance)
     return [
         f'  <trip id="traffic.{k}" type="traffic" depart="0" from="{edges[a][0]}" '
         f'to="{edges[b][0]}" departLane="random" departPos="random_free" departSpeed="0"/>'

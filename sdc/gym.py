@@ -149,7 +149,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
-    lane_lines, edges = road_lines(road, road.to_plain().get("edge_segments"))
+    lane_lines, edges = road_lines(road, road.drawn_edge_segments())
     scene = Scene(
         t_s=np.array([sim.k * sim.step_s]), step=np.array([sim.k]), ego=sim.box[None],
         traffic=[snapshot.traffic_boxes], obstacles=snapshot.obstacle_boxes,
