@@ -1,10 +1,14 @@
-"""The compiled per-step kernels; everything else about the package is in pyproject.toml.
+"""The compiled per-step code (the car's kernels, the read of SUMO's traffic);
+everything else about the package is in pyproject.toml.
 
 ``-ffp-contract=off`` keeps every product rounded on its own, as numpy rounds it,
-so the kernels equal their numpy references bit for bit.
+so the compiled code equals its numpy references bit for bit.
 """
 
 from setuptools import Extension, setup
 
-setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"],
-                             extra_compile_args=["-O2", "-ffp-contract=off"])])
+FLAGS = ["-O2", "-ffp-contract=off"]
+
+setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"], extra_compile_args=FLAGS),
+                   Extension("scenarios._sumo_read", ["scenarios/_sumo_read.c"],
+                             extra_compile_args=FLAGS)])

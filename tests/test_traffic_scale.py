@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import traci.constants as tc
 
 from scenarios.road import RoadGeometry
-from scenarios.snapshot import in_start_zone, sensing_radius_m
+from scenarios.snapshot import in_start_zone, sensing_radius_m, within_m
 from scenarios.spec import ScenarioSpec
+from scenarios.sumo_world import TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M
 from scenarios.worlds import make_world
 from sdc.episode import Simulation, run_episode
 from sdc.vehicle import Command
@@ -41,6 +43,22 @@ def every_vehicle_within(world, ego_box, radius_m) -> int:
     return count
 
 
+def subscribed_traffic(world, ego_box, radius_m) -> tuple[np.ndarray, np.ndarray]:
+    """The traffic boxes and speeds of the subscription's results, in numpy: the
+    reference for the compiled read."""
+    nearby = world._sumo.vehicle.getContextSubscriptionResults("ego")
+    rows = np.array([(*v[tc.VAR_POSITION], v[tc.VAR_ANGLE], v[tc.VAR_SPEED])
+                     for vid, v in nearby.items()
+                     if vid != "ego" and not vid.startswith("obstacle.")]).reshape(-1, 4)
+    yaw = np.radians(90.0 - rows[:, 2])
+    boxes = np.column_stack([rows[:, 0] - TRAFFIC_LENGTH_M / 2 * np.cos(yaw),
+                             rows[:, 1] - TRAFFIC_LENGTH_M / 2 * np.sin(yaw), yaw,
+                             np.full(len(rows), TRAFFIC_LENGTH_M),
+                             np.full(len(rows), TRAFFIC_WIDTH_M)])
+    keep = within_m(boxes, ego_box[:2], radius_m)
+    return boxes[keep], rows[keep, 3]
+
+
 @pytest.mark.parametrize("backend", ["sumo", "highway"])
 def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroundings(
         lesson_plain, backend):
@@ -60,6 +78,10 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
             if backend == "sumo":  # the subscription misses nothing within the radius
                 assert len(sim.snapshot.traffic_boxes) == every_vehicle_within(world, sim.box,
                                                                                 radius)
+                # and the compiled read of its results is the numpy formula, bit for bit
+                boxes, speeds = subscribed_traffic(world, sim.box, radius)
+                assert sim.snapshot.traffic_boxes.tobytes() == boxes.tobytes()
+                assert sim.snapshot.traffic_speeds_mps.tobytes() == speeds.tobytes()
             sim.advance(Command(0.0))
         assert world.vehicle_count() > 2 * len(sim.snapshot.traffic_boxes)  # the rest unread
 
