@@ -1,6 +1,6 @@
 /*
- * Compiled kernels for the per-step hot path: the lidar scan, the ego's overlap
- * test, its gap to the obstacles and its time to collision. Each is the exact counterpart of a numpy
+ * Compiled kernels for the per-step hot path: the lidar scan, and the ego's
+ * contacts (overlaps, gap to the obstacles, time to collision). Each is the exact counterpart of a numpy
  * function in sdc/geometry.py or analysis/safety.py (same formulas, same order
  * of operations, no fused multiply-adds), which stays the reference the tests
  * compare against.
@@ -56,39 +56,10 @@ static int get_doubles(PyObject *obj, Py_buffer *view, int writable, Py_ssize_t 
     return 0;
 }
 
-/* scan(origin_x, origin_y, angles, boxes, segments, max_range, out): the nearest
- * box or segment along each ray, inf beyond max_range (ray_box_ranges and
- * ray_segment_ranges of sdc/geometry.py, then their minimum) */
-static PyObject *scan(PyObject *self, PyObject *args) {
-    double ox, oy, max_range;
-    PyObject *a_obj, *b_obj, *s_obj, *o_obj;
-    if (!PyArg_ParseTuple(args, "ddOOOdO", &ox, &oy, &a_obj, &b_obj, &s_obj, &max_range,
-                          &o_obj))
-        return NULL;
-    Py_buffer av, bv, sv, ov;
-    Py_ssize_t n_rays, n_boxes, n_segs, n_out;
-    if (get_doubles(a_obj, &av, 0, 1, &n_rays, "angles") < 0) return NULL;
-    if (get_doubles(b_obj, &bv, 0, 5, &n_boxes, "boxes") < 0) goto fail_a;
-    if (get_doubles(s_obj, &sv, 0, 4, &n_segs, "segments") < 0) goto fail_b;
-    if (get_doubles(o_obj, &ov, 1, 1, &n_out, "out") < 0) goto fail_s;
-    if (n_out != n_rays) {
-        PyErr_SetString(PyExc_ValueError, "out: one range per angle");
-        goto fail_o;
-    }
-    const double *angles = av.buf, *boxes = bv.buf, *segs = sv.buf;
-    double *out = ov.buf;
-    double *ray_cos = PyMem_Malloc(2 * (n_rays ? n_rays : 1) * sizeof(double));
-    if (ray_cos == NULL) {
-        PyErr_NoMemory();
-        goto fail_o;
-    }
-    double *ray_sin = ray_cos + n_rays;
-    for (Py_ssize_t i = 0; i < n_rays; i++) {
-        out[i] = INFINITY;
-        ray_cos[i] = cos(angles[i]);
-        ray_sin[i] = sin(angles[i]);
-    }
-
+/* the boxes one ray may hit: every box of a set whose bounding circle it passes */
+static void scan_boxes(double ox, double oy, const double *angles, const double *ray_cos,
+                       const double *ray_sin, Py_ssize_t n_rays, const double *boxes,
+                       Py_ssize_t n_boxes, double max_range, double *out) {
     for (Py_ssize_t k = 0; k < n_boxes; k++) {
         const double *b = boxes + 5 * k;
         double dx = b[0] - ox, dy = b[1] - oy;
@@ -107,6 +78,46 @@ static PyObject *scan(PyObject *self, PyObject *args) {
             out[i] = np_min(out[i], r);
         }
     }
+}
+
+/* scan(origin_x, origin_y, yaw, angles, boxes, more_boxes, segments, max_range, out):
+ * the nearest box (of either set) or segment along each ray of world angle
+ * yaw + angle, inf beyond max_range (ray_box_ranges over both sets stacked and
+ * ray_segment_ranges of sdc/geometry.py, then their minimum) */
+static PyObject *scan(PyObject *self, PyObject *args) {
+    double ox, oy, yaw, max_range;
+    PyObject *a_obj, *b_obj, *m_obj, *s_obj, *o_obj;
+    if (!PyArg_ParseTuple(args, "dddOOOOdO", &ox, &oy, &yaw, &a_obj, &b_obj, &m_obj, &s_obj,
+                          &max_range, &o_obj))
+        return NULL;
+    Py_buffer av, bv, mv, sv, ov;
+    Py_ssize_t n_rays, n_boxes, n_more, n_segs, n_out;
+    PyObject *result = NULL;
+    if (get_doubles(a_obj, &av, 0, 1, &n_rays, "angles") < 0) return NULL;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_boxes, "boxes") < 0) goto fail_a;
+    if (get_doubles(m_obj, &mv, 0, 5, &n_more, "more_boxes") < 0) goto fail_b;
+    if (get_doubles(s_obj, &sv, 0, 4, &n_segs, "segments") < 0) goto fail_m;
+    if (get_doubles(o_obj, &ov, 1, 1, &n_out, "out") < 0) goto fail_s;
+    if (n_out != n_rays) {
+        PyErr_SetString(PyExc_ValueError, "out: one range per angle");
+        goto fail_o;
+    }
+    const double *segs = sv.buf;
+    double *out = ov.buf;
+    double *angles = PyMem_Malloc(3 * (n_rays ? n_rays : 1) * sizeof(double));
+    if (angles == NULL) {
+        PyErr_NoMemory();
+        goto fail_o;
+    }
+    double *ray_cos = angles + n_rays, *ray_sin = angles + 2 * n_rays;
+    for (Py_ssize_t i = 0; i < n_rays; i++) {
+        out[i] = INFINITY;
+        angles[i] = yaw + ((const double *)av.buf)[i];
+        ray_cos[i] = cos(angles[i]);
+        ray_sin[i] = sin(angles[i]);
+    }
+    scan_boxes(ox, oy, angles, ray_cos, ray_sin, n_rays, bv.buf, n_boxes, max_range, out);
+    scan_boxes(ox, oy, angles, ray_cos, ray_sin, n_rays, mv.buf, n_more, max_range, out);
     for (Py_ssize_t k = 0; k < n_segs; k++) {
         const double *s = segs + 4 * k;
         double ex = s[2] - s[0], ey = s[3] - s[1];
@@ -123,22 +134,20 @@ static PyObject *scan(PyObject *self, PyObject *args) {
     }
     for (Py_ssize_t i = 0; i < n_rays; i++)
         if (!(out[i] <= max_range)) out[i] = INFINITY;
-    PyMem_Free(ray_cos);
-
-    PyBuffer_Release(&ov);
-    PyBuffer_Release(&sv);
-    PyBuffer_Release(&bv);
-    PyBuffer_Release(&av);
-    Py_RETURN_NONE;
+    PyMem_Free(angles);
+    result = Py_None;
+    Py_INCREF(result);
 fail_o:
     PyBuffer_Release(&ov);
 fail_s:
     PyBuffer_Release(&sv);
+fail_m:
+    PyBuffer_Release(&mv);
 fail_b:
     PyBuffer_Release(&bv);
 fail_a:
     PyBuffer_Release(&av);
-    return NULL;
+    return result;
 }
 
 /* does box a overlap box b? (separating axes; touching counts) */
@@ -192,111 +201,77 @@ static double outline_gap(const double *a, const double *b) {
     return best;
 }
 
-/* first_overlap(box, boxes): index of the first of the boxes the box overlaps
- * (separating axes, touching counts), or -1 (boxes_overlap of sdc/geometry.py) */
-static PyObject *first_overlap(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *b_obj;
-    if (!PyArg_ParseTuple(args, "OO", &a_obj, &b_obj)) return NULL;
-    Py_buffer av, bv;
-    Py_ssize_t n_a, n_b;
-    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
-    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) {
-        PyBuffer_Release(&av);
-        return NULL;
-    }
-    long found = -1;
-    for (Py_ssize_t k = 0; n_a == 1 && k < n_b && found < 0; k++)
-        if (overlaps(av.buf, (const double *)bv.buf + 5 * k)) found = (long)k;
-    PyBuffer_Release(&bv);
-    PyBuffer_Release(&av);
-    return PyLong_FromLong(found);
+/* constant-velocity time to collision of box a (speed along its heading) with box
+ * b (speed_b along b's heading): inf unless b is in a's lateral corridor ahead and
+ * they close or already touch (time_to_collision_s of analysis/safety.py) */
+static double time_to_collision(const double *a, double cos_yaw, double sin_yaw, double speed,
+                                const double *b, double speed_b) {
+    double dx = b[0] - a[0], dy = b[1] - a[1];
+    double ahead = dx * cos_yaw + dy * sin_yaw;
+    double lateral = -dx * sin_yaw + dy * cos_yaw;
+    double rel_yaw = b[2] - a[2];
+    double half_len = b[3] / 2, half_wid = b[4] / 2;
+    double extent_x = fabs(half_len * cos(rel_yaw)) + fabs(half_wid * sin(rel_yaw));
+    double extent_y = fabs(half_len * sin(rel_yaw)) + fabs(half_wid * cos(rel_yaw));
+    double gap = ahead - extent_x - a[3] / 2;
+    int in_path = fabs(lateral) < extent_y + a[4] / 2 && ahead + extent_x > a[3] / 2;
+    double closing = speed - speed_b * cos(rel_yaw);
+    if (!in_path || !(gap <= 0.0 || closing > 0.0)) return INFINITY;
+    return gap <= 0.0 ? 0.0 : gap / closing;
 }
 
-/* gaps(box, boxes, out): the distance between the box's outline and each box's,
- * 0 where they overlap (box_gap_m of sdc/geometry.py) */
-static PyObject *gaps(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *b_obj, *o_obj;
-    if (!PyArg_ParseTuple(args, "OOO", &a_obj, &b_obj, &o_obj)) return NULL;
-    Py_buffer av, bv, ov;
-    Py_ssize_t n_a, n_b, n_o;
-    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
-    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_a;
-    if (get_doubles(o_obj, &ov, 1, 1, &n_o, "out") < 0) goto fail_b;
-    if (n_a != 1 || n_o != n_b) {
-        PyErr_SetString(PyExc_ValueError, "one box, and a gap per box");
-        goto fail_o;
-    }
-    for (Py_ssize_t k = 0; k < n_b; k++) {
-        const double *b = (const double *)bv.buf + 5 * k;
-        ((double *)ov.buf)[k] = overlaps(av.buf, b) ? 0.0 : outline_gap(av.buf, b);
-    }
-    PyBuffer_Release(&ov);
-    PyBuffer_Release(&bv);
-    PyBuffer_Release(&av);
-    Py_RETURN_NONE;
-fail_o:
-    PyBuffer_Release(&ov);
-fail_b:
-    PyBuffer_Release(&bv);
-fail_a:
-    PyBuffer_Release(&av);
-    return NULL;
-}
-
-/* ttc(box, speed, boxes, speeds): the constant-velocity time to collision with
- * anything in the box's lateral corridor ahead (time_to_collision_s of
- * analysis/safety.py) */
-static PyObject *ttc(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *b_obj, *v_obj;
+/* contacts(box, speed, obstacles, traffic, traffic_speeds): what the ego's box meets
+ * this step, as (index of the first obstacle it overlaps or -1, the same for the
+ * traffic, its outline gap to the nearest obstacle or inf, its time to collision
+ * with any of them, the obstacles standing still). Overlaps are boxes_overlap and
+ * gaps box_gap_m of sdc/geometry.py; the time is time_to_collision_s of
+ * analysis/safety.py over the obstacles, then the traffic. */
+static PyObject *contacts(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *o_obj, *t_obj, *v_obj;
     double speed;
-    if (!PyArg_ParseTuple(args, "OdOO", &a_obj, &speed, &b_obj, &v_obj)) return NULL;
-    Py_buffer av, bv, vv;
-    Py_ssize_t n_a, n_b, n_v;
+    if (!PyArg_ParseTuple(args, "OdOOO", &a_obj, &speed, &o_obj, &t_obj, &v_obj)) return NULL;
+    Py_buffer av, ov, tv, vv;
+    Py_ssize_t n_a, n_o, n_t, n_v;
+    PyObject *result = NULL;
     if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
-    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_a;
-    if (get_doubles(v_obj, &vv, 0, 1, &n_v, "speeds") < 0) goto fail_b;
-    if (n_a != 1 || n_v != n_b) {
-        PyErr_SetString(PyExc_ValueError, "one box, and a speed per box");
+    if (get_doubles(o_obj, &ov, 0, 5, &n_o, "obstacles") < 0) goto fail_a;
+    if (get_doubles(t_obj, &tv, 0, 5, &n_t, "traffic") < 0) goto fail_o;
+    if (get_doubles(v_obj, &vv, 0, 1, &n_v, "traffic_speeds") < 0) goto fail_t;
+    if (n_a != 1 || n_v != n_t) {
+        PyErr_SetString(PyExc_ValueError, "one box, and a speed per traffic box");
         goto fail_v;
     }
-    const double *a = av.buf, *speeds = vv.buf;
-    double cx = a[0], cy = a[1], yaw = a[2], length = a[3], width = a[4];
-    double cos_yaw = cos(yaw), sin_yaw = sin(yaw);
-    double best = INFINITY;
-    for (Py_ssize_t k = 0; k < n_b; k++) {
-        const double *b = (const double *)bv.buf + 5 * k;
-        double dx = b[0] - cx, dy = b[1] - cy;
-        double ahead = dx * cos_yaw + dy * sin_yaw;
-        double lateral = -dx * sin_yaw + dy * cos_yaw;
-        double rel_yaw = b[2] - yaw;
-        double half_len = b[3] / 2, half_wid = b[4] / 2;
-        double extent_x = fabs(half_len * cos(rel_yaw)) + fabs(half_wid * sin(rel_yaw));
-        double extent_y = fabs(half_len * sin(rel_yaw)) + fabs(half_wid * cos(rel_yaw));
-        double gap = ahead - extent_x - length / 2;
-        int in_path = fabs(lateral) < extent_y + width / 2 && ahead + extent_x > length / 2;
-        double closing = speed - speeds[k] * cos(rel_yaw);
-        if (!in_path || !(gap <= 0.0 || closing > 0.0)) continue;
-        double t = gap <= 0.0 ? 0.0 : gap / closing;
-        best = np_min(best, t);
+    const double *a = av.buf, *obstacles = ov.buf, *traffic = tv.buf, *speeds = vv.buf;
+    double cos_yaw = cos(a[2]), sin_yaw = sin(a[2]);
+    long hit_obstacle = -1, hit_traffic = -1;
+    double gap = INFINITY, ttc = INFINITY;
+    for (Py_ssize_t k = 0; k < n_o; k++) {
+        const double *b = obstacles + 5 * k;
+        int touching = overlaps(a, b);
+        if (touching && hit_obstacle < 0) hit_obstacle = (long)k;
+        gap = np_min(gap, touching ? 0.0 : outline_gap(a, b));
+        ttc = np_min(ttc, time_to_collision(a, cos_yaw, sin_yaw, speed, b, 0.0));
     }
-    PyBuffer_Release(&vv);
-    PyBuffer_Release(&bv);
-    PyBuffer_Release(&av);
-    return PyFloat_FromDouble(best);
+    for (Py_ssize_t k = 0; k < n_t; k++) {
+        const double *b = traffic + 5 * k;
+        if (hit_traffic < 0 && overlaps(a, b)) hit_traffic = (long)k;
+        ttc = np_min(ttc, time_to_collision(a, cos_yaw, sin_yaw, speed, b, speeds[k]));
+    }
+    result = Py_BuildValue("lldd", hit_obstacle, hit_traffic, gap, ttc);
 fail_v:
     PyBuffer_Release(&vv);
-fail_b:
-    PyBuffer_Release(&bv);
+fail_t:
+    PyBuffer_Release(&tv);
+fail_o:
+    PyBuffer_Release(&ov);
 fail_a:
     PyBuffer_Release(&av);
-    return NULL;
+    return result;
 }
 
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
-    {"first_overlap", first_overlap, METH_VARARGS, "Index of the first overlapping box, or -1."},
-    {"gaps", gaps, METH_VARARGS, "Outline distances from a box to boxes into out."},
-    {"ttc", ttc, METH_VARARGS, "Constant-velocity time to collision [s]."},
+    {"contacts", contacts, METH_VARARGS, "Overlaps, obstacle gap and time to collision."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -6,22 +6,23 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.road import RoadGeometry
-from scenarios.snapshot import Snapshot
 from sdc.geometry import one_box_corners
-from sdc.kernels import first_overlap
+from sdc.kernels import Contacts
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
 
 
-def collision_with(ego_box: np.ndarray, snapshot: Snapshot, road: RoadGeometry) -> str | None:
-    """What the ego touches (``obstacle``, ``vehicle``, ``road_edge``) or ``None``.
+def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) -> str | None:
+    """What the ego touches (``obstacle``, ``vehicle``, ``road_edge``) or ``None``,
+    given its box's ``contacts`` with the obstacles and traffic.
 
     A body corner off the road (beyond either edge, while alongside it; off the
     drivable area of a network) counts as a road-edge collision.
     """
-    for kind, boxes in ((OBSTACLE, snapshot.obstacle_boxes), (VEHICLE, snapshot.traffic_boxes)):
-        if first_overlap(ego_box, boxes) >= 0:
-            return kind
+    if contacts.obstacle >= 0:
+        return OBSTACLE
+    if contacts.vehicle >= 0:
+        return VEHICLE
     if road.off_road(one_box_corners(ego_box)).any():
         return ROAD_EDGE
     return None

@@ -23,7 +23,7 @@ from scenarios.spec import ScenarioSpec
 from scenarios.worlds import make_road, make_world
 from sdc.collision import collision_with
 from sdc.controllers import make_controller
-from sdc.kernels import box_gap_m, time_to_collision_s
+from sdc.kernels import contacts
 from sdc.sensors import LaneSensor, Lidar
 from sdc.trace import Trace, TraceRecorder
 from sdc.vehicle import Command, Vehicle, VehicleState
@@ -84,33 +84,30 @@ class Simulation:
     def _sense(self) -> None:
         state, snapshot = self.state, self.snapshot
         self.box = self.vehicle.body_box(state)
-        self.boxes = np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes])
         self.ranges = self.lidar.scan(
             self.vehicle.point_ahead(state, self.spec.lidar.mount_ahead_m), state.yaw_rad,
-            self.boxes)
+            snapshot.obstacle_boxes, snapshot.traffic_boxes)
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
+        self.contacts = contacts(self.box, state.speed_mps, snapshot.obstacle_boxes,
+                                 snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
-        state, snapshot, lane = self.state, self.snapshot, self.lane
-        gap_m = float(np.min(box_gap_m(self.box, snapshot.obstacle_boxes), initial=math.inf))
-        ttc_s = time_to_collision_s(
-            self.box, state.speed_mps, self.boxes,
-            np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
-                            snapshot.traffic_speeds_mps]))
+        state, lane = self.state, self.lane
         self.recorder.add(
             t_s=self.k * self.step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
             speed_mps=state.speed_mps, steer_rad=state.steer_rad,
             steer_cmd_rad=command.steer_rad,
             lane_offset_m=lane.offset_m if lane else math.nan,
             heading_error_rad=lane.heading_error_rad if lane else math.nan,
-            s_m=lane.s_m if lane else math.nan, obstacle_gap_m=gap_m, ttc_s=ttc_s,
-            phase=phase, lidar=self.ranges, traffic=snapshot.traffic_boxes,
+            s_m=lane.s_m if lane else math.nan, obstacle_gap_m=self.contacts.obstacle_gap_m,
+            ttc_s=self.contacts.ttc_s, phase=phase, lidar=self.ranges,
+            traffic=self.snapshot.traffic_boxes,
         )
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
-        self.hit = collision_with(self.box, self.snapshot, self.road)
+        self.hit = collision_with(self.box, self.contacts, self.road)
         if self.hit is not None:
             return COLLISION
         front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)

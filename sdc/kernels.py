@@ -1,19 +1,21 @@
 """The per-step hot path in compiled code (``sdc/_kernels.c``), called like numpy.
 
-Each function equals its numpy reference bit for bit (the property tests in
+Each function equals its numpy references bit for bit (the property tests in
 ``tests/test_kernels.py`` hold them to it): the lidar scan equals
 :func:`sdc.geometry.ray_box_ranges` and :func:`sdc.geometry.ray_segment_ranges`
-and their minimum, :func:`first_overlap` the first true of
-:func:`sdc.geometry.boxes_overlap`, :func:`box_gap_m` and
-:func:`time_to_collision_s` their namesakes in :mod:`sdc.geometry` and
-:mod:`analysis.safety`. The numpy versions say plainly what is computed; these
-do it without numpy's per-call cost, which dominates a step's few small arrays.
+and their minimum; :func:`contacts` equals :func:`sdc.geometry.boxes_overlap`,
+:func:`sdc.geometry.box_gap_m` and :func:`analysis.safety.time_to_collision_s`.
+The numpy versions say plainly what is computed; these do it without numpy's
+per-call cost, which dominates a step's few small arrays.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
+from scenarios.snapshot import NO_BOXES
 from sdc import _kernels
 
 
@@ -21,33 +23,33 @@ def _rows(array: np.ndarray, columns: int) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64).reshape(-1, columns)
 
 
-def lidar_ranges_m(origin_xy: np.ndarray, angles_rad: np.ndarray, boxes: np.ndarray,
-                   segments: np.ndarray, max_range_m: float) -> np.ndarray:
-    """Range along each ray (world angles) to the nearest box or segment [m];
-    ``inf`` where nothing is hit within ``max_range_m``."""
+def lidar_ranges_m(origin_xy: np.ndarray, yaw_rad: float, angles_rad: np.ndarray,
+                   boxes: np.ndarray, segments: np.ndarray, max_range_m: float,
+                   more_boxes: np.ndarray = NO_BOXES) -> np.ndarray:
+    """Range along each ray (world angle ``yaw_rad + angles_rad``) to the nearest of
+    ``boxes``, ``more_boxes`` and ``segments`` [m]; ``inf`` where nothing is hit
+    within ``max_range_m``."""
     angles = np.ascontiguousarray(angles_rad, dtype=np.float64).reshape(-1)
     out = np.empty(len(angles))
-    _kernels.scan(float(origin_xy[0]), float(origin_xy[1]), angles, _rows(boxes, 5),
-                  _rows(segments, 4), float(max_range_m), out)
+    _kernels.scan(float(origin_xy[0]), float(origin_xy[1]), float(yaw_rad), angles,
+                  _rows(boxes, 5), _rows(more_boxes, 5), _rows(segments, 4),
+                  float(max_range_m), out)
     return out
 
 
-def first_overlap(box: np.ndarray, boxes: np.ndarray) -> int:
-    """Index of the first of ``boxes`` that ``box`` overlaps (touching counts), or -1."""
-    return _kernels.first_overlap(_rows(box, 5), _rows(boxes, 5))
+class Contacts(NamedTuple):
+    """What the ego's box meets at one step."""
+
+    obstacle: int  # index of the first obstacle it overlaps (touching counts), -1: none
+    vehicle: int  # the same for the traffic
+    obstacle_gap_m: float  # its outline's distance to the nearest obstacle, inf: none
+    ttc_s: float  # constant-velocity time to collision with an obstacle or a vehicle
 
 
-def box_gap_m(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    """Distance between the outline of ``box`` and each of ``boxes`` [m], 0 where
-    they overlap (see :func:`sdc.geometry.box_gap_m`)."""
-    boxes = _rows(boxes, 5)
-    out = np.empty(len(boxes))
-    _kernels.gaps(_rows(box, 5), boxes, out)
-    return out
-
-
-def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.ndarray,
-                        speeds_mps: np.ndarray) -> float:
-    """See :func:`analysis.safety.time_to_collision_s`."""
-    return _kernels.ttc(_rows(ego_box, 5), float(ego_speed_mps), _rows(boxes, 5),
-                        np.ascontiguousarray(speeds_mps, dtype=np.float64).reshape(-1))
+def contacts(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
+             traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray) -> Contacts:
+    """The ego's overlaps, obstacle gap and time to collision in one pass; obstacles
+    stand still, traffic moves at its speeds along its headings."""
+    return Contacts(*_kernels.contacts(
+        _rows(box, 5), float(speed_mps), _rows(obstacle_boxes, 5), _rows(traffic_boxes, 5),
+        np.ascontiguousarray(traffic_speeds_mps, dtype=np.float64).reshape(-1)))

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from scenarios.road import RoadGeometry
+from scenarios.snapshot import NO_BOXES
 from scenarios.spec import LidarSpec
 from sdc.kernels import lidar_ranges_m
 
@@ -33,11 +34,13 @@ class Lidar:
         self.edge_segments = np.ascontiguousarray(edge_segments, dtype=np.float64)
         self._rng = rng
 
-    def scan(self, origin_xy: np.ndarray, yaw_rad: float, boxes: np.ndarray) -> np.ndarray:
-        """Range image [m] from a sensor at ``origin_xy`` heading ``yaw_rad``:
-        ``beams`` floats, ``inf`` where nothing is hit within ``max_range_m``."""
-        ranges = lidar_ranges_m(origin_xy, yaw_rad + self.angles_rad, boxes,
-                                self.edge_segments, self.spec.max_range_m)
+    def scan(self, origin_xy: np.ndarray, yaw_rad: float, boxes: np.ndarray,
+             more_boxes: np.ndarray = NO_BOXES) -> np.ndarray:
+        """Range image [m] from a sensor at ``origin_xy`` heading ``yaw_rad`` against
+        the boxes (of one or two sets) and the road edges: ``beams`` floats, ``inf``
+        where nothing is hit within ``max_range_m``."""
+        ranges = lidar_ranges_m(origin_xy, yaw_rad, self.angles_rad, boxes,
+                                self.edge_segments, self.spec.max_range_m, more_boxes)
         if self.spec.noise_std_m > 0:
             noise = self._rng.normal(0.0, self.spec.noise_std_m, size=ranges.shape)
             ranges = np.where(np.isfinite(ranges), np.maximum(ranges + noise, 0.0), ranges)

@@ -3,6 +3,8 @@ No simulation runs here (netconvert builds one small network)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -11,9 +13,9 @@ from scenarios.netfile import STRAIGHT, U_TURN, read_net
 from scenarios.netroad import ROUTE, draw_route, network_area, network_road, scenario_stream
 from scenarios.network import build_network
 from scenarios.road import RoadGeometry
-from scenarios.snapshot import NO_BOXES, Snapshot
 from scenarios.toml_io import load_spec
 from sdc.collision import ROAD_EDGE, collision_with
+from sdc.kernels import Contacts
 
 GRID_TOWN = CATALOG_DIR / "grid-town.toml"
 
@@ -59,8 +61,8 @@ def test_collision_finds_a_kerb_but_not_the_opposite_lanes_or_a_junction(town):
     road = network_road(spec)
 
     def hit(cx, cy, yaw):
-        snapshot = Snapshot(0.0, NO_BOXES, NO_BOXES, np.zeros(0))
-        return collision_with(np.array([cx, cy, yaw, 4.85, 1.93]), snapshot, road)
+        return collision_with(np.array([cx, cy, yaw, 4.85, 1.93]),
+                              Contacts(-1, -1, math.inf, math.inf), road)
 
     assert hit(75.0, 150.0 - 1.6, 0.0) is None  # in a lane
     assert hit(75.0, 150.0, 0.0) is None  # astride the two directions
