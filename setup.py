@@ -1,4 +1,4 @@
-"""The compiled per-step code (the car's kernels, the read of SUMO's traffic);
+"""The compiled per-step code (the car's kernels, the world's);
 everything else about the package is in pyproject.toml.
 
 ``-ffp-contract=off`` keeps every product rounded on its own, as numpy rounds it,
@@ -10,5 +10,5 @@ from setuptools import Extension, setup
 FLAGS = ["-O2", "-ffp-contract=off"]
 
 setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"], extra_compile_args=FLAGS),
-                   Extension("scenarios._sumo_read", ["scenarios/_sumo_read.c"],
+                   Extension("scenarios._kernels", ["scenarios/_kernels.c"],
                              extra_compile_args=FLAGS)])

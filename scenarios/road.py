@@ -12,12 +12,11 @@ import math
 
 import numpy as np
 
+from scenarios import _kernels
 from scenarios.spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
 CHORD_TOLERANCE_M = 0.001
-#: up to this many points, a straight road projects them in plain float arithmetic
-SCALAR_POINTS = 8
 
 
 def centre_line_xy(road: RoadSpec) -> np.ndarray:
@@ -45,6 +44,7 @@ class RoadGeometry:
         delta = np.diff(self.center_xy, axis=0)
         self._seg_len_m = np.hypot(delta[:, 0], delta[:, 1])
         self._seg_dir = delta / self._seg_len_m[:, None]
+        self._seg_start_xy = np.ascontiguousarray(self.center_xy[:-1])
         self._seg_start_s_m = np.concatenate([[0.0], np.cumsum(self._seg_len_m)[:-1]])
         self.length_m = float(self._seg_len_m.sum())
         self._straight_heading_rad = float(np.arctan2(self._seg_dir[0, 1], self._seg_dir[0, 0]))
@@ -63,36 +63,18 @@ class RoadGeometry:
     def to_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Road coordinates ``(s_m, d_m)`` of (K, 2) points.
 
-        Points before the start or past the end are projected on the extended
-        first or last segment, so ``s`` is negative or above ``length_m`` there.
+        Each point projects on its nearest centre-line segment (the first of equals):
+        ``s`` is that segment's start plus the point's distance along it, ``d`` its
+        distance to the segment's left. Points before the start or past the end are
+        projected on the extended first or last segment, so ``s`` is negative or
+        above ``length_m`` there. Compiled (``scenarios/_kernels.c``): a step asks
+        this of a few points, on polylines of up to hundreds of segments.
         """
-        xy = np.atleast_2d(np.asarray(xy, dtype=float))
-        if len(self._seg_len_m) == 1:  # a straight road: one segment, extended both ways
-            return self._straight_frenet(xy)
-        rel = xy[:, None, :] - self.center_xy[None, :-1, :]  # (K, S, 2)
-        along = np.einsum("ksj,sj->ks", rel, self._seg_dir)
-        low = np.zeros_like(self._seg_len_m)
-        high = self._seg_len_m.copy()
-        low[0], high[-1] = -np.inf, np.inf
-        along_c = np.clip(along, low, high)
-        foot = self.center_xy[None, :-1, :] + along_c[..., None] * self._seg_dir[None]
-        dist2 = np.sum((xy[:, None, :] - foot) ** 2, axis=-1)
-        seg = np.argmin(dist2, axis=1)
-        k = np.arange(len(xy))
-        direction = self._seg_dir[seg]
-        r = rel[k, seg]
-        s_m = self._seg_start_s_m[seg] + along_c[k, seg]
-        d_m = direction[:, 0] * r[:, 1] - direction[:, 1] * r[:, 0]
+        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
+        s_m, d_m = np.empty(len(xy)), np.empty(len(xy))
+        _kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
+                        self._seg_start_s_m, s_m, d_m)
         return s_m, d_m
-
-    def _straight_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        (x0, y0), (dx, dy) = self.center_xy[0].tolist(), self._seg_dir[0].tolist()
-        if len(xy) <= SCALAR_POINTS:  # the few points of one step: plain floats are quicker
-            rel = [(x - x0, y - y0) for x, y in xy.tolist()]
-            return (np.array([rx * dx + ry * dy for rx, ry in rel]),
-                    np.array([dx * ry - dy * rx for rx, ry in rel]))
-        rel = xy - self.center_xy[0]
-        return rel[:, 0] * dx + rel[:, 1] * dy, dx * rel[:, 1] - dy * rel[:, 0]
 
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,

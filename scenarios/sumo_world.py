@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios import _sumo_read
+from scenarios import _kernels
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.netroad import DEMAND, NetworkRoad, scenario_stream
 from scenarios.network import EDGE_ID, build_network, sumo_binary
@@ -221,11 +221,11 @@ class SumoWorld:
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
         half a length behind its front bumper, along the yaw. The read is compiled
-        (``_sumo_read.c``): in Python it cost more than the step's geometry.
+        (``scenarios/_kernels.c``): in Python it cost more than the step's geometry.
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
-        count = _sumo_read.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+        count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
                                    TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
                                    float(ego_box[1]), self._radius_m, boxes, speeds)
         return boxes[:count], speeds[:count]

@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from scenarios import RoadSpec
 from scenarios.network import EDGE_ID, build_network
@@ -29,6 +31,56 @@ def test_curve_frenet_round_trip(radius_m):
     np.testing.assert_allclose(dist, abs(radius_m) - d * math.copysign(1, radius_m), atol=0.002)
     heading = road.heading_at(100.0)
     assert heading == pytest.approx(100.0 / radius_m, abs=0.01)
+
+
+def reference_frenet(center_xy: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The straightforward projection in numpy: every point on every segment, the
+    nearest one wins (the first and last extended beyond the ends)."""
+    delta = np.diff(center_xy, axis=0)
+    length = np.hypot(delta[:, 0], delta[:, 1])
+    direction = delta / length[:, None]
+    start_s = np.concatenate([[0.0], np.cumsum(length)[:-1]])
+    rel = xy[:, None, :] - center_xy[None, :-1, :]  # (K, S, 2)
+    along = np.einsum("ksj,sj->ks", rel, direction)
+    low, high = np.zeros_like(length), length.copy()
+    low[0], high[-1] = -np.inf, np.inf
+    along = np.clip(along, low, high)
+    foot = center_xy[None, :-1, :] + along[..., None] * direction[None]
+    seg = np.argmin(np.sum((xy[:, None, :] - foot) ** 2, axis=-1), axis=1)
+    k = np.arange(len(xy))
+    r = rel[k, seg]
+    return (start_s[seg] + along[k, seg],
+            direction[seg, 0] * r[:, 1] - direction[seg, 1] * r[:, 0])
+
+
+coordinate = st.floats(-200.0, 200.0, allow_nan=False)
+polyline_st = st.lists(st.tuples(coordinate, coordinate), min_size=2, max_size=12).map(
+    lambda points: np.array(points)).filter(
+    lambda line: np.all(np.hypot(*np.diff(line, axis=0).T) > 1e-3))
+points_st = st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=10).map(np.array)
+
+
+@settings(max_examples=300, deadline=None)
+@given(line=polyline_st, points=points_st)
+def test_the_compiled_frenet_projection_equals_the_straightforward_one(line, points):
+    """Any polyline (one segment: a straight road), points anywhere, vertices and
+    segment ends included: the same s and d, bit for bit."""
+    points = np.vstack([points, line, (line[:-1] + line[1:]) / 2])
+    road = RoadGeometry(line, 1, 3.5)
+    s_m, d_m = road.to_frenet(points)
+    expected_s, expected_d = reference_frenet(line, points)
+    assert s_m.tobytes() == expected_s.tobytes()
+    assert d_m.tobytes() == expected_d.tobytes()
+
+
+def test_the_frenet_projection_on_a_long_curve():
+    road = RoadGeometry.from_spec(RoadSpec(kind="curve", length_m=1000.0, lanes=3,
+                                           curve_radius_m=150.0))
+    points = np.random.default_rng(4).uniform(-200, 1000, (2000, 2))
+    s_m, d_m = road.to_frenet(points)
+    expected_s, expected_d = reference_frenet(road.center_xy, points)
+    assert len(road.center_xy) > 500
+    assert s_m.tobytes() == expected_s.tobytes() and d_m.tobytes() == expected_d.tobytes()
 
 
 def test_straight_road_edges_and_lanes():

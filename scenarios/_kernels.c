@@ -1,0 +1,193 @@
+/*
+ * The world's per-step questions, compiled: where points are in road
+ * coordinates (the Frenet projection on a polyline), and the read of SUMO's
+ * traffic around the ego. In Python each cost more than the step's geometry:
+ * a step asks a few points of a polyline of up to hundreds of segments, and
+ * libsumo hands a context subscription's results over as a dict of dicts.
+ *
+ * The arithmetic is the one scenarios/road.py and scenarios/sumo_world.py
+ * document (same formulas, same order of operations, no fused multiply-adds),
+ * so the answers are the same to the last bit as their numpy references in the
+ * tests.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <string.h>
+
+static int get_out(PyObject *obj, Py_buffer *view, Py_ssize_t doubles, const char *name) {
+    if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | PyBUF_WRITABLE) < 0)
+        return -1;
+    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
+        || view->len / 8 < doubles) {
+        PyErr_Format(PyExc_TypeError, "%s: a writable C-contiguous float64 array of %zd",
+                     name, doubles);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+static int get_in(PyObject *obj, Py_buffer *view, Py_ssize_t row, Py_ssize_t *count,
+                  const char *name) {
+    if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
+    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
+        || (view->len / 8) % row != 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous float64 array with rows of %zd",
+                     name, row);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    *count = view->len / 8 / row;
+    return 0;
+}
+
+/* frenet(xy, starts, directions, lengths, start_s, s_out, d_out): road coordinates of
+ * points on a polyline of segments (start point, unit direction, length, s at its
+ * start). Each point projects on its nearest segment (the first of equals), the
+ * first one extended backwards and the last one forwards; d is positive to the
+ * left. */
+static PyObject *frenet(PyObject *self, PyObject *args) {
+    PyObject *objs[7];
+    if (!PyArg_ParseTuple(args, "OOOOOOO", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4],
+                          &objs[5], &objs[6]))
+        return NULL;
+    static const char *names[5] = {"xy", "starts", "directions", "lengths", "start_s"};
+    static const Py_ssize_t rows[5] = {2, 2, 2, 1, 1};
+    Py_buffer views[7];
+    Py_ssize_t counts[5];
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 5; got++)
+        if (get_in(objs[got], &views[got], rows[got], &counts[got], names[got]) < 0) goto done;
+    Py_ssize_t n = counts[0], segs = counts[3];
+    if (get_out(objs[5], &views[5], n, "s_out") < 0) goto done;
+    got++;
+    if (get_out(objs[6], &views[6], n, "d_out") < 0) goto done;
+    got++;
+    if (segs == 0 || counts[1] != segs || counts[2] != segs || counts[4] != segs) {
+        PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
+        goto done;
+    }
+    const double *xy = views[0].buf, *start = views[1].buf, *dir = views[2].buf,
+                 *len = views[3].buf, *start_s = views[4].buf;
+    double *s_out = views[5].buf, *d_out = views[6].buf;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double x = xy[2 * k], y = xy[2 * k + 1];
+        double best = INFINITY, best_along = 0.0, best_rx = 0.0, best_ry = 0.0;
+        Py_ssize_t best_seg = 0;
+        for (Py_ssize_t i = 0; i < segs; i++) {
+            double dx = dir[2 * i], dy = dir[2 * i + 1];
+            double rx = x - start[2 * i], ry = y - start[2 * i + 1];
+            double along = rx * dx + ry * dy;
+            double low = i == 0 ? -INFINITY : 0.0, high = i == segs - 1 ? INFINITY : len[i];
+            along = along > low ? along : low;  /* numpy's clip */
+            along = along < high ? along : high;
+            double ex = x - (start[2 * i] + along * dx), ey = y - (start[2 * i + 1] + along * dy);
+            double dist2 = ex * ex + ey * ey;
+            if (dist2 < best || i == 0) {
+                best = dist2;
+                best_seg = i;
+                best_along = along;
+                best_rx = rx;
+                best_ry = ry;
+            }
+        }
+        s_out[k] = start_s[best_seg] + best_along;
+        d_out[k] = dir[2 * best_seg] * best_ry - dir[2 * best_seg + 1] * best_rx;
+    }
+    result = Py_None;
+    Py_INCREF(result);
+done:
+    while (got-- > 0) PyBuffer_Release(&views[got]);
+    return result;
+}
+
+static int read_double(PyObject *values, PyObject *key, double *out) {
+    PyObject *value = PyDict_GetItemWithError(values, key);
+    if (value == NULL) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_KeyError, "a subscribed variable is missing");
+        return -1;
+    }
+    *out = PyFloat_AsDouble(value);
+    return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
+}
+
+/* traffic(nearby, keys, ego_id, skip_prefix, length, width, cx, cy, radius, boxes,
+ * speeds): writes the boxes [cx, cy, yaw, length, width] and speeds of the
+ * vehicles in `nearby` (vehicle id -> {position key: front (x, y), angle key: SUMO
+ * degrees, speed key: m/s}, keys = (position key, angle key, speed key)) other than ego_id and ids starting with skip_prefix whose body
+ * centre lies within radius of (cx, cy), in the dict's order; returns how many */
+static PyObject *traffic(PyObject *self, PyObject *args) {
+    PyObject *nearby, *key_position, *key_angle, *key_speed, *ego_id, *skip_prefix, *b_obj,
+        *s_obj;
+    double length, width, cx, cy, radius;
+    if (!PyArg_ParseTuple(args, "O!(OOO)UUdddddOO", &PyDict_Type, &nearby, &key_position,
+                          &key_angle, &key_speed, &ego_id, &skip_prefix, &length, &width, &cx,
+                          &cy, &radius, &b_obj, &s_obj))
+        return NULL;
+    Py_ssize_t n = PyDict_Size(nearby);
+    Py_buffer bv, sv;
+    if (get_out(b_obj, &bv, 5 * n, "boxes") < 0) return NULL;
+    if (get_out(s_obj, &sv, n, "speeds") < 0) {
+        PyBuffer_Release(&bv);
+        return NULL;
+    }
+    double *boxes = bv.buf, *speeds = sv.buf;
+    Py_ssize_t pos = 0, count = 0;
+    PyObject *vid, *values;
+    int failed = 0;
+    while (PyDict_Next(nearby, &pos, &vid, &values)) {
+        if (!PyUnicode_Check(vid) || !PyDict_Check(values)) {
+            PyErr_SetString(PyExc_TypeError, "nearby: vehicle id -> dict of variables");
+            failed = 1;
+            break;
+        }
+        if (PyUnicode_Compare(vid, ego_id) == 0) continue;
+        Py_ssize_t skip = PyUnicode_Tailmatch(vid, skip_prefix, 0, PY_SSIZE_T_MAX, -1);
+        if (skip < 0) {
+            failed = 1;
+            break;
+        }
+        if (skip) continue;
+        PyObject *front = PyDict_GetItemWithError(values, key_position);
+        double x, y, angle_deg, speed;
+        if (front == NULL || !PyTuple_Check(front) || PyTuple_GET_SIZE(front) != 2) {
+            if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "a position is not (x, y)");
+            failed = 1;
+            break;
+        }
+        x = PyFloat_AsDouble(PyTuple_GET_ITEM(front, 0));
+        y = PyFloat_AsDouble(PyTuple_GET_ITEM(front, 1));
+        if (PyErr_Occurred() || read_double(values, key_angle, &angle_deg) < 0
+            || read_double(values, key_speed, &speed) < 0) {
+            failed = 1;
+            break;
+        }
+        /* the body centre lies half a length behind the front bumper */
+        double yaw = (90.0 - angle_deg) * (M_PI / 180.0);
+        double bx = x - length / 2 * cos(yaw), by = y - length / 2 * sin(yaw);
+        double dx = bx - cx, dy = by - cy;
+        if (!(dx * dx + dy * dy <= radius * radius)) continue;
+        double *b = boxes + 5 * count;
+        b[0] = bx;
+        b[1] = by;
+        b[2] = yaw;
+        b[3] = length;
+        b[4] = width;
+        speeds[count++] = speed;
+    }
+    PyBuffer_Release(&sv);
+    PyBuffer_Release(&bv);
+    return failed ? NULL : PyLong_FromSsize_t(count);
+}
+
+static PyMethodDef methods[] = {
+    {"frenet", frenet, METH_VARARGS, "Road coordinates of points on a polyline."},
+    {"traffic", traffic, METH_VARARGS, "Traffic boxes and speeds from context results."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
+
+PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
