@@ -42,59 +42,72 @@ static int get_in(PyObject *obj, Py_buffer *view, Py_ssize_t row, Py_ssize_t *co
     return 0;
 }
 
-/* frenet(xy, starts, directions, lengths, start_s, s_out, d_out): road coordinates of
- * points on a polyline of segments (start point, unit direction, length, s at its
- * start). Each point projects on its nearest segment (the first of equals), the
- * first one extended backwards and the last one forwards; d is positive to the
- * left. */
+/* a polyline of segments: start point, unit direction, length, s at its start */
+typedef struct {
+    const double *start, *dir, *len, *start_s;
+    Py_ssize_t count;
+} Polyline;
+
+/* the point's projection on its nearest segment (the first of equals), the first
+ * one extended backwards and the last one forwards: its s and d (left positive) */
+static void project(const Polyline *line, double x, double y, double *s_m, double *d_m) {
+    double best = INFINITY, best_along = 0.0, best_rx = 0.0, best_ry = 0.0;
+    Py_ssize_t best_seg = 0;
+    for (Py_ssize_t i = 0; i < line->count; i++) {
+        double dx = line->dir[2 * i], dy = line->dir[2 * i + 1];
+        double rx = x - line->start[2 * i], ry = y - line->start[2 * i + 1];
+        double along = rx * dx + ry * dy;
+        double low = i == 0 ? -INFINITY : 0.0;
+        double high = i == line->count - 1 ? INFINITY : line->len[i];
+        along = along > low ? along : low;  /* numpy's clip */
+        along = along < high ? along : high;
+        double ex = x - (line->start[2 * i] + along * dx);
+        double ey = y - (line->start[2 * i + 1] + along * dy);
+        double dist2 = ex * ex + ey * ey;
+        if (dist2 < best || i == 0) {
+            best = dist2;
+            best_seg = i;
+            best_along = along;
+            best_rx = rx;
+            best_ry = ry;
+        }
+    }
+    *s_m = line->start_s[best_seg] + best_along;
+    *d_m = line->dir[2 * best_seg] * best_ry - line->dir[2 * best_seg + 1] * best_rx;
+}
+
+/* frenet(xy, starts, directions, lengths, start_s, s_out, d_out, half_width, length,
+ * gaps_out): the road coordinates of each point (project above) and its distance
+ * to the nearer road edge, half_width - |d|, where 0 <= s <= length (inf elsewhere) */
 static PyObject *frenet(PyObject *self, PyObject *args) {
-    PyObject *objs[7];
-    if (!PyArg_ParseTuple(args, "OOOOOOO", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4],
-                          &objs[5], &objs[6]))
+    PyObject *objs[8];
+    double half_width, length;
+    if (!PyArg_ParseTuple(args, "OOOOOOOddO", &objs[0], &objs[1], &objs[2], &objs[3],
+                          &objs[4], &objs[5], &objs[6], &half_width, &length, &objs[7]))
         return NULL;
     static const char *names[5] = {"xy", "starts", "directions", "lengths", "start_s"};
     static const Py_ssize_t rows[5] = {2, 2, 2, 1, 1};
-    Py_buffer views[7];
+    static const char *out_names[3] = {"s_out", "d_out", "gaps_out"};
+    Py_buffer views[8];
     Py_ssize_t counts[5];
     int got = 0;
     PyObject *result = NULL;
     for (; got < 5; got++)
         if (get_in(objs[got], &views[got], rows[got], &counts[got], names[got]) < 0) goto done;
-    Py_ssize_t n = counts[0], segs = counts[3];
-    if (get_out(objs[5], &views[5], n, "s_out") < 0) goto done;
-    got++;
-    if (get_out(objs[6], &views[6], n, "d_out") < 0) goto done;
-    got++;
-    if (segs == 0 || counts[1] != segs || counts[2] != segs || counts[4] != segs) {
+    for (; got < 8; got++)
+        if (get_out(objs[got], &views[got], counts[0], out_names[got - 5]) < 0) goto done;
+    Polyline line = {views[1].buf, views[2].buf, views[3].buf, views[4].buf, counts[3]};
+    if (line.count == 0 || counts[1] != line.count || counts[2] != line.count
+        || counts[4] != line.count) {
         PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
         goto done;
     }
-    const double *xy = views[0].buf, *start = views[1].buf, *dir = views[2].buf,
-                 *len = views[3].buf, *start_s = views[4].buf;
-    double *s_out = views[5].buf, *d_out = views[6].buf;
-    for (Py_ssize_t k = 0; k < n; k++) {
-        double x = xy[2 * k], y = xy[2 * k + 1];
-        double best = INFINITY, best_along = 0.0, best_rx = 0.0, best_ry = 0.0;
-        Py_ssize_t best_seg = 0;
-        for (Py_ssize_t i = 0; i < segs; i++) {
-            double dx = dir[2 * i], dy = dir[2 * i + 1];
-            double rx = x - start[2 * i], ry = y - start[2 * i + 1];
-            double along = rx * dx + ry * dy;
-            double low = i == 0 ? -INFINITY : 0.0, high = i == segs - 1 ? INFINITY : len[i];
-            along = along > low ? along : low;  /* numpy's clip */
-            along = along < high ? along : high;
-            double ex = x - (start[2 * i] + along * dx), ey = y - (start[2 * i + 1] + along * dy);
-            double dist2 = ex * ex + ey * ey;
-            if (dist2 < best || i == 0) {
-                best = dist2;
-                best_seg = i;
-                best_along = along;
-                best_rx = rx;
-                best_ry = ry;
-            }
-        }
-        s_out[k] = start_s[best_seg] + best_along;
-        d_out[k] = dir[2 * best_seg] * best_ry - dir[2 * best_seg + 1] * best_rx;
+    const double *xy = views[0].buf;
+    double *s_out = views[5].buf, *d_out = views[6].buf, *gaps_out = views[7].buf;
+    for (Py_ssize_t k = 0; k < counts[0]; k++) {
+        project(&line, xy[2 * k], xy[2 * k + 1], &s_out[k], &d_out[k]);
+        int alongside = s_out[k] >= 0.0 && s_out[k] <= length;
+        gaps_out[k] = alongside ? half_width - fabs(d_out[k]) : INFINITY;
     }
     result = Py_None;
     Py_INCREF(result);

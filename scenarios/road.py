@@ -8,6 +8,7 @@ its left) and back in world x, y. Lane ``i`` (0 = rightmost) has its centre at
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -47,7 +48,9 @@ class RoadGeometry:
         self._seg_start_xy = np.ascontiguousarray(self.center_xy[:-1])
         self._seg_start_s_m = np.concatenate([[0.0], np.cumsum(self._seg_len_m)[:-1]])
         self.length_m = float(self._seg_len_m.sum())
-        self._straight_heading_rad = float(np.arctan2(self._seg_dir[0, 1], self._seg_dir[0, 0]))
+        self._seg_heading_rad = np.arctan2(self._seg_dir[:, 1], self._seg_dir[:, 0])
+        self._seg_heading_list = self._seg_heading_rad.tolist()
+        self._seg_start_s_list = self._seg_start_s_m.tolist()
 
     @classmethod
     def from_spec(cls, road: RoadSpec) -> RoadGeometry:
@@ -60,6 +63,16 @@ class RoadGeometry:
     def lane_center_d_m(self, lane: int) -> float:
         return (lane - (self.lanes - 1) / 2) * self.lane_width_m
 
+    def _project(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Road coordinates and edge gaps of (K, 2) points, compiled
+        (``scenarios/_kernels.c``): a step asks this of a few points, on polylines
+        of up to hundreds of segments."""
+        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
+        s_m, d_m, gaps_m = np.empty(len(xy)), np.empty(len(xy)), np.empty(len(xy))
+        _kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
+                        self._seg_start_s_m, s_m, d_m, self.half_width_m, self.length_m, gaps_m)
+        return s_m, d_m, gaps_m
+
     def to_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Road coordinates ``(s_m, d_m)`` of (K, 2) points.
 
@@ -67,14 +80,9 @@ class RoadGeometry:
         ``s`` is that segment's start plus the point's distance along it, ``d`` its
         distance to the segment's left. Points before the start or past the end are
         projected on the extended first or last segment, so ``s`` is negative or
-        above ``length_m`` there. Compiled (``scenarios/_kernels.c``): a step asks
-        this of a few points, on polylines of up to hundreds of segments.
+        above ``length_m`` there.
         """
-        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
-        s_m, d_m = np.empty(len(xy)), np.empty(len(xy))
-        _kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
-                        self._seg_start_s_m, s_m, d_m)
-        return s_m, d_m
+        return self._project(xy)[:2]
 
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
@@ -82,10 +90,12 @@ class RoadGeometry:
 
     def heading_at(self, s_m) -> np.ndarray:
         """Heading of the centre line at ``s_m`` [rad, CCW from +x]."""
-        if len(self._seg_len_m) == 1:
-            return np.full(np.shape(s_m), self._straight_heading_rad)
-        direction = self._seg_dir[self._segment_at(np.asarray(s_m, dtype=float))]
-        return np.arctan2(direction[..., 1], direction[..., 0])
+        return self._seg_heading_rad[self._segment_at(np.asarray(s_m, dtype=float))]
+
+    def heading_at_s(self, s_m: float) -> float:
+        """:meth:`heading_at` of one position, in plain floats (a step's question)."""
+        seg = bisect.bisect_right(self._seg_start_s_list, s_m) - 1
+        return self._seg_heading_list[min(max(seg, 0), len(self._seg_heading_list) - 1)]
 
     def xy_at(self, s_m, d_m) -> np.ndarray:
         """World points at road coordinates (broadcast), shape (..., 2) [m]."""
@@ -103,9 +113,7 @@ class RoadGeometry:
     def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
         """Each point's distance to the nearer road edge [m]: negative beyond it,
         ``inf`` before the road's start or past its end."""
-        s_m, d_m = self.to_frenet(points)
-        alongside = (s_m >= 0) & (s_m <= self.length_m)
-        return np.where(alongside, self.half_width_m - np.abs(d_m), np.inf)
+        return self._project(points)[2]
 
     def off_road(self, points: np.ndarray) -> np.ndarray:
         """Which points lie beyond a road edge, alongside the road (a bool mask)."""

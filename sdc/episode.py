@@ -77,13 +77,14 @@ class Simulation:
     def start(self) -> None:
         self.k = 0
         self.state = initial_state(self.spec, self.road, self.vehicle)
-        self.snapshot = self.world.start(self.vehicle.body_box(self.state), self.state.speed_mps)
+        self.box = self.vehicle.body_box(self.state)
+        self.snapshot = self.world.start(self.box, self.state.speed_mps)
         self.network_vehicles = self.world.vehicle_count()
         self._sense()
 
     def _sense(self) -> None:
+        """Sense the world at the current state, its body box already in ``box``."""
         state, snapshot = self.state, self.snapshot
-        self.box = self.vehicle.body_box(state)
         self.ranges = self.lidar.scan(
             self.vehicle.point_ahead(state, self.spec.lidar.mount_ahead_m), state.yaw_rad,
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
@@ -93,17 +94,15 @@ class Simulation:
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
-        state, lane = self.state, self.lane
-        self.recorder.add(
-            t_s=self.k * self.step_s, x_m=state.x_m, y_m=state.y_m, yaw_rad=state.yaw_rad,
-            speed_mps=state.speed_mps, steer_rad=state.steer_rad,
-            steer_cmd_rad=command.steer_rad,
-            lane_offset_m=lane.offset_m if lane else math.nan,
-            heading_error_rad=lane.heading_error_rad if lane else math.nan,
-            s_m=lane.s_m if lane else math.nan, obstacle_gap_m=self.contacts.obstacle_gap_m,
-            ttc_s=self.contacts.ttc_s, phase=phase, lidar=self.ranges,
-            traffic=self.snapshot.traffic_boxes,
-        )
+        state, lane, contacts = self.state, self.lane, self.contacts
+        self.recorder.add((  # trace.FLOAT_COLUMNS, in order
+            self.k * self.step_s, state.x_m, state.y_m, state.yaw_rad, state.speed_mps,
+            state.steer_rad, command.steer_rad,
+            lane.offset_m if lane else math.nan,
+            lane.heading_error_rad if lane else math.nan,
+            lane.s_m if lane else math.nan,
+            contacts.obstacle_gap_m, contacts.ttc_s,
+        ), phase, self.ranges, self.snapshot.traffic_boxes)
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
@@ -120,8 +119,8 @@ class Simulation:
     def advance(self, command: Command) -> None:
         """Move the car under ``command``, push it into the world, step the world."""
         self.state = self.vehicle.step(self.state, command, self.step_s)
-        self.snapshot = self.world.step(self.vehicle.body_box(self.state),
-                                        self.state.speed_mps)
+        self.box = self.vehicle.body_box(self.state)
+        self.snapshot = self.world.step(self.box, self.state.speed_mps)
         self.k += 1
         self._sense()
 

@@ -79,7 +79,7 @@ class LaneSensor:
             [cx + look_ahead_m * math.cos(yaw_rad), cy + look_ahead_m * math.sin(yaw_rad)]]))
         if not 0.0 <= s_m[0] <= self.road.length_m:
             return None
-        heading_error = yaw_rad - float(self.road.heading_at(s_m[0]))
+        heading_error = yaw_rad - self.road.heading_at_s(float(s_m[0]))
         heading_error = (heading_error + math.pi) % (2 * math.pi) - math.pi
         return LaneReading(float(d_m[0] - self.lane_d_m), heading_error,
                            float(d_m[1] - self.lane_d_m), float(s_m[0]))

@@ -81,20 +81,25 @@ class TraceRecorder:
     """Collects rows during a run; :meth:`finish` turns them into a :class:`Trace`."""
 
     def __init__(self):
-        self._floats: dict[str, list[float]] = {name: [] for name in FLOAT_COLUMNS}
+        self._floats: list[tuple[float, ...]] = []
         self._phase: list[str] = []
         self._lidar: list[np.ndarray] = []
         self._traffic: list[np.ndarray] = []
 
-    def add(self, *, phase: str, lidar: np.ndarray, traffic: np.ndarray, **floats: float):
-        for name in FLOAT_COLUMNS:
-            self._floats[name].append(floats[name])
+    def add(self, floats: tuple[float, ...], phase: str, lidar: np.ndarray,
+            traffic: np.ndarray) -> None:
+        """One step's row; ``floats`` holds the values of ``FLOAT_COLUMNS``, in order."""
+        if len(floats) != len(FLOAT_COLUMNS):
+            raise ValueError(f"a row has {len(FLOAT_COLUMNS)} floats, not {len(floats)}")
+        self._floats.append(floats)
         self._phase.append(phase)
         self._lidar.append(np.asarray(lidar, np.float32))
         self._traffic.append(np.asarray(traffic, np.float32).ravel())
 
     def finish(self) -> Trace:
-        floats = {name: np.array(values, dtype=float) for name, values in self._floats.items()}
+        columns = np.array(self._floats, dtype=float).reshape(-1, len(FLOAT_COLUMNS)).T
+        floats = {name: np.ascontiguousarray(column)
+                  for name, column in zip(FLOAT_COLUMNS, columns, strict=True)}
         return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic))
 
 

@@ -64,13 +64,26 @@ points_st = st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=10)
 @given(line=polyline_st, points=points_st)
 def test_the_compiled_frenet_projection_equals_the_straightforward_one(line, points):
     """Any polyline (one segment: a straight road), points anywhere, vertices and
-    segment ends included: the same s and d, bit for bit."""
+    segment ends included: the same s, d and edge gaps, bit for bit; the heading
+    is the segment's at s."""
     points = np.vstack([points, line, (line[:-1] + line[1:]) / 2])
-    road = RoadGeometry(line, 1, 3.5)
+    road = RoadGeometry(line, 2, 3.5)
     s_m, d_m = road.to_frenet(points)
     expected_s, expected_d = reference_frenet(line, points)
     assert s_m.tobytes() == expected_s.tobytes()
     assert d_m.tobytes() == expected_d.tobytes()
+    # the edge gaps: beside the road, the distance to the nearer edge
+    alongside = (expected_s >= 0) & (expected_s <= road.length_m)
+    expected_gaps = np.where(alongside, 3.5 - np.abs(expected_d), np.inf)
+    assert road.edge_gaps_m(points).tobytes() == expected_gaps.tobytes()
+    # and the heading, of one position or many
+    delta = np.diff(line, axis=0)
+    length = np.hypot(delta[:, 0], delta[:, 1])
+    heading = np.arctan2(delta[:, 1] / length, delta[:, 0] / length)
+    start_s = np.concatenate([[0.0], np.cumsum(length)[:-1]])
+    seg = np.clip(np.searchsorted(start_s, expected_s, side="right") - 1, 0, len(line) - 2)
+    np.testing.assert_array_equal(road.heading_at(expected_s), heading[seg])
+    assert [road.heading_at_s(s) for s in expected_s.tolist()] == heading[seg].tolist()
 
 
 def test_the_frenet_projection_on_a_long_curve():
