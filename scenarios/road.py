@@ -68,7 +68,7 @@ class RoadGeometry:
         (``scenarios/_kernels.c``): a step asks this of a few points, on polylines
         of up to hundreds of segments."""
         xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
-        s_m, d_m, gaps_m = np.empty(len(xy)), np.empty(len(xy)), np.empty(len(xy))
+        s_m, d_m, gaps_m = np.empty((3, len(xy)))
         _kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
                         self._seg_start_s_m, s_m, d_m, self.half_width_m, self.length_m, gaps_m)
         return s_m, d_m, gaps_m

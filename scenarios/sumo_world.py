@@ -131,7 +131,7 @@ def _is_traffic(vehicle_id: str) -> bool:
 
 def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
     """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
-    cx, cy, yaw, length, _ = box
+    cx, cy, yaw, length, _ = box.tolist()
     return (cx + length / 2 * math.cos(yaw), cy + length / 2 * math.sin(yaw),
             90.0 - math.degrees(yaw))
 

@@ -50,7 +50,7 @@ def one_box_corners(box: np.ndarray) -> np.ndarray:
     """:func:`box_corners` of a single box ``(5,)``, as (4, 2), bit for bit, in
     scalar arithmetic (a step needs the ego's corners; numpy's broadcasting costs
     more than the arithmetic there)."""
-    cx, cy, yaw, length, width = (float(v) for v in box)
+    cx, cy, yaw, length, width = np.asarray(box, dtype=float).tolist()
     c, s = math.cos(yaw), math.sin(yaw)
     half_len, half_wid = 0.5 * length, 0.5 * width
     return np.array([
