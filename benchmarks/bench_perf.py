@@ -22,7 +22,10 @@ SUMO step sweeps the CPU caches, and the agent's first reads after it miss them;
 the control gives the small road the same cold caches, so the ratio shows
 whether the agent's own work grows with the network.
 
-The raw timings add ``town_2000``: the catalog's ``grid-town`` (a SUMO network of
+The raw timings add ``sumo_ms_100_without_ego``: SUMO's step of the 100-vehicle
+traffic with the ego and its subscription taken out (the ratio's denominator is
+the SUMO step inside our loop, which moves the ego and gathers the subscription),
+and ``town_2000``: the catalog's ``grid-town`` (a SUMO network of
 10 x 10 junctions, 2000 cars) under lane keeping, where the road edges come
 from the network's drivable area.
 """
@@ -35,9 +38,11 @@ import types
 import warnings
 
 import numpy as np
+import traci.constants as tc
 
 from scenarios import CATALOG_DIR
 from scenarios.spec import LidarSpec, ScenarioSpec
+from scenarios.sumo_world import SUBSCRIPTION_SLACK_M
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.worlds import make_road, make_world
 from sdc.controllers import make_controller
@@ -107,6 +112,26 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
     return {"step_ms": 1e3 * np.median(step_s), "sumo_ms": 1e3 * np.median(sumo_step_s),
             "agent_ms": 1e3 * np.median(step_s - sumo_step_s), "vehicles": vehicles,
             "steps": len(step_s)}
+
+
+def bare_sumo_ms(spec: ScenarioSpec) -> float:
+    """Median SUMO step [ms] of the same traffic with the ego and its subscription
+    taken out: what SUMO costs alone, next to ``sumo_ms`` inside our loop (which
+    includes placing the ego and gathering the subscription)."""
+    import libsumo
+
+    road = make_road(spec)
+    with make_world(spec, road) as world:
+        Simulation(spec, world, 0.0).start()
+        libsumo.vehicle.unsubscribeContext("ego", tc.CMD_GET_VEHICLE_VARIABLE,
+                                           world._radius_m + SUBSCRIPTION_SLACK_M)
+        libsumo.vehicle.remove("ego")
+        steps_s = []
+        for _ in range(TIMED_STEPS):
+            start = time.perf_counter()
+            libsumo.simulationStep()
+            steps_s.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(steps_s))
 
 
 def town_spec() -> ScenarioSpec:
@@ -187,6 +212,7 @@ def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
     hundred = [closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)) for _ in range(REPETITIONS)]
+    bare = [bare_sumo_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)) for _ in range(REPETITIONS)]
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(2):  # the 2000-vehicle warm-up fills 6 lanes x 18 km: two pairs
@@ -220,6 +246,7 @@ def main() -> None:
                        ("20", twenty), ("town_2000", town)):
         for key in ("vehicles", "steps", "step_ms", "sumo_ms", "agent_ms"):
             print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
+    print(f"raw.sumo_ms_100_without_ego {statistics.median(bare):.3f}")
     print(f"raw.highway_v0_steps_per_s {statistics.median(reference):.1f}")
     print(f"raw.lidar_ms_ours {statistics.median(o for o, _ in lidar):.3f}")
     print(f"raw.lidar_ms_highway_env {statistics.median(t for _, t in lidar):.3f}")

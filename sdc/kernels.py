@@ -19,8 +19,9 @@ from scenarios.snapshot import NO_BOXES
 from sdc import _kernels
 
 
-def _rows(array: np.ndarray, columns: int) -> np.ndarray:
-    return np.ascontiguousarray(array, dtype=np.float64).reshape(-1, columns)
+def _dense(array: np.ndarray) -> np.ndarray:
+    """The array as C-contiguous float64 (itself, when it is already)."""
+    return np.ascontiguousarray(array, np.float64)
 
 
 def lidar_ranges_m(origin_xy: np.ndarray, yaw_rad: float, angles_rad: np.ndarray,
@@ -29,11 +30,9 @@ def lidar_ranges_m(origin_xy: np.ndarray, yaw_rad: float, angles_rad: np.ndarray
     """Range along each ray (world angle ``yaw_rad + angles_rad``) to the nearest of
     ``boxes``, ``more_boxes`` and ``segments`` [m]; ``inf`` where nothing is hit
     within ``max_range_m``."""
-    angles = np.ascontiguousarray(angles_rad, dtype=np.float64).reshape(-1)
-    out = np.empty(len(angles))
-    _kernels.scan(float(origin_xy[0]), float(origin_xy[1]), float(yaw_rad), angles,
-                  _rows(boxes, 5), _rows(more_boxes, 5), _rows(segments, 4),
-                  float(max_range_m), out)
+    out = np.empty(len(angles_rad))
+    _kernels.scan(float(origin_xy[0]), float(origin_xy[1]), yaw_rad, _dense(angles_rad),
+                  _dense(boxes), _dense(more_boxes), _dense(segments), max_range_m, out)
     return out
 
 
@@ -50,6 +49,5 @@ def contacts(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
              traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray) -> Contacts:
     """The ego's overlaps, obstacle gap and time to collision in one pass; obstacles
     stand still, traffic moves at its speeds along its headings."""
-    return Contacts(*_kernels.contacts(
-        _rows(box, 5), float(speed_mps), _rows(obstacle_boxes, 5), _rows(traffic_boxes, 5),
-        np.ascontiguousarray(traffic_speeds_mps, dtype=np.float64).reshape(-1)))
+    return Contacts(*_kernels.contacts(_dense(box), speed_mps, _dense(obstacle_boxes),
+                                       _dense(traffic_boxes), _dense(traffic_speeds_mps)))
