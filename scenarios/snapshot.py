@@ -6,7 +6,7 @@ heading counter-clockwise from +x, full length and width).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -30,8 +30,7 @@ def within_m(boxes: np.ndarray, center_xy: np.ndarray, radius_m: float) -> np.nd
     return d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= radius_m * radius_m
 
 
-@dataclass(frozen=True)
-class Snapshot:
+class Snapshot(NamedTuple):
     t_s: float
     traffic_boxes: np.ndarray  # (N, 5) moving vehicles within the sensing radius
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order

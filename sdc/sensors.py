@@ -5,7 +5,7 @@ its offset from the lane centre. Both see plain arrays, never a simulator.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,8 +55,7 @@ class Lidar:
                                 ranges[hit] * np.sin(a)])
 
 
-@dataclass(frozen=True)
-class LaneReading:
+class LaneReading(NamedTuple):
     offset_m: float  # body centre's signed offset from the lane centre, + = left
     heading_error_rad: float  # car yaw minus lane heading, + = pointing left of the lane
     preview_offset_m: float  # offset of the point look_ahead_m ahead of the body centre
