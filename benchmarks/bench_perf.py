@@ -26,13 +26,20 @@ SUMO step sweeps the CPU caches, and the agent's first reads after it miss them;
 the control gives the small road the same cold caches, so the ratio shows
 whether the agent's own work grows with the network.
 
-The raw timings add ``town_2000``: the catalog's ``grid-town`` (a SUMO network of
-10 x 10 junctions, 2000 cars) under lane keeping, where the road edges come
-from the network's drivable area.
+The raw timings add:
+
+- ``libsumo_only_ms_100``: a loop doing only libsumo's part of a closed loop
+  (push the ego, step, read the subscription), and ``libsumo_only_vs_bare_sumo``,
+  its ratio to the bare step: the floor under ``overhead_vs_bare_sumo`` whatever
+  the agent's own code costs;
+- ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
+  junctions, 2000 cars) under lane keeping, where the road edges come from the
+  network's drivable area.
 """
 
 from __future__ import annotations
 
+import math
 import statistics
 import time
 import types
@@ -43,7 +50,7 @@ import traci.constants as tc
 
 from scenarios import CATALOG_DIR
 from scenarios.spec import LidarSpec, ScenarioSpec
-from scenarios.sumo_world import SUBSCRIPTION_SLACK_M
+from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M, _sumo_pose
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.worlds import make_road, make_world
 from sdc.controllers import make_controller
@@ -123,13 +130,37 @@ def bare_sumo_ms(spec: ScenarioSpec) -> float:
     road = make_road(spec)
     with make_world(spec, road) as world:
         Simulation(spec, world, 0.0).start()
-        libsumo.vehicle.unsubscribeContext("ego", tc.CMD_GET_VEHICLE_VARIABLE,
+        libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
                                            world._radius_m + SUBSCRIPTION_SLACK_M)
-        libsumo.vehicle.remove("ego")
+        libsumo.vehicle.remove(EGO_ID)
         steps_s = []
         for _ in range(TIMED_STEPS):
             start = time.perf_counter()
             libsumo.simulationStep()
+            steps_s.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(steps_s))
+
+
+def libsumo_only_ms(spec: ScenarioSpec) -> float:
+    """Median step [ms] of a loop that does only what libsumo must for a closed loop:
+    push the ego (driving straight on), step, read the subscription."""
+    import libsumo
+
+    road = make_road(spec)
+    with make_world(spec, road) as world:
+        sim = Simulation(spec, world, 0.0)
+        sim.start()
+        box, step_m = sim.box.copy(), spec.ego.speed_mps * spec.scenario.step_s
+        steps_s = []
+        for _ in range(TIMED_STEPS):
+            start = time.perf_counter()
+            box[0] += step_m * math.cos(box[2])
+            box[1] += step_m * math.sin(box[2])
+            x, y, angle_deg = _sumo_pose(box)
+            libsumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
+            libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
+            libsumo.simulationStep()
+            libsumo.vehicle.getContextSubscriptionResults(EGO_ID)
             steps_s.append(time.perf_counter() - start)
     return 1e3 * float(np.median(steps_s))
 
@@ -211,10 +242,11 @@ def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
 def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
-    hundred, bare = [], []
+    hundred, bare, floor = [], [], []
     for _ in range(REPETITIONS):
         hundred.append(closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)))
         bare.append(bare_sumo_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
+        floor.append(libsumo_only_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(2):  # the 2000-vehicle warm-up fills 6 lanes x 18 km: two pairs
@@ -252,6 +284,9 @@ def main() -> None:
     print(f"raw.bare_sumo_ms_100 {statistics.median(bare):.3f}")
     in_loop = paired(r["step_ms"] / r["sumo_ms"] for r in hundred)
     print(f"raw.overhead_vs_sumo_in_loop {in_loop:.2f}")
+    print(f"raw.libsumo_only_ms_100 {statistics.median(floor):.3f}")
+    floors = [f / b for f, b in zip(floor, bare, strict=True)]
+    print(f"raw.libsumo_only_vs_bare_sumo {paired(floors):.2f}")
     print(f"raw.highway_v0_steps_per_s {statistics.median(reference):.1f}")
     print(f"raw.lidar_ms_ours {statistics.median(o for o, _ in lidar):.3f}")
     print(f"raw.lidar_ms_highway_env {statistics.median(t for _, t in lidar):.3f}")
