@@ -70,10 +70,11 @@ class RoadSpec(Spec):
 class TrafficSpec(Spec):
     """Background traffic entering at the road's start; ``speed_dev`` is relative.
 
-    On a ``sumo_net`` road, ``vehicles`` cars each drive one random trip (from and
-    to edges drawn in proportion to their length, like SUMO's ``randomTrips.py
-    -l``), all departing at 0 s from free random places, at each edge's speed
-    limit times a factor ~ N(1, ``speed_dev``); ``flow_vph_per_lane`` and
+    On a ``sumo_net`` road, ``vehicles`` cars drive random trips (from and to
+    edges drawn in proportion to their length, like SUMO's ``randomTrips.py
+    -l``), the first ones departing at 0 s from free random places, each car that
+    arrives replaced by a new trip (``scenarios/demand.py``). They drive at each
+    edge's speed limit times a factor ~ N(1, ``speed_dev``); ``flow_vph_per_lane`` and
     ``speed_mean_mps`` are for the built-in roads.
 
     With ``warm_up_s``, the traffic flows that long before the ego is put on the

@@ -20,6 +20,7 @@ import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
 from scenarios import _kernels
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.demand import RandomTrips
 from scenarios.netroad import DEMAND, NetworkRoad, scenario_stream
 from scenarios.network import EDGE_ID, build_network, sumo_binary
 from scenarios.road import RoadGeometry
@@ -33,6 +34,7 @@ from scenarios.spec import ScenarioSpec
 
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
+TRAFFIC_PREFIX = "traffic."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
 #: SUMO measures the context radius between front bumpers: a body centre within the
 #: sensing radius has its front bumper within it plus half of each body's length [m]
@@ -68,27 +70,20 @@ def _flows(spec: ScenarioSpec) -> list[str]:
     ]
 
 
-def _trips(spec: ScenarioSpec, road: NetworkRoad) -> list[str]:
-    """``traffic.vehicles`` random trips across the network, all leaving at 0 s."""
-    if spec.traffic.vehicles == 0:
-        return []
-    edges = road.net.trip_edges()
-    weights = np.array([length_m for _, length_m in edges])
-    chance = weights / weights.sum()
-    rng = scenario_stream(spec.scenario.seed, DEMAND)
-    ends = rng.choice(len(edges), size=(spec.traffic.vehicles, 2), p=chance)
-    while np.any(same := ends[:, 0] == ends[:, 1]):
-        ends[same, 1] = rng.choice(len(edges), size=int(same.sum()), p=chance)
+def _trips(trips: list[tuple[str, str]]) -> list[str]:
+    """The first random trips across the network, all leaving at 0 s."""
     return [
-        f'  <trip id="traffic.{k}" type="traffic" depart="0" from="{edges[a][0]}" '
-        f'to="{edges[b][0]}" departLane="random" departPos="random_free" departSpeed="0"/>'
-        for k, (a, b) in enumerate(ends)
+        f'  <trip id="{TRAFFIC_PREFIX}{k}" type="traffic" depart="0" from="{start}" '
+        f'to="{end}" departLane="random" departPos="random_free" departSpeed="0"/>'
+        for k, (start, end) in enumerate(trips)
     ]
 
 
-def routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
+def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+               trips: list[tuple[str, str]] = ()) -> str:
     """The ``.rou.xml`` text: vehicle types, the ego's route, obstacles as stopped
-    vehicles, and the background traffic (flows, or trips on a network)."""
+    vehicles, and the background traffic (flows, or on a network the ``trips``
+    (from edge, to edge) leaving at 0 s)."""
     model = VEHICLE_MODELS[spec.vehicle.model]
     traffic = spec.traffic
     network = isinstance(road, NetworkRoad)
@@ -119,7 +114,7 @@ def routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
             f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
             "  </vehicle>",
         ]
-    lines += _trips(spec, road) if network else _flows(spec)
+    lines += _trips(trips) if network else _flows(spec)
     lines.append("</routes>")
     return "\n".join(lines) + "\n"
 
@@ -148,6 +143,9 @@ class SumoWorld:
         self.road = road
         self.cache_dir = cache_dir
         self._obstacle_boxes = obstacle_boxes(spec, road)
+        self._demand = (RandomTrips(road.net, scenario_stream(spec.scenario.seed, DEMAND))
+                        if isinstance(road, NetworkRoad) and spec.traffic.vehicles else None)
+        self._trips_made = 0
         self._radius_m = sensing_radius_m(spec)
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
@@ -170,7 +168,9 @@ class SumoWorld:
         net = self.road.net.path if network else build_network(self.spec.road, self.cache_dir)
         self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
         routes = Path(self._tmp.name) / "scenario.rou.xml"
-        routes.write_text(routes_xml(self.spec, self.road))
+        trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
+        self._trips_made = len(trips)
+        routes.write_text(routes_xml(self.spec, self.road, trips))
         sim.start([
             *command, "--net-file", str(net), "--route-files", str(routes),
             # a random trip with no way to its end is dropped, not fatal
@@ -182,7 +182,7 @@ class SumoWorld:
         ])
         self._sumo = sim
         for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
-            sim.simulationStep()
+            self._advance()
         self._clear_start()
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
@@ -211,9 +211,26 @@ class SumoWorld:
         x, y, angle_deg = _sumo_pose(ego_box)
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
-        sumo.simulationStep()
+        self._advance()
         boxes, speeds = self._traffic(ego_box)
         return Snapshot(sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds)
+
+    def _advance(self) -> None:
+        """One SUMO step; on a network, every car that arrived starts a new trip."""
+        self._sumo.simulationStep()
+        if self._demand is None:
+            return
+        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if _is_traffic(v)]
+        if not arrived:
+            return
+        for start, end in self._demand.draw(len(arrived)):
+            vid = f"{TRAFFIC_PREFIX}{self._trips_made}"
+            self._trips_made += 1
+            # two edges not joined make a trip: SUMO routes it as the car enters
+            self._sumo.route.add(vid, [start, end])
+            self._sumo.vehicle.add(vid, vid, typeID="traffic", depart="now",
+                                   departLane="random", departPos="random_free",
+                                   departSpeed="0")
 
     def _traffic(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Boxes and speeds of the vehicles within the sensing radius, ego and

@@ -12,7 +12,8 @@ import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
 from scenarios.netroad import network_road
-from sdc.episode import run_episode
+from scenarios.worlds import make_world
+from sdc.episode import Simulation, run_episode
 
 SPEED_MPS = 3.74  # the lesson's
 
@@ -77,6 +78,22 @@ def test_random_trips_fill_the_network(seed):
     row = run_episode(town(seed, vehicles=400)).row
     # a few may be taken off where the ego enters, none are lost otherwise
     assert 390 <= row["network_vehicles"] <= 400
+
+
+def test_every_car_that_arrives_starts_a_new_trip(seed):
+    """The network keeps its traffic.vehicles cars: without new trips, the grid
+    loses more than 5% of 400 in two minutes."""
+    spec = town(seed, vehicles=400)
+    with make_world(spec, network_road(spec)) as world:
+        sim = Simulation(spec, world, 5.0)
+        sim.start()
+        counts = []
+        for _ in range(1200):  # 2 minutes, the ego standing
+            world.step(sim.box, 0.0)
+            counts.append(world.vehicle_count())
+        arrived = world._trips_made - 400
+    assert arrived > 20  # cars did arrive, and
+    assert min(counts) >= 390 and max(counts) <= 400  # were replaced
 
 
 @pytest.mark.slow
