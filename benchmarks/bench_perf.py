@@ -249,7 +249,7 @@ def main() -> None:
         floor.append(libsumo_only_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
-    for _ in range(2):  # the 2000-vehicle warm-up fills 6 lanes x 18 km: two pairs
+    for _ in range(REPETITIONS):  # each pair waits on a 2000-vehicle warm-up (6 lanes x 18 km)
         short.append(closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0)))
         two_thousand.append(closed_loop(traffic_spec(6, 18000.0, 1800.0, 690.0)))
         short_cold.append(closed_loop(traffic_spec(6, 900.0, 1800.0, 60.0, start_m=200.0),
