@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench clean system-packages
 
-$(STAMP): pyproject.toml setup.py sdc/_kernels.c scenarios/_kernels.c  # C builds at install
+$(STAMP): pyproject.toml setup.py sdc/_kernels.c scenarios/_kernels.c scenarios/_buffers.h  # C builds at install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'

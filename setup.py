@@ -9,6 +9,9 @@ from setuptools import Extension, setup
 
 FLAGS = ["-O2", "-ffp-contract=off"]
 
-setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"], extra_compile_args=FLAGS),
-                   Extension("scenarios._kernels", ["scenarios/_kernels.c"],
+HEADERS = ["scenarios/_buffers.h"]
+
+setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"], depends=HEADERS,
+                             extra_compile_args=FLAGS),
+                   Extension("scenarios._kernels", ["scenarios/_kernels.c"], depends=HEADERS,
                              extra_compile_args=FLAGS)])

@@ -10,37 +10,8 @@
  * so the answers are the same to the last bit as their numpy references in the
  * tests.
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
+#include "_buffers.h"
 #include <math.h>
-#include <string.h>
-
-static int get_out(PyObject *obj, Py_buffer *view, Py_ssize_t doubles, const char *name) {
-    if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | PyBUF_WRITABLE) < 0)
-        return -1;
-    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
-        || view->len / 8 < doubles) {
-        PyErr_Format(PyExc_TypeError, "%s: a writable C-contiguous float64 array of %zd",
-                     name, doubles);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    return 0;
-}
-
-static int get_in(PyObject *obj, Py_buffer *view, Py_ssize_t row, Py_ssize_t *count,
-                  const char *name) {
-    if (PyObject_GetBuffer(obj, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
-    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
-        || (view->len / 8) % row != 0) {
-        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous float64 array with rows of %zd",
-                     name, row);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    *count = view->len / 8 / row;
-    return 0;
-}
 
 /* a polyline of segments: start point, unit direction, length, s at its start */
 typedef struct {
@@ -93,9 +64,17 @@ static PyObject *frenet(PyObject *self, PyObject *args) {
     int got = 0;
     PyObject *result = NULL;
     for (; got < 5; got++)
-        if (get_in(objs[got], &views[got], rows[got], &counts[got], names[got]) < 0) goto done;
-    for (; got < 8; got++)
-        if (get_out(objs[got], &views[got], counts[0], out_names[got - 5]) < 0) goto done;
+        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+            goto done;
+    for (; got < 8; got++) {
+        Py_ssize_t n_out;
+        if (get_doubles(objs[got], &views[got], 1, 1, &n_out, out_names[got - 5]) < 0) goto done;
+        if (n_out != counts[0]) {
+            PyErr_Format(PyExc_ValueError, "%s: one value per point", out_names[got - 5]);
+            got++; /* this view is released too */
+            goto done;
+        }
+    }
     Polyline line = {views[1].buf, views[2].buf, views[3].buf, views[4].buf, counts[3]};
     if (line.count == 0 || counts[1] != line.count || counts[2] != line.count
         || counts[4] != line.count) {
@@ -139,10 +118,16 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
                           &key_angle, &key_speed, &ego_id, &skip_prefix, &length, &width, &cx,
                           &cy, &radius, &b_obj, &s_obj))
         return NULL;
-    Py_ssize_t n = PyDict_Size(nearby);
+    Py_ssize_t n = PyDict_Size(nearby), n_boxes, n_speeds;
     Py_buffer bv, sv;
-    if (get_out(b_obj, &bv, 5 * n, "boxes") < 0) return NULL;
-    if (get_out(s_obj, &sv, n, "speeds") < 0) {
+    if (get_doubles(b_obj, &bv, 1, 5, &n_boxes, "boxes") < 0) return NULL;
+    if (get_doubles(s_obj, &sv, 1, 1, &n_speeds, "speeds") < 0) {
+        PyBuffer_Release(&bv);
+        return NULL;
+    }
+    if (n_boxes < n || n_speeds < n) {
+        PyErr_SetString(PyExc_ValueError, "boxes, speeds: room for every vehicle of nearby");
+        PyBuffer_Release(&sv);
         PyBuffer_Release(&bv);
         return NULL;
     }

@@ -6,13 +6,11 @@
  * compare against.
  *
  * Arrays arrive as C-contiguous float64 buffers (the Python wrappers in
- * sdc/kernels.py make sure of that): boxes are rows [cx, cy, yaw, length, width],
+ * sdc/kernels.py make sure of that; scenarios/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
  * segments rows [x0, y0, x1, y1], all in metres and radians.
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
+#include "../scenarios/_buffers.h"
 #include <math.h>
-#include <string.h>
 
 /* numpy's maximum/minimum for non-NaN input: the first argument wins ties */
 static inline double np_max(double a, double b) { return a >= b ? a : b; }
@@ -39,21 +37,6 @@ static inline double slab_range(double lx, double ly, double local_angle, double
     slab(ly, sin(local_angle), half_wid, &ty_in, &ty_out);
     double t_in = np_max(tx_in, ty_in), t_out = np_min(tx_out, ty_out);
     return (t_in <= t_out && t_out >= 0.0) ? np_max(t_in, 0.0) : INFINITY;
-}
-
-static int get_doubles(PyObject *obj, Py_buffer *view, int writable, Py_ssize_t row,
-                       Py_ssize_t *count, const char *name) {
-    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(obj, view, flags) < 0) return -1;
-    if (view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0
-        || (view->len / 8) % row != 0) {
-        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous float64 array with rows of %zd",
-                     name, row);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    *count = view->len / 8 / row;
-    return 0;
 }
 
 /* the boxes one ray may hit: every box of a set whose bounding circle it passes */

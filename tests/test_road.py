@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scenarios import RoadSpec
+from scenarios import RoadSpec, _kernels
 from scenarios.network import EDGE_ID, build_network
 from scenarios.road import RoadGeometry
 
@@ -127,3 +127,15 @@ def test_sumo_lanes_match_our_geometry(tmp_path, spec):
                 road.length_m, abs=0.01)
     finally:
         libsumo.close()
+
+
+def test_the_compiled_projection_refuses_wrong_arrays_by_name():
+    road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=2))
+    line = (road._seg_start_xy, road._seg_dir, road._seg_len_m, road._seg_start_s_m)
+    points, out = np.zeros((3, 2)), np.empty(3)
+    with pytest.raises(TypeError, match="xy"):
+        _kernels.frenet(np.zeros(3), *line, out, out, 3.5, 100.0, out)
+    with pytest.raises(TypeError, match="d_out"):
+        _kernels.frenet(points, *line, out, np.empty(3, np.float32), 3.5, 100.0, out)
+    with pytest.raises(ValueError, match="gaps_out"):
+        _kernels.frenet(points, *line, out, out, 3.5, 100.0, np.empty(2))
