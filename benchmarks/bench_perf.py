@@ -1,6 +1,8 @@
 """The car's cost against SUMO's and highway-env's, as ratios measured in one run.
 
-Prints ``name value`` lines (medians of REPETITIONS), then the raw timings:
+Prints ``name value`` lines (medians of REPETITIONS paired measurements; of
+SHORT_PAIRS for the 100-vehicle overhead, whose runs take a second: this
+machine's speed swings between seconds), then the raw timings:
 
 - ``overhead_vs_bare_sumo``: a full closed-loop step (SUMO step, state read,
   lidar, lane offset, control, collision check, ego push) over the bare SUMO
@@ -31,7 +33,7 @@ The raw timings add:
 - ``libsumo_only_ms_100``: a loop doing only libsumo's part of a closed loop
   (push the ego, step, read the subscription), and ``libsumo_only_vs_bare_sumo``,
   its ratio to the bare step: the floor under ``overhead_vs_bare_sumo`` whatever
-  the agent's own code costs;
+  the agent's own code costs; ``overhead_vs_libsumo_only`` is our step over it;
 - ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
   junctions, 2000 cars) under lane keeping, where the road edges come from the
   network's drivable area.
@@ -58,6 +60,7 @@ from sdc.episode import Simulation
 from sdc.sensors import Lidar
 
 REPETITIONS = 3
+SHORT_PAIRS = 9
 #: memory read after each SUMO step of the cold-cache control: more than the CPU caches
 CACHE_WALK_BYTES = 64 << 20
 TIMED_STEPS = 400
@@ -243,7 +246,7 @@ def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
     hundred, bare, floor = [], [], []
-    for _ in range(REPETITIONS):
+    for _ in range(SHORT_PAIRS):
         hundred.append(closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)))
         bare.append(bare_sumo_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
         floor.append(libsumo_only_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
@@ -287,6 +290,8 @@ def main() -> None:
     print(f"raw.libsumo_only_ms_100 {statistics.median(floor):.3f}")
     floors = [f / b for f, b in zip(floor, bare, strict=True)]
     print(f"raw.libsumo_only_vs_bare_sumo {paired(floors):.2f}")
+    over_floor = [r["step_ms"] / f for r, f in zip(hundred, floor, strict=True)]
+    print(f"raw.overhead_vs_libsumo_only {paired(over_floor):.2f}")
     print(f"raw.highway_v0_steps_per_s {statistics.median(reference):.1f}")
     print(f"raw.lidar_ms_ours {statistics.median(o for o, _ in lidar):.3f}")
     print(f"raw.lidar_ms_highway_env {statistics.median(t for _, t in lidar):.3f}")
