@@ -95,6 +95,37 @@ done:
     return result;
 }
 
+/* locate(x, y, starts, directions, lengths, start_s): (s, d) of one point, as
+ * frenet does it, without arrays around the point (a step asks this of single
+ * points) */
+static PyObject *locate(PyObject *self, PyObject *args) {
+    double x, y;
+    PyObject *objs[4];
+    if (!PyArg_ParseTuple(args, "ddOOOO", &x, &y, &objs[0], &objs[1], &objs[2], &objs[3]))
+        return NULL;
+    static const char *names[4] = {"starts", "directions", "lengths", "start_s"};
+    static const Py_ssize_t rows[4] = {2, 2, 1, 1};
+    Py_buffer views[4];
+    Py_ssize_t counts[4];
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 4; got++)
+        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+            goto done;
+    Polyline line = {views[0].buf, views[1].buf, views[2].buf, views[3].buf, counts[2]};
+    if (line.count == 0 || counts[0] != line.count || counts[1] != line.count
+        || counts[3] != line.count) {
+        PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
+        goto done;
+    }
+    double s_m, d_m;
+    project(&line, x, y, &s_m, &d_m);
+    result = Py_BuildValue("dd", s_m, d_m);
+done:
+    while (got-- > 0) PyBuffer_Release(&views[got]);
+    return result;
+}
+
 static int read_double(PyObject *values, PyObject *key, double *out) {
     PyObject *value = PyDict_GetItemWithError(values, key);
     if (value == NULL) {
@@ -182,6 +213,7 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
 
 static PyMethodDef methods[] = {
     {"frenet", frenet, METH_VARARGS, "Road coordinates of points on a polyline."},
+    {"locate", locate, METH_VARARGS, "Road coordinates of one point on a polyline."},
     {"traffic", traffic, METH_VARARGS, "Traffic boxes and speeds from context results."},
     {NULL, NULL, 0, NULL},
 };

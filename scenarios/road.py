@@ -84,6 +84,11 @@ class RoadGeometry:
         """
         return self._project(xy)[:2]
 
+    def locate(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """:meth:`to_frenet` of one point, in plain floats (a step's question)."""
+        return _kernels.locate(x_m, y_m, self._seg_start_xy, self._seg_dir, self._seg_len_m,
+                               self._seg_start_s_m)
+
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
                        0, len(self._seg_len_m) - 1)

@@ -110,7 +110,7 @@ class Simulation:
         if self.hit is not None:
             return COLLISION
         front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
-        if self.road.to_frenet(front)[0][0] >= self.road.length_m:
+        if self.road.locate(float(front[0]), float(front[1]))[0] >= self.road.length_m:
             return ROUTE_END
         if self.k == self.n_steps:
             return DURATION

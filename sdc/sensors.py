@@ -73,12 +73,11 @@ class LaneSensor:
                 look_ahead_m: float) -> LaneReading | None:
         """The reading for a body centre and heading; ``None`` past either end of the road."""
         cx, cy = float(center_xy[0]), float(center_xy[1])
-        s_m, d_m = self.road.to_frenet(np.array([
-            [cx, cy],
-            [cx + look_ahead_m * math.cos(yaw_rad), cy + look_ahead_m * math.sin(yaw_rad)]]))
-        if not 0.0 <= s_m[0] <= self.road.length_m:
+        s_m, d_m = self.road.locate(cx, cy)
+        if not 0.0 <= s_m <= self.road.length_m:
             return None
-        heading_error = yaw_rad - self.road.heading_at_s(float(s_m[0]))
+        _, preview_d_m = self.road.locate(cx + look_ahead_m * math.cos(yaw_rad),
+                                          cy + look_ahead_m * math.sin(yaw_rad))
+        heading_error = yaw_rad - self.road.heading_at_s(s_m)
         heading_error = (heading_error + math.pi) % (2 * math.pi) - math.pi
-        return LaneReading(float(d_m[0] - self.lane_d_m), heading_error,
-                           float(d_m[1] - self.lane_d_m), float(s_m[0]))
+        return LaneReading(d_m - self.lane_d_m, heading_error, preview_d_m - self.lane_d_m, s_m)

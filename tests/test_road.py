@@ -64,14 +64,17 @@ points_st = st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=10)
 @given(line=polyline_st, points=points_st)
 def test_the_compiled_frenet_projection_equals_the_straightforward_one(line, points):
     """Any polyline (one segment: a straight road), points anywhere, vertices and
-    segment ends included: the same s, d and edge gaps, bit for bit; the heading
-    is the segment's at s."""
+    segment ends included: the same s, d and edge gaps, bit for bit, for many
+    points or one; the heading is the segment's at s."""
     points = np.vstack([points, line, (line[:-1] + line[1:]) / 2])
     road = RoadGeometry(line, 2, 3.5)
     s_m, d_m = road.to_frenet(points)
     expected_s, expected_d = reference_frenet(line, points)
     assert s_m.tobytes() == expected_s.tobytes()
     assert d_m.tobytes() == expected_d.tobytes()
+    # one point at a time, in plain floats
+    located = np.array([road.locate(x, y) for x, y in points.tolist()]).reshape(-1, 2)
+    assert located.T.tobytes() == np.array([expected_s, expected_d]).tobytes()
     # the edge gaps: beside the road, the distance to the nearer edge
     alongside = (expected_s >= 0) & (expected_s <= road.length_m)
     expected_gaps = np.where(alongside, 3.5 - np.abs(expected_d), np.inf)
