@@ -47,43 +47,59 @@ static void project(const Polyline *line, double x, double y, double *s_m, doubl
     *d_m = line->dir[2 * best_seg] * best_ry - line->dir[2 * best_seg + 1] * best_rx;
 }
 
+/* the polyline's four arrays (starts, directions, lengths, start_s) into views[0..3]
+ * and line; on failure every view taken is released */
+static int get_polyline(PyObject *const objs[4], Py_buffer views[4], Polyline *line) {
+    static const char *names[4] = {"starts", "directions", "lengths", "start_s"};
+    static const Py_ssize_t rows[4] = {2, 2, 1, 1};
+    Py_ssize_t counts[4];
+    int got = 0;
+    for (; got < 4; got++)
+        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+            goto fail;
+    if (counts[2] == 0 || counts[0] != counts[2] || counts[1] != counts[2]
+        || counts[3] != counts[2]) {
+        PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
+        goto fail;
+    }
+    *line = (Polyline){views[0].buf, views[1].buf, views[2].buf, views[3].buf, counts[2]};
+    return 0;
+fail:
+    while (got-- > 0) PyBuffer_Release(&views[got]);
+    return -1;
+}
+
 /* frenet(xy, starts, directions, lengths, start_s, s_out, d_out, half_width, length,
  * gaps_out): the road coordinates of each point (project above) and its distance
  * to the nearer road edge, half_width - |d|, where 0 <= s <= length (inf elsewhere) */
 static PyObject *frenet(PyObject *self, PyObject *args) {
-    PyObject *objs[8];
+    PyObject *xy_obj, *line_objs[4], *out_objs[3];
     double half_width, length;
-    if (!PyArg_ParseTuple(args, "OOOOOOOddO", &objs[0], &objs[1], &objs[2], &objs[3],
-                          &objs[4], &objs[5], &objs[6], &half_width, &length, &objs[7]))
+    if (!PyArg_ParseTuple(args, "OOOOOOOddO", &xy_obj, &line_objs[0], &line_objs[1],
+                          &line_objs[2], &line_objs[3], &out_objs[0], &out_objs[1], &half_width,
+                          &length, &out_objs[2]))
         return NULL;
-    static const char *names[5] = {"xy", "starts", "directions", "lengths", "start_s"};
-    static const Py_ssize_t rows[5] = {2, 2, 2, 1, 1};
     static const char *out_names[3] = {"s_out", "d_out", "gaps_out"};
-    Py_buffer views[8];
-    Py_ssize_t counts[5];
+    Py_buffer xy_view, line_views[4], out_views[3];
+    Py_ssize_t n;
+    Polyline line;
     int got = 0;
     PyObject *result = NULL;
-    for (; got < 5; got++)
-        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
-            goto done;
-    for (; got < 8; got++) {
+    if (get_doubles(xy_obj, &xy_view, 0, 2, &n, "xy") < 0) return NULL;
+    if (get_polyline(line_objs, line_views, &line) < 0) goto release_xy;
+    for (; got < 3; got++) {
         Py_ssize_t n_out;
-        if (get_doubles(objs[got], &views[got], 1, 1, &n_out, out_names[got - 5]) < 0) goto done;
-        if (n_out != counts[0]) {
-            PyErr_Format(PyExc_ValueError, "%s: one value per point", out_names[got - 5]);
+        if (get_doubles(out_objs[got], &out_views[got], 1, 1, &n_out, out_names[got]) < 0)
+            goto done;
+        if (n_out != n) {
+            PyErr_Format(PyExc_ValueError, "%s: one value per point", out_names[got]);
             got++; /* this view is released too */
             goto done;
         }
     }
-    Polyline line = {views[1].buf, views[2].buf, views[3].buf, views[4].buf, counts[3]};
-    if (line.count == 0 || counts[1] != line.count || counts[2] != line.count
-        || counts[4] != line.count) {
-        PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
-        goto done;
-    }
-    const double *xy = views[0].buf;
-    double *s_out = views[5].buf, *d_out = views[6].buf, *gaps_out = views[7].buf;
-    for (Py_ssize_t k = 0; k < counts[0]; k++) {
+    const double *xy = xy_view.buf;
+    double *s_out = out_views[0].buf, *d_out = out_views[1].buf, *gaps_out = out_views[2].buf;
+    for (Py_ssize_t k = 0; k < n; k++) {
         project(&line, xy[2 * k], xy[2 * k + 1], &s_out[k], &d_out[k]);
         int alongside = s_out[k] >= 0.0 && s_out[k] <= length;
         gaps_out[k] = alongside ? half_width - fabs(d_out[k]) : INFINITY;
@@ -91,7 +107,10 @@ static PyObject *frenet(PyObject *self, PyObject *args) {
     result = Py_None;
     Py_INCREF(result);
 done:
-    while (got-- > 0) PyBuffer_Release(&views[got]);
+    while (got-- > 0) PyBuffer_Release(&out_views[got]);
+    for (int i = 3; i >= 0; i--) PyBuffer_Release(&line_views[i]);
+release_xy:
+    PyBuffer_Release(&xy_view);
     return result;
 }
 
@@ -99,31 +118,17 @@ done:
  * frenet does it, without arrays around the point (a step asks this of single
  * points) */
 static PyObject *locate(PyObject *self, PyObject *args) {
-    double x, y;
-    PyObject *objs[4];
-    if (!PyArg_ParseTuple(args, "ddOOOO", &x, &y, &objs[0], &objs[1], &objs[2], &objs[3]))
+    double x, y, s_m, d_m;
+    PyObject *line_objs[4];
+    if (!PyArg_ParseTuple(args, "ddOOOO", &x, &y, &line_objs[0], &line_objs[1], &line_objs[2],
+                          &line_objs[3]))
         return NULL;
-    static const char *names[4] = {"starts", "directions", "lengths", "start_s"};
-    static const Py_ssize_t rows[4] = {2, 2, 1, 1};
-    Py_buffer views[4];
-    Py_ssize_t counts[4];
-    int got = 0;
-    PyObject *result = NULL;
-    for (; got < 4; got++)
-        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
-            goto done;
-    Polyline line = {views[0].buf, views[1].buf, views[2].buf, views[3].buf, counts[2]};
-    if (line.count == 0 || counts[0] != line.count || counts[1] != line.count
-        || counts[3] != line.count) {
-        PyErr_SetString(PyExc_ValueError, "a start, direction, length and s per segment");
-        goto done;
-    }
-    double s_m, d_m;
+    Py_buffer line_views[4];
+    Polyline line;
+    if (get_polyline(line_objs, line_views, &line) < 0) return NULL;
     project(&line, x, y, &s_m, &d_m);
-    result = Py_BuildValue("dd", s_m, d_m);
-done:
-    while (got-- > 0) PyBuffer_Release(&views[got]);
-    return result;
+    for (int i = 3; i >= 0; i--) PyBuffer_Release(&line_views[i]);
+    return Py_BuildValue("dd", s_m, d_m);
 }
 
 static int read_double(PyObject *values, PyObject *key, double *out) {
