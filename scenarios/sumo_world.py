@@ -63,7 +63,7 @@ def _flows(spec: ScenarioSpec) -> list[str]:
     if traffic.flow_vph_per_lane == 0:
         return []
     return [
-        f'  <flow id="traffic.{lane}" type="traffic" route="r0" begin="0" '
+        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="r0" begin="0" '
         f'end="{traffic.warm_up_s + spec.scenario.duration_s}" '
         f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
         for lane in range(spec.road.lane_count)

@@ -378,7 +378,6 @@ def test_axis_aligned_gap_closed_form(a, b):
         assert boxes_overlap(a, b[None])[0] == (max(sep_x, sep_y) < 0.0)
 
 
-
 @PROPS
 @given(box=box_st)
 def test_one_box_corners_equal_box_corners_bit_for_bit(box):
