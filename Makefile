@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench clean system-packages
 
-$(STAMP): pyproject.toml setup.py sdc/_kernels.c scenarios/_kernels.c scenarios/_buffers.h  # C builds at install
+$(STAMP): pyproject.toml setup.py sdc/_kernels.c scenarios/_kernels.c scenarios/_sumo_step.cpp scenarios/*.h  # C builds at install
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
@@ -34,4 +34,4 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_perf.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build sdc/_kernels*.so scenarios/_kernels*.so
+	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build sdc/_kernels*.so scenarios/_kernels*.so scenarios/_sumo_step*.so

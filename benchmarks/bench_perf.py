@@ -7,14 +7,18 @@ machine's speed swings between seconds), then the raw timings:
 - ``overhead_vs_bare_sumo``: a full closed-loop step (SUMO step, state read,
   lidar, lane offset, control, collision check, ego push) over the bare SUMO
   step, on a 3-lane highway holding about 100 vehicles (traffic warmed up). Bare:
-  the same traffic with the ego and its subscription taken out, measured right
-  after the loop (SUMO's step inside our loop also places the ego and gathers
-  the subscription, about 10% more; ``raw.overhead_vs_sumo_in_loop`` divides by
-  that instead).
+  the same scenario in SUMO alone, measured right after the loop: the ego is a
+  SUMO vehicle driving on in its lane at its speed, neither pushed nor
+  subscribed to. Traffic changing lanes around that slow car is half of SUMO's
+  step, so taking the ego out (``raw.overhead_vs_sumo_without_ego``) measures
+  another scenario; ``raw.overhead_vs_sumo_in_loop`` divides by SUMO's step
+  inside our loop instead (the compiled world step: the ego's push, SUMO's step,
+  its time).
 - ``agent_cost_ratio_2000_vs_100``: the agent's own cost per step (everything
-  but ``simulationStep``) on a 6-lane road 18 km long holding about 2000
-  vehicles over its cost on one 900 m long holding about 100, at the same
-  traffic density around the ego; traffic is read only within the sensing radius.
+  but the compiled world step: the ego's push and SUMO's step) on a 6-lane road
+  18 km long holding about 2000 vehicles over its cost on one 900 m long holding
+  about 100, at the same traffic density around the ego; traffic is read only
+  within the sensing radius.
 - ``speedup_vs_highway_env``: our closed-loop steps/s on a 3-lane highway with
   about 20 vehicles over highway-env's (``highway-v0``, 3 lanes, as many
   vehicles, 180-cell LidarObservation, ContinuousAction, one simulation step
@@ -30,10 +34,11 @@ whether the agent's own work grows with the network.
 
 The raw timings add:
 
-- ``libsumo_only_ms_100``: a loop doing only libsumo's part of a closed loop
-  (push the ego, step, read the subscription), and ``libsumo_only_vs_bare_sumo``,
-  its ratio to the bare step: the floor under ``overhead_vs_bare_sumo`` whatever
-  the agent's own code costs; ``overhead_vs_libsumo_only`` is our step over it;
+- ``libsumo_only_ms_100``: a loop doing only the world's part of a closed loop
+  (push the ego, step, read the traffic around it), and
+  ``libsumo_only_vs_bare_sumo``, its ratio to the bare step: the floor under
+  ``overhead_vs_bare_sumo`` whatever the agent's own code costs;
+  ``overhead_vs_libsumo_only`` is our step over it;
 - ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
   junctions, 2000 cars) under lane keeping, where the road edges come from the
   network's drivable area.
@@ -50,9 +55,9 @@ import warnings
 import numpy as np
 import traci.constants as tc
 
-from scenarios import CATALOG_DIR
+from scenarios import CATALOG_DIR, sumo_world
 from scenarios.spec import LidarSpec, ScenarioSpec
-from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M, _sumo_pose
+from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.worlds import make_road, make_world
 from sdc.controllers import make_controller
@@ -87,26 +92,26 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
     it, and of their difference, the agent's own cost [ms] (medians: this machine's
     occasional stalls hit single steps). With ``cache_walk``, every SUMO step also
     reads that array, as a big network's step sweeps the CPU caches."""
-    import libsumo
-
     controller = make_controller(spec.controller)
     road = make_road(spec)
     sumo_s = []
-    real_step = libsumo.simulationStep
+    compiled = sumo_world._sumo_step
 
     def timed_step(*args):
         start = time.perf_counter()
-        real_step(*args)
+        t_s = compiled.step(*args)
         if cache_walk is not None:
             cache_walk.sum()
         sumo_s.append(time.perf_counter() - start)
+        return t_s
 
     steps_s = []
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, controller.look_ahead_m)
         sim.start()
         vehicles = world.vehicle_count()
-        libsumo.simulationStep = timed_step
+        sumo_world._sumo_step = types.SimpleNamespace(bind=compiled.bind, step=timed_step,
+                                                      traffic=compiled.traffic)
         try:
             sumo_s.clear()
             for _ in range(TIMED_STEPS):
@@ -118,16 +123,18 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
                 sim.advance(command)
                 steps_s.append(time.perf_counter() - start)
         finally:
-            libsumo.simulationStep = real_step
+            sumo_world._sumo_step = compiled
     step_s, sumo_step_s = np.array(steps_s), np.array(sumo_s[: len(steps_s)])
     return {"step_ms": 1e3 * np.median(step_s), "sumo_ms": 1e3 * np.median(sumo_step_s),
             "agent_ms": 1e3 * np.median(step_s - sumo_step_s), "vehicles": vehicles,
             "steps": len(step_s)}
 
 
-def bare_sumo_ms(spec: ScenarioSpec) -> float:
-    """Median SUMO step [ms] of the scenario's traffic with the ego and its
-    subscription taken out: what SUMO costs alone."""
+def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
+    """Median SUMO step [ms] of the scenario in SUMO alone: no push, no subscription;
+    the ego stays as a SUMO vehicle driving on in its lane at its speed, so traffic
+    meets the same slow car (lane changing around it is half of SUMO's step here).
+    Without ``ego``, the ego is taken out as well."""
     import libsumo
 
     road = make_road(spec)
@@ -135,20 +142,24 @@ def bare_sumo_ms(spec: ScenarioSpec) -> float:
         Simulation(spec, world, 0.0).start()
         libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
                                            world._radius_m + SUBSCRIPTION_SLACK_M)
-        libsumo.vehicle.remove(EGO_ID)
+        if ego:  # its speed mode and lane change mode stay off: it keeps speed and lane
+            libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
+        else:
+            libsumo.vehicle.remove(EGO_ID)
         steps_s = []
         for _ in range(TIMED_STEPS):
             start = time.perf_counter()
             libsumo.simulationStep()
             steps_s.append(time.perf_counter() - start)
+        if ego:
+            assert libsumo.vehicle.getLaneIndex(EGO_ID) == spec.ego.lane
     return 1e3 * float(np.median(steps_s))
 
 
 def libsumo_only_ms(spec: ScenarioSpec) -> float:
-    """Median step [ms] of a loop that does only what libsumo must for a closed loop:
-    push the ego (driving straight on), step, read the subscription."""
-    import libsumo
-
+    """Median step [ms] of a loop that does only the world's part of a closed loop
+    (``SumoWorld.step``: push the ego, driving straight on, step SUMO, read the
+    traffic around it), without sensing or control."""
     road = make_road(spec)
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, 0.0)
@@ -159,11 +170,7 @@ def libsumo_only_ms(spec: ScenarioSpec) -> float:
             start = time.perf_counter()
             box[0] += step_m * math.cos(box[2])
             box[1] += step_m * math.sin(box[2])
-            x, y, angle_deg = _sumo_pose(box)
-            libsumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
-            libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
-            libsumo.simulationStep()
-            libsumo.vehicle.getContextSubscriptionResults(EGO_ID)
+            world.step(box, spec.ego.speed_mps)
             steps_s.append(time.perf_counter() - start)
     return 1e3 * float(np.median(steps_s))
 
@@ -245,11 +252,13 @@ def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
 def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
-    hundred, bare, floor = [], [], []
+    hundred, bare, without_ego, floor = [], [], [], []
     for _ in range(SHORT_PAIRS):
-        hundred.append(closed_loop(traffic_spec(3, 2500.0, 1100.0, 120.0)))
-        bare.append(bare_sumo_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
-        floor.append(libsumo_only_ms(traffic_spec(3, 2500.0, 1100.0, 120.0)))
+        spec = traffic_spec(3, 2500.0, 1100.0, 120.0)
+        hundred.append(closed_loop(spec))
+        bare.append(bare_sumo_ms(spec))
+        without_ego.append(bare_sumo_ms(spec, ego=False))
+        floor.append(libsumo_only_ms(spec))
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(REPETITIONS):  # each pair waits on a 2000-vehicle warm-up (6 lanes x 18 km)
@@ -285,6 +294,9 @@ def main() -> None:
         for key in ("vehicles", "steps", "step_ms", "sumo_ms", "agent_ms"):
             print(f"raw.{key}_{name} {median_of(runs, key):.3f}")
     print(f"raw.bare_sumo_ms_100 {statistics.median(bare):.3f}")
+    print(f"raw.bare_sumo_without_ego_ms_100 {statistics.median(without_ego):.3f}")
+    alone = [r["step_ms"] / b for r, b in zip(hundred, without_ego, strict=True)]
+    print(f"raw.overhead_vs_sumo_without_ego {paired(alone):.2f}")
     in_loop = paired(r["step_ms"] / r["sumo_ms"] for r in hundred)
     print(f"raw.overhead_vs_sumo_in_loop {in_loop:.2f}")
     print(f"raw.libsumo_only_ms_100 {statistics.median(floor):.3f}")

@@ -11,6 +11,7 @@
  * tests.
  */
 #include "_buffers.h"
+#include "_traffic_box.h"
 #include <math.h>
 
 /* a polyline of segments: start point, unit direction, length, s at its start */
@@ -198,17 +199,8 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
             failed = 1;
             break;
         }
-        /* the body centre lies half a length behind the front bumper */
-        double yaw = (90.0 - angle_deg) * (M_PI / 180.0);
-        double bx = x - length / 2 * cos(yaw), by = y - length / 2 * sin(yaw);
-        double dx = bx - cx, dy = by - cy;
-        if (!(dx * dx + dy * dy <= radius * radius)) continue;
-        double *b = boxes + 5 * count;
-        b[0] = bx;
-        b[1] = by;
-        b[2] = yaw;
-        b[3] = length;
-        b[4] = width;
+        if (!traffic_box(x, y, angle_deg, length, width, cx, cy, radius, boxes + 5 * count))
+            continue;
         speeds[count++] = speed;
     }
     PyBuffer_Release(&sv);

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios import _kernels
+from scenarios import _kernels, _sumo_step
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.demand import RandomTrips
 from scenarios.netroad import DEMAND, NetworkRoad, scenario_stream
@@ -149,6 +149,8 @@ class SumoWorld:
         self._radius_m = sensing_radius_m(spec)
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
+        self._direct = False  # stepping through _sumo_step (libsumo only, not sumo-gui)
+        self._traffic_rows = 64  # room for this many context results in a direct read
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
@@ -181,6 +183,9 @@ class SumoWorld:
             "--no-step-log", "true", "--no-warnings", "true",
         ])
         self._sumo = sim
+        if not self.gui:
+            from libsumo import _libsumo
+            self._direct = _sumo_step.bind(_libsumo.__file__, sim.TraCIException)
         for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
             self._advance()
         self._clear_start()
@@ -206,9 +211,19 @@ class SumoWorld:
             vehicle.remove(str(vid))
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
-        """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
-        sumo = self._sumo
+        """Place the ego at ``ego_box``, advance SUMO one step, return the new state.
+
+        With libsumo the step is compiled (``scenarios/_sumo_step.cpp``): the same
+        calls into SUMO, without libsumo's Python layer, which cost as much as
+        SUMO's own work for them.
+        """
         x, y, angle_deg = _sumo_pose(ego_box)
+        if self._direct:
+            t_s = _sumo_step.step(EGO_ID, x, y, angle_deg, ego_speed_mps)
+            self._renew_trips()
+            boxes, speeds = self._traffic_direct(ego_box)
+            return Snapshot(t_s, boxes, self._obstacle_boxes, speeds)
+        sumo = self._sumo
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
         self._advance()
@@ -216,8 +231,12 @@ class SumoWorld:
         return Snapshot(sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds)
 
     def _advance(self) -> None:
-        """One SUMO step; on a network, every car that arrived starts a new trip."""
+        """One SUMO step."""
         self._sumo.simulationStep()
+        self._renew_trips()
+
+    def _renew_trips(self) -> None:
+        """On a network, every car that arrived in the last step starts a new trip."""
         if self._demand is None:
             return
         arrived = [v for v in self._sumo.simulation.getArrivedIDList() if _is_traffic(v)]
@@ -246,6 +265,19 @@ class SumoWorld:
                                    TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
                                    float(ego_box[1]), self._radius_m, boxes, speeds)
         return boxes[:count], speeds[:count]
+
+    def _traffic_direct(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """What :meth:`_traffic` returns, read from SUMO's results without libsumo's
+        dicts (``scenarios/_sumo_step.cpp``)."""
+        while True:
+            rows = self._traffic_rows
+            boxes, speeds = np.empty((rows, 5)), np.empty(rows)
+            count = _sumo_step.traffic(EGO_ID, _TRAFFIC_VARS, OBSTACLE_PREFIX, TRAFFIC_LENGTH_M,
+                                       TRAFFIC_WIDTH_M, float(ego_box[0]), float(ego_box[1]),
+                                       self._radius_m, boxes, speeds)
+            if count >= 0:
+                return boxes[:count], speeds[:count]
+            self._traffic_rows = max(-count, 2 * rows)  # more results than room: grow
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""
