@@ -28,10 +28,10 @@
 
 namespace {
 
-struct Result {  // libsumo::TraCIResult
+/* libsumo::TraCIResult: polymorphic, so its vtable pointer comes before the data.
+ * Only data members are read here; no virtual method is called through this view. */
+struct Result {
     virtual ~Result() {}
-    virtual std::string getString() const { return ""; }
-    virtual int getType() const { return -1; }
 };
 struct Position : Result {  // libsumo::TraCIPosition
     double x, y, z;
