@@ -39,6 +39,10 @@ The raw timings add:
   ``libsumo_only_vs_bare_sumo``, its ratio to the bare step: the floor under
   ``overhead_vs_bare_sumo`` whatever the agent's own code costs;
   ``overhead_vs_libsumo_only`` is our step over it;
+- ``kernels_only_ms_100``: a loop of only the compiled calls of a step (the world
+  step, lidar scan, lane lookups, contacts) back to back, and
+  ``kernels_only_vs_bare_sumo``: what ``overhead_vs_bare_sumo`` would be, at
+  least, were the whole loop compiled but for those calls;
 - ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
   junctions, 2000 cars) under lane keeping, where the road edges come from the
   network's drivable area.
@@ -62,6 +66,7 @@ from scenarios.toml_io import load_spec, read_toml
 from scenarios.worlds import make_road, make_world
 from sdc.controllers import make_controller
 from sdc.episode import Simulation
+from sdc.kernels import contacts
 from sdc.sensors import Lidar
 
 REPETITIONS = 3
@@ -175,6 +180,34 @@ def libsumo_only_ms(spec: ScenarioSpec) -> float:
     return 1e3 * float(np.median(steps_s))
 
 
+def kernels_only_ms(spec: ScenarioSpec) -> float:
+    """Median step [ms] of a loop of only the compiled calls of a closed-loop step, back
+    to back: the world step, the lidar scan, the lane sensor's two road lookups and
+    the contacts (no controller, no trace row, no end checks). However much of the
+    loop were compiled, a step costs at least this."""
+    road = make_road(spec)
+    with make_world(spec, road) as world:
+        sim = Simulation(spec, world, 0.0)
+        sim.start()
+        box, step_m = sim.box.copy(), spec.ego.speed_mps * spec.scenario.step_s
+        look_ahead_m, lidar_ahead_m = 5.0, spec.lidar.mount_ahead_m
+        steps_s = []
+        for _ in range(TIMED_STEPS):
+            start = time.perf_counter()
+            box[0] += step_m * math.cos(box[2])
+            box[1] += step_m * math.sin(box[2])
+            snapshot = world.step(box, spec.ego.speed_mps)
+            cos_yaw, sin_yaw = math.cos(box[2]), math.sin(box[2])
+            sim.lidar.scan((box[0] + lidar_ahead_m * cos_yaw, box[1] + lidar_ahead_m * sin_yaw),
+                           box[2], snapshot.obstacle_boxes, snapshot.traffic_boxes)
+            road.locate(box[0], box[1])
+            road.locate(box[0] + look_ahead_m * cos_yaw, box[1] + look_ahead_m * sin_yaw)
+            contacts(box, spec.ego.speed_mps, snapshot.obstacle_boxes, snapshot.traffic_boxes,
+                     snapshot.traffic_speeds_mps)
+            steps_s.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(steps_s))
+
+
 def town_spec() -> ScenarioSpec:
     """The catalog's town of 10 x 10 junctions with 2000 cars, lane keeping, no obstacle."""
     plain = load_spec(CATALOG_DIR / "grid-town.toml").to_plain()
@@ -252,13 +285,14 @@ def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
 def main() -> None:
     """Each ratio pairs measurements taken one right after the other, and the median
     of those paired ratios is printed: this machine's speed drifts between minutes."""
-    hundred, bare, without_ego, floor = [], [], [], []
+    hundred, bare, without_ego, floor, kernels = [], [], [], [], []
     for _ in range(SHORT_PAIRS):
         spec = traffic_spec(3, 2500.0, 1100.0, 120.0)
         hundred.append(closed_loop(spec))
         bare.append(bare_sumo_ms(spec))
         without_ego.append(bare_sumo_ms(spec, ego=False))
         floor.append(libsumo_only_ms(spec))
+        kernels.append(kernels_only_ms(spec))
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(REPETITIONS):  # each pair waits on a 2000-vehicle warm-up (6 lanes x 18 km)
@@ -304,6 +338,9 @@ def main() -> None:
     print(f"raw.libsumo_only_vs_bare_sumo {paired(floors):.2f}")
     over_floor = [r["step_ms"] / f for r, f in zip(hundred, floor, strict=True)]
     print(f"raw.overhead_vs_libsumo_only {paired(over_floor):.2f}")
+    print(f"raw.kernels_only_ms_100 {statistics.median(kernels):.3f}")
+    compiled = [k / b for k, b in zip(kernels, bare, strict=True)]
+    print(f"raw.kernels_only_vs_bare_sumo {paired(compiled):.2f}")
     print(f"raw.highway_v0_steps_per_s {statistics.median(reference):.1f}")
     print(f"raw.lidar_ms_ours {statistics.median(o for o, _ in lidar):.3f}")
     print(f"raw.lidar_ms_highway_env {statistics.median(t for _, t in lidar):.3f}")
