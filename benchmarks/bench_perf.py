@@ -161,30 +161,13 @@ def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
     return 1e3 * float(np.median(steps_s))
 
 
-def libsumo_only_ms(spec: ScenarioSpec) -> float:
+def world_loop_ms(spec: ScenarioSpec, sense: bool = False) -> float:
     """Median step [ms] of a loop that does only the world's part of a closed loop
     (``SumoWorld.step``: push the ego, driving straight on, step SUMO, read the
-    traffic around it), without sensing or control."""
-    road = make_road(spec)
-    with make_world(spec, road) as world:
-        sim = Simulation(spec, world, 0.0)
-        sim.start()
-        box, step_m = sim.box.copy(), spec.ego.speed_mps * spec.scenario.step_s
-        steps_s = []
-        for _ in range(TIMED_STEPS):
-            start = time.perf_counter()
-            box[0] += step_m * math.cos(box[2])
-            box[1] += step_m * math.sin(box[2])
-            world.step(box, spec.ego.speed_mps)
-            steps_s.append(time.perf_counter() - start)
-    return 1e3 * float(np.median(steps_s))
-
-
-def kernels_only_ms(spec: ScenarioSpec) -> float:
-    """Median step [ms] of a loop of only the compiled calls of a closed-loop step, back
-    to back: the world step, the lidar scan, the lane sensor's two road lookups and
-    the contacts (no controller, no trace row, no end checks). However much of the
-    loop were compiled, a step costs at least this."""
+    traffic around it), without sensing or control. With ``sense``, also the
+    compiled calls of sensing, back to back: the lidar scan, the lane sensor's two
+    road lookups and the contacts (still no controller, trace row or end checks);
+    however much of the loop were compiled, a step costs at least this."""
     road = make_road(spec)
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, 0.0)
@@ -197,13 +180,15 @@ def kernels_only_ms(spec: ScenarioSpec) -> float:
             box[0] += step_m * math.cos(box[2])
             box[1] += step_m * math.sin(box[2])
             snapshot = world.step(box, spec.ego.speed_mps)
-            cos_yaw, sin_yaw = math.cos(box[2]), math.sin(box[2])
-            sim.lidar.scan((box[0] + lidar_ahead_m * cos_yaw, box[1] + lidar_ahead_m * sin_yaw),
-                           box[2], snapshot.obstacle_boxes, snapshot.traffic_boxes)
-            road.locate(box[0], box[1])
-            road.locate(box[0] + look_ahead_m * cos_yaw, box[1] + look_ahead_m * sin_yaw)
-            contacts(box, spec.ego.speed_mps, snapshot.obstacle_boxes, snapshot.traffic_boxes,
-                     snapshot.traffic_speeds_mps)
+            if sense:
+                cos_yaw, sin_yaw = math.cos(box[2]), math.sin(box[2])
+                sim.lidar.scan((box[0] + lidar_ahead_m * cos_yaw,
+                                box[1] + lidar_ahead_m * sin_yaw),
+                               box[2], snapshot.obstacle_boxes, snapshot.traffic_boxes)
+                road.locate(box[0], box[1])
+                road.locate(box[0] + look_ahead_m * cos_yaw, box[1] + look_ahead_m * sin_yaw)
+                contacts(box, spec.ego.speed_mps, snapshot.obstacle_boxes,
+                         snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
             steps_s.append(time.perf_counter() - start)
     return 1e3 * float(np.median(steps_s))
 
@@ -291,8 +276,8 @@ def main() -> None:
         hundred.append(closed_loop(spec))
         bare.append(bare_sumo_ms(spec))
         without_ego.append(bare_sumo_ms(spec, ego=False))
-        floor.append(libsumo_only_ms(spec))
-        kernels.append(kernels_only_ms(spec))
+        floor.append(world_loop_ms(spec))
+        kernels.append(world_loop_ms(spec, sense=True))
     short, two_thousand, short_cold = [], [], []
     walk = np.ones(CACHE_WALK_BYTES // 8)
     for _ in range(REPETITIONS):  # each pair waits on a 2000-vehicle warm-up (6 lanes x 18 km)

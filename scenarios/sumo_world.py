@@ -220,18 +220,18 @@ class SumoWorld:
         x, y, angle_deg = _sumo_pose(ego_box)
         if self._direct:
             t_s = _sumo_step.step(EGO_ID, x, y, angle_deg, ego_speed_mps)
-            self._renew_trips()
-            boxes, speeds = self._traffic_direct(ego_box)
-            return Snapshot(t_s, boxes, self._obstacle_boxes, speeds)
-        sumo = self._sumo
-        sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
-        sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
-        self._advance()
+        else:
+            sumo = self._sumo
+            sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
+            sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
+            sumo.simulationStep()
+            t_s = sumo.simulation.getTime()
+        self._renew_trips()
         boxes, speeds = self._traffic(ego_box)
-        return Snapshot(sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds)
+        return Snapshot(t_s, boxes, self._obstacle_boxes, speeds)
 
     def _advance(self) -> None:
-        """One SUMO step."""
+        """One SUMO step of the warm-up, before the ego enters."""
         self._sumo.simulationStep()
         self._renew_trips()
 
@@ -256,19 +256,18 @@ class SumoWorld:
         obstacles aside, in SUMO's order.
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
-        half a length behind its front bumper, along the yaw. The read is compiled
-        (``scenarios/_kernels.c``): in Python it cost more than the step's geometry.
+        half a length behind its front bumper, along the yaw. The read is compiled:
+        from SUMO's own results with libsumo (``scenarios/_sumo_step.cpp``), from
+        the dict of dicts traci hands over otherwise (``scenarios/_kernels.c``); in
+        Python it cost more than the step's geometry.
         """
-        nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
-        boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
-        count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                   TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
-                                   float(ego_box[1]), self._radius_m, boxes, speeds)
-        return boxes[:count], speeds[:count]
-
-    def _traffic_direct(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """What :meth:`_traffic` returns, read from SUMO's results without libsumo's
-        dicts (``scenarios/_sumo_step.cpp``)."""
+        if not self._direct:
+            nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
+            boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
+            count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+                                     TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
+                                     float(ego_box[1]), self._radius_m, boxes, speeds)
+            return boxes[:count], speeds[:count]
         while True:
             rows = self._traffic_rows
             boxes, speeds = np.empty((rows, 5)), np.empty(rows)

@@ -58,7 +58,7 @@ def test_more_vehicles_than_room_grows_the_read(lesson_plain):
         many = sim.snapshot.traffic_boxes
         assert len(many) >= 4 and world._traffic_rows >= len(many)
         # the same read again, with room from the start
-        again, speeds = world._traffic_direct(sim.box)
+        again, speeds = world._traffic(sim.box)
         assert again.tobytes() == many.tobytes()
         assert speeds.tobytes() == sim.snapshot.traffic_speeds_mps.tobytes()
 
