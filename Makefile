@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench clean system-packages
 
-$(STAMP): pyproject.toml setup.py sdc/_kernels.c scenarios/_kernels.c scenarios/_sumo_step.cpp scenarios/*.h  # C builds at install
+$(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/_road_kernels.c scenarios/*.h  # C builds at install (optional)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
@@ -17,6 +17,7 @@ demo: $(STAMP)
 
 test: $(STAMP) system-packages
 	$(BIN)/ruff check .
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -n 2 -q
 
 test-fast: $(STAMP)
@@ -27,6 +28,7 @@ system-packages:
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/lint-imports
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sweep.py
@@ -34,4 +36,5 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_perf.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build sdc/_kernels*.so scenarios/_kernels*.so scenarios/_sumo_step*.so
+	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build
+	find sdc scenarios -name '*.so' -delete

@@ -1,20 +1,21 @@
-"""The compiled per-step code (the car's kernels, the world's, and the SUMO step);
+"""The compiled per-step code (the car's geometry kernels and the world's road kernels);
 everything else about the package is in pyproject.toml.
 
-``-ffp-contract=off`` keeps every product rounded on its own, as numpy rounds it,
-so the compiled code equals its numpy references bit for bit.
+Both extensions are optional: without a C compiler the build skips them (with a
+warning) and sdc runs their numpy references, which give the same results bit for
+bit. ``-ffp-contract=off`` keeps every product rounded on its own, as numpy rounds
+it, which is what makes the two paths equal.
 """
 
 from setuptools import Extension, setup
 
 FLAGS = ["-O2", "-ffp-contract=off"]
+HEADERS = ["scenarios/_buffers.h"]
 
-HEADERS = ["scenarios/_buffers.h", "scenarios/_traffic_box.h"]
 
-setup(ext_modules=[Extension("sdc._kernels", ["sdc/_kernels.c"], depends=HEADERS,
-                             extra_compile_args=FLAGS),
-                   Extension("scenarios._kernels", ["scenarios/_kernels.c"], depends=HEADERS,
-                             extra_compile_args=FLAGS),
-                   Extension("scenarios._sumo_step", ["scenarios/_sumo_step.cpp"],
-                             depends=HEADERS, language="c++", libraries=["dl"],
-                             extra_compile_args=[*FLAGS, "-std=c++17"])])
+def kernel(name: str, source: str) -> Extension:
+    return Extension(name, [source], depends=HEADERS, extra_compile_args=FLAGS, optional=True)
+
+
+setup(ext_modules=[kernel("sdc.car._geometry_kernels", "sdc/car/_geometry_kernels.c"),
+                   kernel("scenarios._road_kernels", "scenarios/_road_kernels.c")])

@@ -22,12 +22,14 @@ from matplotlib import animation  # noqa: E402
 from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
 
 from analysis.metrics import central_range_m  # noqa: E402
-from scenarios.road import RoadGeometry  # noqa: E402
+from analysis.trace_file import Trace  # noqa: E402
+from scenarios.boxes import box_corners  # noqa: E402
+from scenarios.road_geometry import RoadGeometry  # noqa: E402
+from scenarios.scenario_spec import (
+    ScenarioSpec,  # noqa: E402
+    beam_angles_rad,  # noqa: E402
+)
 from scenarios.snapshot import obstacle_boxes  # noqa: E402
-from scenarios.spec import ScenarioSpec  # noqa: E402
-from sdc.geometry import box_corners  # noqa: E402
-from sdc.sensors import beam_angles_rad  # noqa: E402
-from sdc.trace import Trace  # noqa: E402
 
 VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
 

@@ -9,8 +9,8 @@ import math
 
 import numpy as np
 
-from scenarios.road import RoadGeometry
-from sdc.geometry import box_corners
+from scenarios.boxes import box_corners
+from scenarios.road_geometry import RoadGeometry
 
 
 def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.ndarray,

@@ -12,10 +12,9 @@ machine's speed swings between seconds), then the raw timings:
   subscribed to. Traffic changing lanes around that slow car is half of SUMO's
   step, so taking the ego out (``raw.overhead_vs_sumo_without_ego``) measures
   another scenario; ``raw.overhead_vs_sumo_in_loop`` divides by SUMO's step
-  inside our loop instead (the compiled world step: the ego's push, SUMO's step,
-  its time).
+  inside our loop instead (``libsumo.simulationStep`` alone).
 - ``agent_cost_ratio_2000_vs_100``: the agent's own cost per step (everything
-  but the compiled world step: the ego's push and SUMO's step) on a 6-lane road
+  but ``libsumo.simulationStep``) on a 6-lane road
   18 km long holding about 2000 vehicles over its cost on one 900 m long holding
   about 100, at the same traffic density around the ego; traffic is read only
   within the sensing radius.
@@ -39,10 +38,10 @@ The raw timings add:
   ``libsumo_only_vs_bare_sumo``, its ratio to the bare step: the floor under
   ``overhead_vs_bare_sumo`` whatever the agent's own code costs;
   ``overhead_vs_libsumo_only`` is our step over it;
-- ``kernels_only_ms_100``: a loop of only the compiled calls of a step (the world
-  step, lidar scan, lane lookups, contacts) back to back, and
+- ``kernels_only_ms_100``: a loop of only the world step and the compiled calls
+  of a step (lidar scan, lane lookups, contacts) back to back, and
   ``kernels_only_vs_bare_sumo``: what ``overhead_vs_bare_sumo`` would be, at
-  least, were the whole loop compiled but for those calls;
+  least, were the whole car's side compiled;
 - ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
   junctions, 2000 cars) under lane keeping, where the road edges come from the
   network's drivable area.
@@ -59,15 +58,15 @@ import warnings
 import numpy as np
 import traci.constants as tc
 
-from scenarios import CATALOG_DIR, sumo_world
-from scenarios.spec import LidarSpec, ScenarioSpec
+from scenarios import CATALOG_DIR
+from scenarios.scenario_spec import LidarSpec, ScenarioSpec
 from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M
 from scenarios.toml_io import load_spec, read_toml
-from scenarios.worlds import make_road, make_world
-from sdc.controllers import make_controller
-from sdc.episode import Simulation
-from sdc.kernels import contacts
-from sdc.sensors import Lidar
+from scenarios.world_backends import make_road, make_world
+from sdc.car.controllers import make_controller
+from sdc.car.geometry_kernels import contacts
+from sdc.car.sensors import Lidar
+from sdc.run.episode import Simulation
 
 REPETITIONS = 3
 SHORT_PAIRS = 9
@@ -99,24 +98,24 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
     reads that array, as a big network's step sweeps the CPU caches."""
     controller = make_controller(spec.controller)
     road = make_road(spec)
+    import libsumo
+
     sumo_s = []
-    compiled = sumo_world._sumo_step
+    sumo_step = libsumo.simulationStep
 
     def timed_step(*args):
         start = time.perf_counter()
-        t_s = compiled.step(*args)
+        sumo_step(*args)
         if cache_walk is not None:
             cache_walk.sum()
         sumo_s.append(time.perf_counter() - start)
-        return t_s
 
     steps_s = []
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, controller.look_ahead_m)
         sim.start()
         vehicles = world.vehicle_count()
-        sumo_world._sumo_step = types.SimpleNamespace(bind=compiled.bind, step=timed_step,
-                                                      traffic=compiled.traffic)
+        libsumo.simulationStep = timed_step  # the world calls it through the module
         try:
             sumo_s.clear()
             for _ in range(TIMED_STEPS):
@@ -128,7 +127,7 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
                 sim.advance(command)
                 steps_s.append(time.perf_counter() - start)
         finally:
-            sumo_world._sumo_step = compiled
+            libsumo.simulationStep = sumo_step
     step_s, sumo_step_s = np.array(steps_s), np.array(sumo_s[: len(steps_s)])
     return {"step_ms": 1e3 * np.median(step_s), "sumo_ms": 1e3 * np.median(sumo_step_s),
             "agent_ms": 1e3 * np.median(step_s - sumo_step_s), "vehicles": vehicles,

@@ -27,9 +27,9 @@ import time
 from pathlib import Path
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep import load_sweep
-from sdc.executors import LocalExecutor, RayExecutor
-from sdc.sweep import run_sweep
+from scenarios.sweep_spec import load_sweep
+from sdc.batch.executors import LocalExecutor, RayExecutor
+from sdc.batch.sweep_runner import run_sweep
 
 PAIRS, SAMPLES = 3, 200  # seed-envelope samples: 400 runs a sweep
 
@@ -78,10 +78,10 @@ def driver_peak_rss_kib(sweep_file: Path, out_dir: Path) -> int:
     """Peak RSS of a process that runs the sweep as its driver."""
     code = (
         "import resource, sys\n"
-        "from scenarios.sweep import load_sweep\n"
-        "from sdc.executors import LocalExecutor\n"
-        "from sdc.progress import QuietReporter\n"
-        "from sdc.sweep import run_sweep\n"
+        "from scenarios.sweep_spec import load_sweep\n"
+        "from sdc.batch.executors import LocalExecutor\n"
+        "from sdc.batch.progress import QuietReporter\n"
+        "from sdc.batch.sweep_runner import run_sweep\n"
         f"run_sweep(load_sweep({str(sweep_file)!r}), {str(out_dir)!r}, LocalExecutor(2),\n"
         "          QuietReporter(), traces='none')\n"
         "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"

@@ -3,7 +3,7 @@
 from pathlib import Path
 
 from scenarios.errors import SdcError, SpecError
-from scenarios.spec import (
+from scenarios.scenario_spec import (
     ControllerSpec,
     EgoSpec,
     LaneKeepParams,

@@ -1,6 +1,6 @@
 /*
- * Taking numpy arrays in the compiled code (scenarios/_kernels.c and
- * sdc/_kernels.c): a float64, C-contiguous buffer of whole rows, or a TypeError
+ * Taking numpy arrays in the compiled code (scenarios/_road_kernels.c and
+ * sdc/car/_geometry_kernels.c): a float64, C-contiguous buffer of whole rows, or a TypeError
  * naming the argument.
  */
 #ifndef SDC_BUFFERS_H

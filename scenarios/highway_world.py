@@ -16,7 +16,8 @@ import math
 
 import numpy as np
 
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import (
     NO_BOXES,
     Snapshot,
@@ -25,7 +26,6 @@ from scenarios.snapshot import (
     sensing_radius_m,
     within_m,
 )
-from scenarios.spec import ScenarioSpec
 
 START, END = "start", "end"
 #: SUMO's vType bounds on the speed factor, used for highway-env's desired speeds too

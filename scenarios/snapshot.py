@@ -10,8 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 
 NO_BOXES = np.zeros((0, 5))
 #: traffic is reported within the lidar's range plus this, from the ego's body centre [m]

@@ -18,19 +18,19 @@ from pathlib import Path
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios import _kernels, _sumo_step
+from scenarios import _road_kernels as _kernels
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
-from scenarios.demand import RandomTrips
-from scenarios.netroad import DEMAND, NetworkRoad, scenario_stream
-from scenarios.network import EDGE_ID, build_network, sumo_binary
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import (
     Snapshot,
     in_start_zone,
     obstacle_boxes,
     sensing_radius_m,
 )
-from scenarios.spec import ScenarioSpec
+from scenarios.sumo_net.build import EDGE_ID, build_network, sumo_binary
+from scenarios.sumo_net.random_trips import RandomTrips
+from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
 
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
@@ -149,8 +149,6 @@ class SumoWorld:
         self._radius_m = sensing_radius_m(spec)
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
-        self._direct = False  # stepping through _sumo_step (libsumo only, not sumo-gui)
-        self._traffic_rows = 64  # room for this many context results in a direct read
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
@@ -183,9 +181,6 @@ class SumoWorld:
             "--no-step-log", "true", "--no-warnings", "true",
         ])
         self._sumo = sim
-        if not self.gui:
-            from libsumo import _libsumo
-            self._direct = _sumo_step.bind(_libsumo.__file__, sim.TraCIException)
         for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
             self._advance()
         self._clear_start()
@@ -211,21 +206,13 @@ class SumoWorld:
             vehicle.remove(str(vid))
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
-        """Place the ego at ``ego_box``, advance SUMO one step, return the new state.
-
-        With libsumo the step is compiled (``scenarios/_sumo_step.cpp``): the same
-        calls into SUMO, without libsumo's Python layer, which cost as much as
-        SUMO's own work for them.
-        """
+        """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
         x, y, angle_deg = _sumo_pose(ego_box)
-        if self._direct:
-            t_s = _sumo_step.step(EGO_ID, x, y, angle_deg, ego_speed_mps)
-        else:
-            sumo = self._sumo
-            sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
-            sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
-            sumo.simulationStep()
-            t_s = sumo.simulation.getTime()
+        sumo = self._sumo
+        sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
+        sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
+        sumo.simulationStep()
+        t_s = sumo.simulation.getTime()
         self._renew_trips()
         boxes, speeds = self._traffic(ego_box)
         return Snapshot(t_s, boxes, self._obstacle_boxes, speeds)
@@ -256,27 +243,16 @@ class SumoWorld:
         obstacles aside, in SUMO's order.
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
-        half a length behind its front bumper, along the yaw. The read is compiled:
-        from SUMO's own results with libsumo (``scenarios/_sumo_step.cpp``), from
-        the dict of dicts traci hands over otherwise (``scenarios/_kernels.c``); in
-        Python it cost more than the step's geometry.
+        half a length behind its front bumper, along the yaw. The read of the dict of
+        dicts libsumo and traci hand over is compiled (``scenarios/_road_kernels.c``);
+        in Python it cost more than the step's geometry.
         """
-        if not self._direct:
-            nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
-            boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
-            count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                     TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
-                                     float(ego_box[1]), self._radius_m, boxes, speeds)
-            return boxes[:count], speeds[:count]
-        while True:
-            rows = self._traffic_rows
-            boxes, speeds = np.empty((rows, 5)), np.empty(rows)
-            count = _sumo_step.traffic(EGO_ID, _TRAFFIC_VARS, OBSTACLE_PREFIX, TRAFFIC_LENGTH_M,
-                                       TRAFFIC_WIDTH_M, float(ego_box[0]), float(ego_box[1]),
-                                       self._radius_m, boxes, speeds)
-            if count >= 0:
-                return boxes[:count], speeds[:count]
-            self._traffic_rows = max(-count, 2 * rows)  # more results than room: grow
+        nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
+        boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
+        count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+                                 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
+                                 float(ego_box[1]), self._radius_m, boxes, speeds)
+        return boxes[:count], speeds[:count]
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.errors import SpecError
-from scenarios.spec import ScenarioSpec
+from scenarios.scenario_spec import ScenarioSpec
 
 
 def read_toml(path: str | Path) -> dict:

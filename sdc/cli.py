@@ -16,9 +16,9 @@ import click
 
 from scenarios import CATALOG_DIR
 from scenarios.errors import SdcError
-from scenarios.spec import CONTROLLER_PARAMS, ScenarioSpec
+from scenarios.scenario_spec import CONTROLLER_PARAMS, ScenarioSpec
 from scenarios.toml_io import load_spec
-from scenarios.worlds import check_inputs
+from scenarios.world_backends import check_inputs
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -39,7 +39,7 @@ def _check_trace_path(trace: Path | None) -> None:
 
 def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     """Run a spec; a failure inside the run becomes a row with ``status`` error."""
-    from sdc.task import RunTask, execute
+    from sdc.batch.run_task import RunTask, execute
 
     run_id = f"{spec.scenario.name}-{spec.controller.name}-{spec.scenario.seed}"
     return execute(RunTask(run_id, spec, trace_path=trace))
@@ -137,10 +137,10 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
               show_default="all cores", help="Worker processes.")
 def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     """Sweep the catalog's seed-envelope on all cores and write its collision report."""
-    from scenarios.sweep import load_sweep
-    from sdc.executors import LocalExecutor
-    from sdc.progress import RichReporter
-    from sdc.sweep import run_sweep
+    from scenarios.sweep_spec import load_sweep
+    from sdc.batch.executors import LocalExecutor
+    from sdc.batch.progress import RichReporter
+    from sdc.batch.sweep_runner import run_sweep
 
     try:
         spec = load_sweep(CATALOG_DIR / "sweeps" / "seed-envelope.toml")
@@ -169,8 +169,8 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
-    from scenarios.sweep import expand, plan_sha256
-    from sdc.manifest import read_manifest
+    from scenarios.sweep_spec import expand, plan_sha256
+    from sdc.batch.manifest import read_manifest
 
     manifest = read_manifest(out_dir) if out_dir.is_dir() else None
     return (manifest is not None
@@ -260,10 +260,10 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
     --run-timeout or kills its worker becomes an error or timeout row. After a
     kill or Ctrl-C, the same command with --resume finishes the sweep.
     """
-    from scenarios.sweep import expand, load_sweep
-    from sdc.executors import LocalExecutor, RayExecutor
-    from sdc.progress import QuietReporter, RichReporter
-    from sdc.sweep import run_sweep
+    from scenarios.sweep_spec import expand, load_sweep
+    from sdc.batch.executors import LocalExecutor, RayExecutor
+    from sdc.batch.progress import QuietReporter, RichReporter
+    from sdc.batch.sweep_runner import run_sweep
 
     if ray_address and executor != "ray":
         _bad_input("--ray-address: only applies with --executor ray")
@@ -339,7 +339,7 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
     when DIR kept the run's trace). With TRACE.parquet, the recorded run is drawn
     without SUMO (default --out: TRACE.html beside it).
     """
-    from sdc.trace import read_trace
+    from analysis.trace_file import read_trace
 
     if out is not None and out.suffix not in (".gif", ".mp4", ".html"):
         _bad_input(f"--out: {out} must end in .gif, .mp4 or .html")
@@ -374,9 +374,9 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
 
 def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui: bool) -> bool:
     """Re-simulate, compare, report and draw; True when the replay is not identical."""
-    from sdc.episode import run_episode
-    from sdc.replay import first_divergence, load_recorded_run, version_warnings
-    from sdc.trace import read_trace
+    from analysis.trace_file import read_trace
+    from sdc.batch.replay_check import first_divergence, load_recorded_run, version_warnings
+    from sdc.run.episode import run_episode
 
     recorded = load_recorded_run(sweep_dir, run_id)
     for line in version_warnings(recorded.manifest):

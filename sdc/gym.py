@@ -35,12 +35,12 @@ import numpy as np
 from gymnasium import spaces
 
 from scenarios import CATALOG_DIR
-from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 from scenarios.toml_io import load_spec
-from scenarios.worlds import BACKENDS, make_road, make_world
-from sdc.episode import COLLISION, DURATION, Simulation
-from sdc.vehicle import Command
+from scenarios.world_backends import BACKENDS, make_road, make_world
+from sdc.car.vehicle import Command
+from sdc.run.episode import COLLISION, DURATION, Simulation
 
 ENV_ID = "sdc/ObstacleAvoidance-v0"
 MAX_STEER_RAD = 0.7  # the lesson's avoidance angle
@@ -145,7 +145,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     """sdc's drawing of the simulation's current step."""
     from analysis.metrics import central_range_m
     from analysis.render import Scene, frame_rgb, road_heading_rad, road_lines
-    from sdc.sensors import beam_angles_rad
+    from scenarios.scenario_spec import beam_angles_rad
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)

@@ -105,7 +105,7 @@ def test_a_run_that_raises_is_an_error_row_and_exit_1(monkeypatch):
     def broken(spec, **_):
         raise RuntimeError("SUMO went away")
 
-    monkeypatch.setattr("sdc.episode.run_episode", broken)
+    monkeypatch.setattr("sdc.run.episode.run_episode", broken)
     result = invoke("run", LESSON, "--json")
     assert result.exit_code == 1
     row = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])

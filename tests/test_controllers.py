@@ -2,8 +2,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.spec import ControllerSpec, LaneKeepParams, SeedParams
-from sdc.controllers import (
+from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, SeedParams
+from sdc.car.controllers import (
     AVOID_LEFT,
     AVOID_RIGHT,
     AVOID_STRAIGHT,
@@ -12,7 +12,7 @@ from sdc.controllers import (
     SeedController,
     make_controller,
 )
-from sdc.sensors import LaneReading
+from sdc.car.sensors import LaneReading
 
 CLEAR = np.full(180, np.inf)
 

@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 
+from analysis.trace_file import read_trace
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
-from sdc.episode import run_episode
-from sdc.trace import read_trace
+from sdc.run.episode import run_episode
 
 pytestmark = pytest.mark.slow
 

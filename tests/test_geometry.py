@@ -1,4 +1,4 @@
-"""Tests for sdc.geometry: analytic cases plus hypothesis properties against brute force."""
+"""Tests for sdc.car.geometry: analytic cases plus hypothesis properties against brute force."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from sdc.geometry import (
+from sdc.car.geometry import (
     box_corners,
     box_edges,
     box_gap_m,

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, load_spec
-from scenarios.spec import ScenarioSpec
-from sdc.episode import run_episode
+from scenarios.scenario_spec import ScenarioSpec
+from sdc.run.episode import run_episode
 
 pytestmark = pytest.mark.slow
 
@@ -56,7 +56,7 @@ def test_highway_traffic_reacts_to_a_stopped_ego(lesson_plain):
 
 @pytest.mark.parametrize("radius_m", [200.0, -200.0])
 def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
-    from scenarios.road import RoadGeometry
+    from scenarios.road_geometry import RoadGeometry
 
     plain = copy.deepcopy(lesson_plain)
     plain["road"].update(kind="curve", curve_radius_m=radius_m, length_m=300.0,
@@ -80,10 +80,10 @@ def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
 
 def test_a_sweep_over_both_backends_reports_them_side_by_side(tmp_path):
     from analysis.report import write_report
-    from scenarios.sweep import load_sweep
-    from sdc.executors import LocalExecutor
-    from sdc.progress import QuietReporter
-    from sdc.sweep import run_sweep
+    from scenarios.sweep_spec import load_sweep
+    from sdc.batch.executors import LocalExecutor
+    from sdc.batch.progress import QuietReporter
+    from sdc.batch.sweep_runner import run_sweep
 
     sweep_file = tmp_path / "both.toml"
     sweep_file.write_text(f"""[sweep]

@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
 
 from analysis import safety
-from sdc import kernels
-from sdc.geometry import box_gap_m, boxes_overlap, ray_box_ranges, ray_segment_ranges
+from sdc.car import geometry_kernels as kernels
+from sdc.car.geometry import box_gap_m, boxes_overlap, ray_box_ranges, ray_segment_ranges
 
 PROPS = settings(max_examples=300, deadline=None)
 segment_st = st.tuples(*[st.floats(-60.0, 60.0, allow_nan=False)] * 4)

@@ -9,13 +9,19 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, RoadSpec, SpecError
-from scenarios.netfile import STRAIGHT, U_TURN, read_net
-from scenarios.netroad import ROUTE, draw_route, network_area, network_road, scenario_stream
-from scenarios.network import build_network
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
+from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, read_net
+from scenarios.sumo_net.route_road import (
+    ROUTE,
+    draw_route,
+    network_area,
+    network_road,
+    scenario_stream,
+)
 from scenarios.toml_io import load_spec
-from sdc.collision import ROAD_EDGE, collision_with
-from sdc.kernels import Contacts
+from sdc.car.collision import ROAD_EDGE, collision_with
+from sdc.car.geometry_kernels import Contacts
 
 GRID_TOWN = CATALOG_DIR / "grid-town.toml"
 
@@ -158,7 +164,7 @@ def test_built_in_roads_refuse_network_fields():
 def test_a_crowd_of_overlapping_lanes_still_finds_the_lane_a_point_is_on():
     """Twenty lanes stacked on one another, then a lane beside them: a point on
     the last one has more lane pieces near it than one lookup returns."""
-    from scenarios.drivable import DrivableArea
+    from scenarios.sumo_net.drivable_area import DrivableArea
 
     stacked = [np.array([[47.5, 1.2], [52.5, 1.2]])] * 20  # each one piece, centred at x 50
     beside = np.array([[0.0, 4.0], [100.0, 4.0]])  # its pieces' midpoints are farther away

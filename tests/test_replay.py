@@ -13,15 +13,15 @@ from click.testing import CliRunner
 from PIL import Image
 
 from analysis.render import frame_steps
+from analysis.trace_file import Trace, read_trace
 from scenarios import CATALOG_DIR
-from scenarios.sweep import load_sweep
+from scenarios.sweep_spec import load_sweep
+from sdc.batch.executors import LocalExecutor
+from sdc.batch.manifest import package_versions
+from sdc.batch.progress import QuietReporter
+from sdc.batch.replay_check import first_divergence, version_warnings
+from sdc.batch.sweep_runner import run_sweep
 from sdc.cli import main
-from sdc.executors import LocalExecutor
-from sdc.manifest import package_versions
-from sdc.progress import QuietReporter
-from sdc.replay import first_divergence, version_warnings
-from sdc.sweep import run_sweep
-from sdc.trace import Trace, read_trace
 
 SWEEP = f"""[sweep]
 name = "replays"

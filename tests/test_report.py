@@ -18,11 +18,11 @@ from click.testing import CliRunner
 
 from analysis.report import write_report
 from scenarios import CATALOG_DIR
-from scenarios.sweep import load_sweep
+from scenarios.sweep_spec import load_sweep
+from sdc.batch.executors import LocalExecutor
+from sdc.batch.progress import QuietReporter
+from sdc.batch.sweep_runner import run_sweep
 from sdc.cli import main
-from sdc.executors import LocalExecutor
-from sdc.progress import QuietReporter
-from sdc.sweep import run_sweep
 
 pytestmark = pytest.mark.slow
 

@@ -7,9 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scenarios import RoadSpec, _kernels
-from scenarios.network import EDGE_ID, build_network
-from scenarios.road import RoadGeometry
+from scenarios import RoadSpec
+from scenarios import _road_kernels as _kernels
+from scenarios.road_geometry import RoadGeometry
+from scenarios.sumo_net.build import EDGE_ID, build_network
 
 
 def curve(radius_m: float, lanes: int = 3) -> RoadSpec:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from analysis.safety import road_edge_gaps_m, time_to_collision_s
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
 
 EGO = np.array([0.0, 0.0, 0.0, 4.0, 2.0])  # centre at the origin, heading +x
 

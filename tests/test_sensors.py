@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from scenarios import LidarSpec, RoadSpec
-from scenarios.road import RoadGeometry
-from sdc.sensors import LaneSensor, Lidar, beam_angles_rad
+from scenarios.road_geometry import RoadGeometry
+from sdc.car.sensors import LaneSensor, Lidar, beam_angles_rad
 
 NO_EDGES = np.zeros((0, 4))
 

@@ -11,9 +11,9 @@ import pandas as pd
 import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
-from scenarios.netroad import network_road
-from scenarios.worlds import make_world
-from sdc.episode import Simulation, run_episode
+from scenarios.sumo_net.route_road import network_road
+from scenarios.world_backends import make_world
+from sdc.run.episode import Simulation, run_episode
 
 SPEED_MPS = 3.74  # the lesson's
 
@@ -65,7 +65,7 @@ def test_same_seed_same_trace_in_another_process_and_other_seeds_differ(seed):
     spec = town(seed, vehicles=200)
     here = run_episode(spec).row["trace_sha256"]
     code = ("import sys; from scenarios import ScenarioSpec; import json;"
-            "from sdc.episode import run_episode;"
+            "from sdc.run.episode import run_episode;"
             "spec = ScenarioSpec.from_plain(json.loads(sys.stdin.read()));"
             "print(run_episode(spec).row['trace_sha256'])")
     there = subprocess.run([sys.executable, "-c", code], input=json.dumps(spec.to_plain()),
@@ -119,7 +119,7 @@ def test_a_network_converted_from_openstreetmap_runs(tmp_path):
     primary road, a residential street, a one-way) and run in it."""
     from pathlib import Path
 
-    from scenarios.network import sumo_binary
+    from scenarios.sumo_net.build import sumo_binary
 
     osm = Path(__file__).parent / "data" / "osm-town.osm"
     net = tmp_path / "osm-town.net.xml"

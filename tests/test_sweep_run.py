@@ -14,11 +14,11 @@ import pandas as pd
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep import expand, load_sweep
-from sdc.executors import LocalExecutor, RayExecutor
-from sdc.progress import QuietReporter
-from sdc.sweep import run_sweep
-from sdc.task import RunTask, execute
+from scenarios.sweep_spec import expand, load_sweep
+from sdc.batch.executors import LocalExecutor, RayExecutor
+from sdc.batch.progress import QuietReporter
+from sdc.batch.run_task import RunTask, execute
+from sdc.batch.sweep_runner import run_sweep
 
 pytestmark = pytest.mark.slow
 

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from scenarios import CATALOG_DIR
 from scenarios.errors import SpecError
-from scenarios.sweep import SweepSpec, expand, load_sweep, plan_sha256, sample_values
+from scenarios.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256, sample_values
 from sdc.cli import main
 
 BASE = str(CATALOG_DIR / "seed-lesson.toml")

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 import traci.constants as tc
 
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import in_start_zone, sensing_radius_m, within_m
-from scenarios.spec import ScenarioSpec
 from scenarios.sumo_world import TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M
-from scenarios.worlds import make_world
-from sdc.episode import Simulation, run_episode
-from sdc.vehicle import Command
+from scenarios.world_backends import make_world
+from sdc.car.vehicle import Command
+from sdc.run.episode import Simulation, run_episode
 
 pytestmark = pytest.mark.slow
 

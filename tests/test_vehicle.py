@@ -5,7 +5,7 @@ import math
 import pytest
 
 from scenarios.bodies import VEHICLE_MODELS
-from sdc.vehicle import GRAVITY_MPS2, Command, Vehicle, VehicleState
+from sdc.car.vehicle import GRAVITY_MPS2, Command, Vehicle, VehicleState
 
 LESSON = VEHICLE_MODELS["x5-lesson"]
 

@@ -27,8 +27,8 @@ from typing import Any, Literal
 import numpy as np
 
 from scenarios.errors import SpecError
-from scenarios.fields import Spec, build, num
-from scenarios.spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
+from scenarios.scenario_spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
+from scenarios.spec_fields import Spec, build, num
 from scenarios.toml_io import load_spec, read_toml
 
 SAMPLERS = ("grid", "random", "sobol", "lhs")

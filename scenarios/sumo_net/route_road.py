@@ -6,10 +6,10 @@ proportion to its length), then at every junction one of the lane's turns
 (straight on where it can with ``road.route_turns = "straight"``; U-turns
 never), through the junction's own lanes, until the route is ``road.length_m``
 long. Along it, the ego's lane is the road of
-:class:`~scenarios.road.RoadGeometry` (one lane: ``s`` along the route, ``d``
+:class:`~scenarios.road_geometry.RoadGeometry` (one lane: ``s`` along the route, ``d``
 from its centre), so lane sensing, positions and route end work as on the
 built-in roads; road edges come from the whole network
-(:class:`~scenarios.drivable.DrivableArea`).
+(:class:`~scenarios.sumo_net.drivable_area.DrivableArea`).
 """
 
 from __future__ import annotations
@@ -19,13 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.drivable import EDGE_SEARCH_VERSION, DrivableArea
+from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError, SpecError
-from scenarios.files import write_atomic
-from scenarios.netfile import STRAIGHT, U_TURN, NetFile, NetLane, read_net
-from scenarios.network import default_cache_dir
-from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.sumo_net.build import default_cache_dir
+from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
+from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, NetFile, NetLane, read_net
 
 #: tries at drawing a route that long before giving up (dead ends cut walks short)
 ROUTE_TRIES = 50

@@ -14,7 +14,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from scenarios.files import write_atomic
+from scenarios.atomic_write import write_atomic
 
 #: the result row of DESIGN.md section 4, in order, plus sdc's own columns
 RESULT_FIELDS = [

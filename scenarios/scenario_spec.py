@@ -11,9 +11,11 @@ import dataclasses
 import math
 from typing import Any, Literal
 
+import numpy as np
+
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.errors import SpecError
-from scenarios.fields import Spec, build, num, to_plain
+from scenarios.spec_fields import Spec, build, num, to_plain
 
 spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
 
@@ -73,7 +75,7 @@ class TrafficSpec(Spec):
     On a ``sumo_net`` road, ``vehicles`` cars drive random trips (from and to
     edges drawn in proportion to their length, like SUMO's ``randomTrips.py
     -l``), the first ones departing at 0 s from free random places, each car that
-    arrives replaced by a new trip (``scenarios/demand.py``). They drive at each
+    arrives replaced by a new trip (``scenarios/sumo_net/random_trips.py``). They drive at each
     edge's speed limit times a factor ~ N(1, ``speed_dev``); ``flow_vph_per_lane`` and
     ``speed_mean_mps`` are for the built-in roads.
 
@@ -105,6 +107,16 @@ class EgoSpec(Spec):
     lane: int = num(ge=0)
     start_m: float = num(ge=0)
     speed_mps: float = num(ge=0, le=70)
+
+
+def beam_angles_rad(beams: int, fov_deg: float) -> np.ndarray:
+    """Beam directions relative to the car's heading, index 0 leftmost.
+
+    Beams are ``fov_deg / beams`` apart and index ``beams // 2`` looks straight
+    ahead, as in the lesson's 180-beam range image (ranges[85:96] is the centre).
+    """
+    step_rad = math.radians(fov_deg) / beams
+    return (beams // 2 - np.arange(beams)) * step_rad
 
 
 @spec_class

@@ -1,5 +1,8 @@
-"""The per-step record of one run: columns of numpy arrays, a content hash,
-and a Parquet file that carries the spec and road geometry in its metadata.
+"""The per-step record of one run (a trace): columns of numpy arrays, a content
+hash, and a Parquet file that carries the spec and road geometry in its metadata.
+
+The car's run fills one with :class:`sdc.run.trace_recorder.TraceRecorder`;
+everything in ``analysis`` reads it from here, without the simulator.
 """
 
 from __future__ import annotations
@@ -13,8 +16,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
-from scenarios.files import write_atomic
 
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (
@@ -75,32 +78,6 @@ class Trace:
         """Write atomically: a crash leaves either no file or the whole one."""
         table = self.to_table(metadata)
         write_atomic(path, lambda tmp: pq.write_table(table, tmp))
-
-
-class TraceRecorder:
-    """Collects rows during a run; :meth:`finish` turns them into a :class:`Trace`."""
-
-    def __init__(self):
-        self._floats: list[tuple[float, ...]] = []
-        self._phase: list[str] = []
-        self._lidar: list[np.ndarray] = []
-        self._traffic: list[np.ndarray] = []
-
-    def add(self, floats: tuple[float, ...], phase: str, lidar: np.ndarray,
-            traffic: np.ndarray) -> None:
-        """One step's row; ``floats`` holds the values of ``FLOAT_COLUMNS``, in order."""
-        if len(floats) != len(FLOAT_COLUMNS):
-            raise ValueError(f"a row has {len(FLOAT_COLUMNS)} floats, not {len(floats)}")
-        self._floats.append(floats)
-        self._phase.append(phase)
-        self._lidar.append(np.asarray(lidar, np.float32))
-        self._traffic.append(np.asarray(traffic, np.float32).ravel())
-
-    def finish(self) -> Trace:
-        columns = np.array(self._floats, dtype=float).reshape(-1, len(FLOAT_COLUMNS)).T
-        floats = {name: np.ascontiguousarray(column)
-                  for name, column in zip(FLOAT_COLUMNS, columns, strict=True)}
-        return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic))
 
 
 def read_trace(path: str | Path) -> tuple[Trace, dict]:

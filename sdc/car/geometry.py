@@ -18,48 +18,11 @@ No function loops in Python over beams, boxes or segments.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-# Local corner signs (length, width) in the order front-left, rear-left, rear-right, front-right.
-_CORNER_SIGNS = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]])
+from scenarios.boxes import as_boxes, box_corners, one_box_corners
 
-
-def _as_boxes(boxes: np.ndarray) -> np.ndarray:
-    return np.asarray(boxes, dtype=np.float64).reshape(-1, 5)
-
-
-def box_corners(boxes: np.ndarray) -> np.ndarray:
-    """Corners of oriented boxes.
-
-    boxes: (N, 5) ``[cx_m, cy_m, yaw_rad, length_m, width_m]``.
-    Returns (N, 4, 2) corner positions in metres, counter-clockwise:
-    front-left, rear-left, rear-right, front-right.
-    """
-    b = _as_boxes(boxes)
-    cos_yaw, sin_yaw = np.cos(b[:, 2]), np.sin(b[:, 2])
-    half_len_m = 0.5 * b[:, 3, None] * _CORNER_SIGNS[None, :, 0]  # (N, 4)
-    half_wid_m = 0.5 * b[:, 4, None] * _CORNER_SIGNS[None, :, 1]
-    x_m = b[:, 0, None] + cos_yaw[:, None] * half_len_m - sin_yaw[:, None] * half_wid_m
-    y_m = b[:, 1, None] + sin_yaw[:, None] * half_len_m + cos_yaw[:, None] * half_wid_m
-    return np.stack([x_m, y_m], axis=-1)
-
-
-def one_box_corners(box: np.ndarray) -> np.ndarray:
-    """:func:`box_corners` of a single box ``(5,)``, as (4, 2), bit for bit, in
-    scalar arithmetic (a step needs the ego's corners; numpy's broadcasting costs
-    more than the arithmetic there)."""
-    cx, cy, yaw, length, width = np.asarray(box, dtype=float).tolist()
-    c, s = math.cos(yaw), math.sin(yaw)
-    half_len, half_wid = 0.5 * length, 0.5 * width
-    return np.array([
-        [cx + c * half_len - s * half_wid, cy + s * half_len + c * half_wid],
-        [cx + c * -half_len - s * half_wid, cy + s * -half_len + c * half_wid],
-        [cx + c * -half_len - s * -half_wid, cy + s * -half_len + c * -half_wid],
-        [cx + c * half_len - s * -half_wid, cy + s * half_len + c * -half_wid],
-    ])
-
+__all__ = ["box_corners", "one_box_corners"]  # the world's boxes, re-exported beside the kernels
 
 def box_edges(boxes: np.ndarray) -> np.ndarray:
     """Outline of oriented boxes as segments: (N, 5) boxes -> (N, 4, 4) ``[x0, y0, x1, y1]`` (m).
@@ -113,7 +76,7 @@ def ray_box_ranges(
     """
     origin_m = np.asarray(origin_xy, dtype=np.float64).reshape(2)
     angles = np.atleast_1d(np.asarray(angles_rad, dtype=np.float64))
-    b = _as_boxes(boxes)
+    b = as_boxes(boxes)
     local_x_m, local_y_m = _origin_in_box_frames(origin_m, b)
     range_m = _slab_ranges(local_x_m[None, :], local_y_m[None, :],
                            angles[:, None] - b[None, :, 2],  # (B, N); exact 0 stays exact
@@ -154,8 +117,8 @@ def boxes_overlap(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     box: (5,), boxes: (N, 5), both ``[cx_m, cy_m, yaw_rad, length_m, width_m]``.
     Returns (N,) bool. Touching boxes (zero separation) count as overlapping.
     """
-    a = _as_boxes(box)[0]
-    b = _as_boxes(boxes)
+    a = as_boxes(box)[0]
+    b = as_boxes(boxes)
 
     def axes(yaw_rad: np.ndarray) -> np.ndarray:  # (..., 2, 2): length axis, width axis
         c, s = np.cos(yaw_rad), np.sin(yaw_rad)
@@ -194,7 +157,7 @@ def box_gap_m(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     Returns (N,) gaps in metres, 0.0 where :func:`boxes_overlap` is true. For disjoint convex
     rectangles the minimum is attained at a corner of one box against an edge of the other.
     """
-    a, b = _as_boxes(box)[:1], _as_boxes(boxes)
+    a, b = as_boxes(box)[:1], as_boxes(boxes)
     n = b.shape[0]
     if n == 0:
         return np.zeros(0)
@@ -212,7 +175,7 @@ def boxes_within_m(point_xy: np.ndarray, boxes: np.ndarray, reach_m: float) -> n
     A cheap, conservative cull before the exact kernels: every box that a ray of
     length ``reach_m`` from the point, or a disc of radius ``reach_m``, can touch is kept.
     """
-    b = _as_boxes(boxes)
+    b = as_boxes(boxes)
     half_diag_m = 0.5 * np.hypot(b[:, 3], b[:, 4])
     centre_m = np.hypot(b[:, 0] - point_xy[0], b[:, 1] - point_xy[1])
     return centre_m <= reach_m + half_diag_m

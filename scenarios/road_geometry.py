@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from scenarios import _kernels
-from scenarios.spec import RoadSpec
+from scenarios import _road_kernels as _kernels
+from scenarios.scenario_spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
 CHORD_TOLERANCE_M = 0.001
@@ -65,7 +65,7 @@ class RoadGeometry:
 
     def _project(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Road coordinates and edge gaps of (K, 2) points, compiled
-        (``scenarios/_kernels.c``): a step asks this of a few points, on polylines
+        (``scenarios/_road_kernels.c``): a step asks this of a few points, on polylines
         of up to hundreds of segments."""
         xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
         s_m, d_m, gaps_m = np.empty((3, len(xy)))

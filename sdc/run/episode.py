@@ -17,16 +17,17 @@ import numpy as np
 
 from analysis.metrics import trace_metrics
 from analysis.safety import road_edge_gaps_m
+from analysis.trace_file import Trace
 from scenarios.bodies import VEHICLE_MODELS
-from scenarios.road import RoadGeometry
-from scenarios.spec import ScenarioSpec
-from scenarios.worlds import make_road, make_world
-from sdc.collision import collision_with
-from sdc.controllers import make_controller
-from sdc.kernels import contacts
-from sdc.sensors import LaneSensor, Lidar
-from sdc.trace import Trace, TraceRecorder
-from sdc.vehicle import Command, Vehicle, VehicleState
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.world_backends import make_road, make_world
+from sdc.car.collision import collision_with
+from sdc.car.controllers import make_controller
+from sdc.car.geometry_kernels import contacts
+from sdc.car.sensors import LaneSensor, Lidar
+from sdc.car.vehicle import Command, Vehicle, VehicleState
+from sdc.run.trace_recorder import TraceRecorder
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.netfile import NetFile
+from scenarios.sumo_net.net_xml import NetFile
 
 
 class RandomTrips:

@@ -5,14 +5,31 @@
  * a step asks a few points of a polyline of up to hundreds of segments, and
  * libsumo hands a context subscription's results over as a dict of dicts.
  *
- * The arithmetic is the one scenarios/road.py and scenarios/sumo_world.py
+ * The arithmetic is the one scenarios/road_geometry.py and scenarios/sumo_world.py
  * document (same formulas, same order of operations, no fused multiply-adds),
  * so the answers are the same to the last bit as their numpy references in the
  * tests.
  */
 #include "_buffers.h"
-#include "_traffic_box.h"
 #include <math.h>
+
+/* One SUMO vehicle as a box (the formula scenarios/sumo_world.py documents):
+ * box = [cx, cy, yaw, length, width] of a vehicle whose front bumper is at
+ * (front_x, front_y) heading angle_deg (SUMO: degrees clockwise from north): the
+ * body centre lies half a length behind the front bumper. Returns whether that
+ * centre lies within radius of (cx, cy). */
+static inline int traffic_box(double front_x, double front_y, double angle_deg, double length,
+                              double width, double cx, double cy, double radius, double *box) {
+    double yaw = (90.0 - angle_deg) * (M_PI / 180.0);
+    double bx = front_x - length / 2 * cos(yaw), by = front_y - length / 2 * sin(yaw);
+    double dx = bx - cx, dy = by - cy;
+    box[0] = bx;
+    box[1] = by;
+    box[2] = yaw;
+    box[3] = length;
+    box[4] = width;
+    return dx * dx + dy * dy <= radius * radius;
+}
 
 /* a polyline of segments: start point, unit direction, length, s at its start */
 typedef struct {
@@ -215,6 +232,6 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_road_kernels", NULL, -1, methods};
 
-PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__road_kernels(void) { return PyModule_Create(&module); }

@@ -9,7 +9,7 @@ import subprocess
 from importlib import metadata
 from pathlib import Path
 
-from scenarios.files import write_atomic
+from scenarios.atomic_write import write_atomic
 
 MANIFEST = "manifest.json"
 _PACKAGES = ("sdc", "libsumo", "eclipse-sumo", "numpy", "scipy", "pandas", "pyarrow", "ray")

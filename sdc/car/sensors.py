@@ -9,20 +9,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.road import RoadGeometry
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import LidarSpec, beam_angles_rad
 from scenarios.snapshot import NO_BOXES
-from scenarios.spec import LidarSpec
-from sdc.kernels import lidar_ranges_m
-
-
-def beam_angles_rad(beams: int, fov_deg: float) -> np.ndarray:
-    """Beam directions relative to the car's heading, index 0 leftmost.
-
-    Beams are ``fov_deg / beams`` apart and index ``beams // 2`` looks straight
-    ahead, as in the lesson's 180-beam range image (ranges[85:96] is the centre).
-    """
-    step_rad = math.radians(fov_deg) / beams
-    return (beams // 2 - np.arange(beams)) * step_rad
+from sdc.car.geometry_kernels import lidar_ranges_m
 
 
 class Lidar:

@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from analysis.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.errors import SdcError
-from scenarios.spec import ScenarioSpec
-from sdc.manifest import package_versions, read_manifest
-from sdc.trace import FLOAT_COLUMNS, Trace
+from scenarios.scenario_spec import ScenarioSpec
+from sdc.batch.manifest import package_versions, read_manifest
 
 
 @dataclasses.dataclass(frozen=True)

@@ -21,17 +21,17 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.errors import SdcError
-from scenarios.sweep import PlannedRun, SweepSpec, expand, plan_sha256
-from scenarios.worlds import prepare_network
-from sdc.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
-from sdc.results import ResultStore, result_schema
-from sdc.task import RunTask, TraceMode
+from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.world_backends import prepare_network
+from sdc.batch.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
+from sdc.batch.result_store import ResultStore, result_schema
+from sdc.batch.run_task import RunTask, TraceMode
 
 STATUSES = ("ok", "error", "timeout")
 
 
 class Reporter(Protocol):
-    """What a sweep tells about its progress (see :mod:`sdc.progress`)."""
+    """What a sweep tells about its progress (see :mod:`sdc.batch.progress`)."""
 
     def start(self, total: int, done: int, collisions: int, failed: int) -> None: ...
     def advance(self, row: dict) -> None: ...

@@ -1,10 +1,10 @@
-"""The per-step hot path in compiled code (``sdc/_kernels.c``), called like numpy.
+"""The per-step hot path in compiled code (``sdc/car/_geometry_kernels.c``), called like numpy.
 
 Each function equals its numpy references bit for bit (the property tests in
 ``tests/test_kernels.py`` hold them to it): the lidar scan equals
-:func:`sdc.geometry.ray_box_ranges` and :func:`sdc.geometry.ray_segment_ranges`
-and their minimum; :func:`contacts` equals :func:`sdc.geometry.boxes_overlap`,
-:func:`sdc.geometry.box_gap_m` and :func:`analysis.safety.time_to_collision_s`.
+:func:`sdc.car.geometry.ray_box_ranges` and :func:`sdc.car.geometry.ray_segment_ranges`
+and their minimum; :func:`contacts` equals :func:`sdc.car.geometry.boxes_overlap`,
+:func:`sdc.car.geometry.box_gap_m` and :func:`analysis.safety.time_to_collision_s`.
 The numpy versions say plainly what is computed; these do it without numpy's
 per-call cost, which dominates a step's few small arrays.
 """
@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scenarios.snapshot import NO_BOXES
-from sdc import _kernels
+from sdc.car import _geometry_kernels as _kernels
 
 
 def _dense(array: np.ndarray) -> np.ndarray:

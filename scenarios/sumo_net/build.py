@@ -1,7 +1,7 @@
 """SUMO road networks built with ``netconvert`` and cached by content hash.
 
 The road is one edge ``road`` from node ``start`` to node ``end`` whose shape is
-the centre line of :mod:`scenarios.road`; ``spreadType="center"`` puts the lanes
+the centre line of :mod:`scenarios.road_geometry`; ``spreadType="center"`` puts the lanes
 on both sides of it, so SUMO's lane ``road_i`` is our lane ``i``.
 """
 
@@ -14,8 +14,8 @@ import tempfile
 from pathlib import Path
 
 from scenarios.errors import SdcError
-from scenarios.road import RoadGeometry
-from scenarios.spec import RoadSpec
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import RoadSpec
 
 EDGE_ID = "road"
 

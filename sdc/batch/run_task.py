@@ -12,7 +12,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Literal
 
-from scenarios.spec import ScenarioSpec
+from scenarios.scenario_spec import ScenarioSpec
 
 TraceMode = Literal["none", "failures", "all"]
 
@@ -46,7 +46,7 @@ def failed_row(task: RunTask, status: str, error: str, **extra: Any) -> dict:
 
 def execute(task: RunTask) -> dict:
     """Run ``task`` and return its result row; write its trace when asked to."""
-    from sdc.episode import run_episode  # keeps importers that never run fast
+    from sdc.run.episode import run_episode  # keeps importers that never run fast
 
     try:
         episode = run_episode(task.spec)

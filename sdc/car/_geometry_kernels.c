@@ -1,15 +1,15 @@
 /*
  * Compiled kernels for the per-step hot path: the lidar scan, and the ego's
  * contacts (overlaps, gap to the obstacles, time to collision). Each is the exact counterpart of a numpy
- * function in sdc/geometry.py or analysis/safety.py (same formulas, same order
+ * function in sdc/car/geometry.py or analysis/safety.py (same formulas, same order
  * of operations, no fused multiply-adds), which stays the reference the tests
  * compare against.
  *
  * Arrays arrive as C-contiguous float64 buffers (the Python wrappers in
- * sdc/kernels.py make sure of that; scenarios/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
+ * sdc/car/geometry_kernels.py make sure of that; scenarios/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
  * segments rows [x0, y0, x1, y1], all in metres and radians.
  */
-#include "../scenarios/_buffers.h"
+#include "../../scenarios/_buffers.h"
 #include <math.h>
 
 /* numpy's maximum/minimum for non-NaN input: the first argument wins ties */
@@ -66,7 +66,7 @@ static void scan_boxes(double ox, double oy, const double *angles, const double 
 /* scan(origin_x, origin_y, yaw, angles, boxes, more_boxes, segments, max_range, out):
  * the nearest box (of either set) or segment along each ray of world angle
  * yaw + angle, inf beyond max_range (ray_box_ranges over both sets stacked and
- * ray_segment_ranges of sdc/geometry.py, then their minimum) */
+ * ray_segment_ranges of sdc/car/geometry.py, then their minimum) */
 static PyObject *scan(PyObject *self, PyObject *args) {
     double ox, oy, yaw, max_range;
     PyObject *a_obj, *b_obj, *m_obj, *s_obj, *o_obj;
@@ -150,7 +150,7 @@ static int overlaps(const double *a, const double *b) {
     return 1;
 }
 
-/* corners of a box, counter-clockwise from front-left (box_corners of sdc/geometry.py) */
+/* corners of a box, counter-clockwise from front-left (box_corners of sdc/car/geometry.py) */
 static void corners(const double *b, double out[4][2]) {
     static const double sign[4][2] = {{1.0, 1.0}, {-1.0, 1.0}, {-1.0, -1.0}, {1.0, -1.0}};
     double c = cos(b[2]), s = sin(b[2]);
@@ -161,7 +161,7 @@ static void corners(const double *b, double out[4][2]) {
     }
 }
 
-/* distance from point p to the segment a-b (point_segment_distance of sdc/geometry.py) */
+/* distance from point p to the segment a-b (point_segment_distance of sdc/car/geometry.py) */
 static double point_segment(const double *p, const double *a, const double *b) {
     double ex = b[0] - a[0], ey = b[1] - a[1];
     double len2 = ex * ex + ey * ey;
@@ -207,7 +207,7 @@ static double time_to_collision(const double *a, double cos_yaw, double sin_yaw,
  * this step, as (index of the first obstacle it overlaps or -1, the same for the
  * traffic, its outline gap to the nearest obstacle or inf, its time to collision
  * with any of them, the obstacles standing still). Overlaps are boxes_overlap and
- * gaps box_gap_m of sdc/geometry.py; the time is time_to_collision_s of
+ * gaps box_gap_m of sdc/car/geometry.py; the time is time_to_collision_s of
  * analysis/safety.py over the obstacles, then the traffic. */
 static PyObject *contacts(PyObject *self, PyObject *args) {
     PyObject *a_obj, *o_obj, *t_obj, *v_obj;
@@ -258,6 +258,6 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_kernels", NULL, -1, methods};
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_geometry_kernels", NULL, -1, methods};
 
-PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__geometry_kernels(void) { return PyModule_Create(&module); }

@@ -11,9 +11,9 @@ import contextlib
 from pathlib import Path
 
 from scenarios.errors import SdcError
-from scenarios.network import build_network
-from scenarios.road import RoadGeometry
-from scenarios.spec import RoadSpec, ScenarioSpec
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.sumo_net.build import build_network
 
 BACKENDS = ("sumo", "highway")
 
@@ -21,7 +21,7 @@ BACKENDS = ("sumo", "highway")
 def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
     """The road of ``spec``: a built-in road, or the route drawn through a SUMO network."""
     if spec.road.kind == "sumo_net":
-        from scenarios.netroad import network_road
+        from scenarios.sumo_net.route_road import network_road
 
         return network_road(spec, cache_dir)
     return RoadGeometry.from_spec(spec.road)
@@ -31,7 +31,7 @@ def check_inputs(spec: ScenarioSpec) -> None:
     """Check what a run of ``spec`` reads besides the spec (a network file), so a
     bad one is reported as bad input before anything runs."""
     if spec.road.kind == "sumo_net":
-        from scenarios.netroad import read_network_file
+        from scenarios.sumo_net.route_road import read_network_file
 
         read_network_file(spec)
 
@@ -43,8 +43,8 @@ def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
     if road.kind != "sumo_net":
         build_network(road, cache_dir)
         return
-    from scenarios.netfile import read_net
-    from scenarios.netroad import network_area
+    from scenarios.sumo_net.net_xml import read_net
+    from scenarios.sumo_net.route_road import network_area
 
     with contextlib.suppress(SdcError):
         network_area(read_net(road.net_file), cache_dir)

@@ -21,10 +21,10 @@ from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.connection import wait
 
 from scenarios.errors import SdcError
-from sdc.task import RunTask, execute, failed_row
+from sdc.batch.run_task import RunTask, execute, failed_row
 
 TaskFn = Callable[[RunTask], dict]
-_WARM_MODULES = ("sdc.episode",)  # imported by each worker before it takes a task
+_WARM_MODULES = ("sdc.run.episode",)  # imported by each worker before it takes a task
 
 
 def _timeout_row(task: RunTask, elapsed_s: float, limit_s: float) -> dict:

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.road import RoadGeometry
-from sdc.geometry import one_box_corners
-from sdc.kernels import Contacts
+from scenarios.road_geometry import RoadGeometry
+from sdc.car.geometry import one_box_corners
+from sdc.car.geometry_kernels import Contacts
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
 

@@ -1,6 +1,6 @@
 """Controllers: from a range image and a lane reading to a steering command.
 
-Every controller returns a :class:`~sdc.vehicle.Command` (ISO 8855: positive
+Every controller returns a :class:`~sdc.car.vehicle.Command` (ISO 8855: positive
 steering turns left; the lesson's Webots code uses the opposite sign) and the
 phase it is in, which the trace records every step.
 """
@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.spec import ControllerSpec, LaneKeepParams, SeedParams
-from sdc.sensors import LaneReading
-from sdc.vehicle import Command
+from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, SeedParams
+from sdc.car.sensors import LaneReading
+from sdc.car.vehicle import Command
 
 LANE_KEEP, AVOID_LEFT, AVOID_STRAIGHT, AVOID_RIGHT = (
     "lane_keep", "avoid_left", "avoid_straight", "avoid_right")

@@ -1,0 +1,1 @@
+"""One run: the episode loop (the car in a world backend), its trace and its result row."""
