@@ -40,9 +40,9 @@ def _check_trace_path(trace: Path | None) -> None:
 def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     """Run a spec; a failure inside the run becomes a row with ``status`` error."""
     from sdc.batch.run_task import RunTask, execute
+    from sdc.run.episode import default_run_id
 
-    run_id = f"{spec.scenario.name}-{spec.controller.name}-{spec.scenario.seed}"
-    return execute(RunTask(run_id, spec, trace_path=trace))
+    return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
 
 
 def _fmt(value, unit: str = "", digits: int = 2) -> str:
@@ -115,14 +115,16 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
         click.echo("interrupted", err=True)
         sys.exit(EXIT_INTERRUPTED)
     if as_json:
-        click.echo(json.dumps({k: v for k, v in row.items() if k != "traceback"}))
+        from sdc.run.result_row import JSON_COLUMNS
+
+        click.echo(json.dumps({k: row[k] for k in JSON_COLUMNS}))
     else:
         for line in summary_lines(spec.scenario.name, row):
             click.echo(line)
         if trace is not None and row["status"] == "ok":
             click.echo(f"  trace written to {trace}")
     if row["status"] != "ok":
-        click.echo(row.get("traceback", ""), err=True)
+        click.echo(row["traceback"] or "", err=True)
         sys.exit(EXIT_RUN_ERROR)
 
 
@@ -381,10 +383,10 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     recorded = load_recorded_run(sweep_dir, run_id)
     for line in version_warnings(recorded.manifest):
         click.echo(line, err=True)
-    episode = run_episode(recorded.spec, gui=gui)
+    episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
     replayed_sha = episode.trace.sha256()
     row = recorded.row
-    for line in summary_lines(run_id, {"run_id": run_id, **episode.row}):
+    for line in summary_lines(run_id, episode.row):
         click.echo(line)
     diverged = True
     if row is None:

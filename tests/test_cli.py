@@ -9,6 +9,7 @@ from click.testing import CliRunner
 from scenarios import CATALOG_DIR
 from scenarios.toml_io import dumps_plain
 from sdc.cli import main
+from sdc.run.result_row import JSON_COLUMNS
 
 LESSON = str(CATALOG_DIR / "seed-lesson.toml")
 
@@ -31,9 +32,7 @@ def test_run_json_prints_the_row_on_the_last_line(tmp_path):
     assert result.exit_code == 0, result.output
     row = json.loads(result.output.strip().splitlines()[-1])
     assert row["seed"] == 5 and row["controller"] == "seed" and row["status"] == "ok"
-    for key in ("collision", "collision_with", "maneuver_started", "returned_to_lane",
-                "trace_sha256", "termination", "sim_time_s", "steps", "run_id"):
-        assert key in row
+    assert list(row) == list(JSON_COLUMNS) and row["run_id"] == "seed-lesson-seed-5"
     assert trace.exists()
 
 
@@ -110,6 +109,8 @@ def test_a_run_that_raises_is_an_error_row_and_exit_1(monkeypatch):
     assert result.exit_code == 1
     row = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])
     assert row["status"] == "error" and "SUMO went away" in row["error"]
+    assert list(row) == list(JSON_COLUMNS) and row["trace_sha256"] is None
+    assert "RuntimeError: SUMO went away" in result.stderr  # the traceback
 
 
 @pytest.mark.slow

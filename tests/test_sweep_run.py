@@ -18,7 +18,8 @@ from scenarios.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.run_task import RunTask, execute
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.sweep_runner import run_sweep, sweep_columns
+from sdc.run.result_row import RUN_COLUMNS, result_schema
 
 pytestmark = pytest.mark.slow
 
@@ -122,12 +123,14 @@ def _kill_own_worker(task: RunTask) -> dict:
 
 def test_a_killed_worker_costs_one_run_and_the_sweep_goes_on(tmp_path):
     sweep = load_sweep(write(tmp_path, "tiny", TINY))
-    tasks = [RunTask(run.run_id, run.spec) for run in expand(sweep)]
+    tasks = [RunTask(run.run_id, run.spec, sweep_columns(run)) for run in expand(sweep)]
     with LocalExecutor(2, task_fn=_kill_own_worker) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
     assert sorted(rows) == sorted(task.run_id for task in tasks)
+    columns = result_schema(sweep.param_types).names  # every row complete, the dead one too
+    assert all(list(row) == columns for row in rows.values())
     dead = rows.pop("00002-seed")
-    assert dead["status"] == "error"
+    assert dead["status"] == "error" and dead["sample"] == 2 and dead["traceback"] is None
     assert "worker process died" in dead["error"] and "SIGKILL" in dead["error"]
     assert all(row["status"] == "ok" for row in rows.values())
 
@@ -153,6 +156,7 @@ def test_ray_stops_a_hung_run(tmp_path):
         rows = {row["run_id"]: row for row in executor.map(tasks)}
     assert rows["00000-lane-keep"]["status"] == "ok"
     assert rows["00001-lane-keep"]["status"] == "timeout"
+    assert all(list(row) == list(RUN_COLUMNS) for row in rows.values())
 
 
 def _wait_for(predicate, timeout_s: float) -> None:

@@ -21,15 +21,15 @@ from collections.abc import Callable, Iterable, Iterator
 from multiprocessing.connection import wait
 
 from scenarios.errors import SdcError
-from sdc.batch.run_task import RunTask, execute, failed_row
+from sdc.batch.run_task import RunTask, execute, task_error_row, task_timeout_row
 
 TaskFn = Callable[[RunTask], dict]
 _WARM_MODULES = ("sdc.run.episode",)  # imported by each worker before it takes a task
 
 
 def _timeout_row(task: RunTask, elapsed_s: float, limit_s: float) -> dict:
-    return failed_row(task, "timeout", f"run exceeded the run timeout of {limit_s:g} s; "
-                      "its worker was stopped", wall_time_s=elapsed_s)
+    return task_timeout_row(task, f"run exceeded the run timeout of {limit_s:g} s; "
+                            "its worker was stopped", elapsed_s)
 
 
 def _next_deadline_s(starts: Iterable[float], limit_s: float | None) -> float | None:
@@ -64,7 +64,7 @@ def _worker_main(conn, task_fn: TaskFn, parent_pid: int) -> None:
         try:
             row = task_fn(task)
         except Exception as e:  # a bug outside the run itself; still one row
-            row = failed_row(task, "error", f"{type(e).__name__}: {e}")
+            row = task_error_row(task, f"{type(e).__name__}: {e}")
         conn.send(row)
 
 
@@ -144,7 +144,7 @@ class LocalExecutor:
         self._replace(i)
         if task is None:
             return None
-        return failed_row(task, "error", f"worker process died while running this run ({cause})")
+        return task_error_row(task, f"worker process died while running this run ({cause})")
 
     def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
         pending = collections.deque(tasks)
@@ -228,7 +228,7 @@ class RayExecutor:
                     yield ray.get(ref)
                 except ray.exceptions.RayError as e:
                     cause = str(e).strip().splitlines()[0] if str(e).strip() else ""
-                    yield failed_row(task, "error", f"{type(e).__name__}: {cause}")
+                    yield task_error_row(task, f"{type(e).__name__}: {cause}")
             if self.run_timeout_s is None:
                 continue
             for ref, (task, start) in list(running.items()):

@@ -15,43 +15,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.atomic_write import write_atomic
-
-#: the result row of DESIGN.md section 4, in order, plus sdc's own columns
-RESULT_FIELDS = [
-    ("run_id", pa.string()),
-    ("run_index", pa.int64()),  # position in the sweep's plan
-    ("sample", pa.int64()),  # the scenario sample; its controllers share it
-    ("seed", pa.int64()),
-    ("controller", pa.string()),
-    ("backend", pa.string()),
-    ("status", pa.string()),  # ok | error | timeout
-    ("error", pa.string()),
-    ("termination", pa.string()),  # collision | duration | route_end
-    ("collision", pa.bool_()),
-    ("collision_with", pa.string()),  # none | obstacle | vehicle | road_edge
-    ("collision_time_s", pa.float64()),
-    ("min_gap_obstacle_m", pa.float64()),
-    ("min_ttc_s", pa.float64()),
-    ("min_road_edge_gap_m", pa.float64()),
-    ("maneuver_started", pa.bool_()),
-    ("detection_range_m", pa.float64()),
-    ("returned_to_lane", pa.bool_()),
-    ("return_time_s", pa.float64()),
-    ("max_abs_lane_offset_m", pa.float64()),
-    ("sim_time_s", pa.float64()),
-    ("steps", pa.int64()),
-    ("wall_time_s", pa.float64()),
-    ("network_vehicles", pa.int64()),  # traffic in the whole network as the ego entered
-    ("trace_sha256", pa.string()),
-    ("traceback", pa.string()),
-]
-_ARROW_TYPES = {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}
-
-
-def result_schema(param_types: dict[str, type]) -> pa.Schema:
-    """The fixed columns, then one ``p.<path>`` column per swept parameter."""
-    params = [(f"p.{path}", _ARROW_TYPES[tp]) for path, tp in param_types.items()]
-    return pa.schema(RESULT_FIELDS + params)
+from sdc.run.result_row import check_keys
 
 
 def _write_atomic(table: pa.Table, path: Path) -> None:
@@ -59,7 +23,11 @@ def _write_atomic(table: pa.Table, path: Path) -> None:
 
 
 class ResultStore:
-    """Buffers rows and writes a part every ``flush_s`` seconds or ``flush_rows`` rows."""
+    """Buffers rows and writes a part every ``flush_s`` seconds or ``flush_rows`` rows.
+
+    ``schema`` is :func:`sdc.run.result_row.result_schema`'s; a row whose keys are
+    not exactly its columns raises :class:`sdc.run.result_row.RowKeyError`.
+    """
 
     def __init__(self, out_dir: Path, schema: pa.Schema, *, flush_s: float = 1.0,
                  flush_rows: int = 500):
@@ -77,6 +45,7 @@ class ResultStore:
         return sorted(self.parts_dir.glob("part-*.parquet"))
 
     def add(self, row: dict) -> None:
+        check_keys(row, self.schema.names, f"result row {row.get('run_id')!r}")
         self._buffer.append(row)
         if (len(self._buffer) >= self.flush_rows
                 or time.monotonic() - self._last_flush >= self.flush_s):

@@ -7,41 +7,46 @@ a failure of the run itself: that becomes a row with ``status`` error.
 from __future__ import annotations
 
 import dataclasses
-import math
 import traceback
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 from scenarios.scenario_spec import ScenarioSpec
+from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row
 
 TraceMode = Literal["none", "failures", "all"]
 
 
 @dataclasses.dataclass(frozen=True)
 class RunTask:
-    """What a worker needs for one run. ``columns`` are copied into the row as they are."""
+    """What a worker needs for one run. ``sweep``: the run's sweep columns, for its row."""
 
     run_id: str
     spec: ScenarioSpec
-    columns: dict[str, Any] = dataclasses.field(default_factory=dict)
+    sweep: SweepColumns | None = None
     trace_path: Path | None = None
     traces: TraceMode = "all"  # with a trace_path: write it always, or on a collision only
 
 
-def _plain(value: Any) -> Any:
-    if hasattr(value, "item"):  # numpy scalar
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+def _identity(task: RunTask) -> dict:
+    spec = task.spec
+    return {"run_id": task.run_id, "seed": spec.scenario.seed,
+            "controller": spec.controller.name, "backend": spec.scenario.backend}
 
 
-def failed_row(task: RunTask, status: str, error: str, **extra: Any) -> dict:
-    """The row of a run that produced no outcome (``status`` error or timeout)."""
-    return {"run_id": task.run_id, **task.columns, "seed": task.spec.scenario.seed,
-            "controller": task.spec.controller.name, "backend": task.spec.scenario.backend,
-            "status": status,
-            "error": error, **extra}
+def task_row(task: RunTask, row: dict) -> dict:
+    """A run's row as ``task``'s: with its sweep's columns when it has them."""
+    return row if task.sweep is None else sweep_row(row, task.sweep)
+
+
+def task_error_row(task: RunTask, error: str, traceback_text: str | None = None) -> dict:
+    """The row of ``task`` when it raised or its worker died."""
+    return task_row(task, error_row(**_identity(task), error=error, traceback=traceback_text))
+
+
+def task_timeout_row(task: RunTask, error: str, wall_time_s: float) -> dict:
+    """The row of ``task`` when it was stopped at the run timeout."""
+    return task_row(task, timeout_row(**_identity(task), error=error, wall_time_s=wall_time_s))
 
 
 def execute(task: RunTask) -> dict:
@@ -49,12 +54,10 @@ def execute(task: RunTask) -> dict:
     from sdc.run.episode import run_episode  # keeps importers that never run fast
 
     try:
-        episode = run_episode(task.spec)
+        episode = run_episode(task.spec, run_id=task.run_id)
     except Exception as e:  # the run's own failure is an outcome row, not a crash
-        return failed_row(task, "error", f"{type(e).__name__}: {e}",
-                          traceback=traceback.format_exc())
+        return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
     wanted = task.traces == "all" or (task.traces == "failures" and episode.row["collision"])
     if task.trace_path is not None and wanted:
         episode.write_trace(task.trace_path)
-    return {"run_id": task.run_id, **task.columns,
-            **{k: _plain(v) for k, v in episode.row.items()}}
+    return task_row(task, episode.row)

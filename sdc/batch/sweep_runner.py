@@ -24,8 +24,9 @@ from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.world_backends import prepare_network
 from sdc.batch.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
-from sdc.batch.result_store import ResultStore, result_schema
+from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
+from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
 
 STATUSES = ("ok", "error", "timeout")
 
@@ -57,26 +58,24 @@ class SweepOutcome:
     wall_time_s: float
 
 
-def param_columns(run: PlannedRun) -> dict:
-    return {f"p.{path}": value for path, value in run.params.items()}
+def sweep_columns(run: PlannedRun) -> SweepColumns:
+    return SweepColumns(run_index=run.index, sample=run.sample, params=run.params)
 
 
 def _invalid_row(run: PlannedRun) -> dict:
-    return {"run_id": run.run_id, "run_index": run.index, "sample": run.sample,
-            "seed": run.seed, "controller": run.controller, "backend": run.backend,
-            "status": "error", "error": run.error, **param_columns(run)}
+    return invalid_sample_row(sweep_columns(run), run_id=run.run_id, seed=run.seed,
+                              controller=run.controller, backend=run.backend, error=run.error)
 
 
 def _plan_table(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     params = result_schema(sweep.param_types)
-    rows = [{"run_id": r.run_id, "run_index": r.index, "sample": r.sample,
-             "controller": r.controller, "seed": r.seed, "error": r.error,
+    rows = [{"run_id": r.run_id, "controller": r.controller, "seed": r.seed, "error": r.error,
              "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
-             **param_columns(r)} for r in plan]
+             **sweep_columns(r).values()} for r in plan]
     fields = [params.field(n) for n in ("run_id", "run_index", "sample", "controller", "seed",
                                         "error")]
     fields += [pa.field("spec_json", pa.string())]
-    fields += [f for f in params if f.name.startswith("p.")]
+    fields += [f for f in params if f.name.startswith(PARAM_PREFIX)]
     return pa.Table.from_pylist(rows, schema=pa.schema(fields))
 
 
@@ -146,8 +145,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     if traces != "none":
         trace_dir.mkdir(exist_ok=True)
     todo = [run for run in plan if run.run_id not in done]
-    tasks = [RunTask(run.run_id, run.spec,
-                     {"run_index": run.index, "sample": run.sample, **param_columns(run)},
+    tasks = [RunTask(run.run_id, run.spec, sweep_columns(run),
                      trace_path=None if traces == "none" else trace_dir / f"{run.run_id}.parquet",
                      traces=traces)
              for run in todo if run.spec is not None]

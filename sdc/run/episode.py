@@ -27,6 +27,7 @@ from sdc.car.controllers import make_controller
 from sdc.car.geometry_kernels import contacts
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
+from sdc.run.result_row import ok_row
 from sdc.run.trace_recorder import TraceRecorder
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
@@ -34,12 +35,17 @@ COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
 @dataclass(frozen=True)
 class Episode:
-    row: dict  # the result row (DESIGN.md section 4) of this run
+    row: dict  # the run's result row (sdc.run.result_row.ok_row)
     trace: Trace
     metadata: dict  # what the trace file carries: spec, road, run
 
     def write_trace(self, path: str | Path) -> None:
         self.trace.write(path, self.metadata)
+
+
+def default_run_id(spec: ScenarioSpec) -> str:
+    """A run's ID outside a sweep: ``<scenario>-<controller>-<seed>``."""
+    return f"{spec.scenario.name}-{spec.controller.name}-{spec.scenario.seed}"
 
 
 def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> VehicleState:
@@ -125,7 +131,9 @@ class Simulation:
         self.k += 1
         self._sense()
 
-    def finish(self, termination: str) -> Episode:
+    def finish(self, termination: str, run_id: str | None = None) -> Episode:
+        """The run's :class:`Episode`; its row is named ``run_id`` (default
+        :func:`default_run_id`)."""
         spec, model, road = self.spec, self.model, self.road
         trace = self.recorder.finish()
         t_end = float(trace.floats["t_s"][-1])
@@ -133,25 +141,24 @@ class Simulation:
             trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
             road)
         hit = self.hit
-        row = {
-            "seed": spec.scenario.seed,
-            "controller": spec.controller.name,
-            "backend": self.world.backend,
-            "status": "ok",
-            "error": None,
-            "termination": termination,
-            "collision": hit is not None,
-            "collision_with": hit or "none",
-            "collision_time_s": t_end if hit else None,
-            **trace_metrics(trace.floats, trace.phase, trace.lidar,
-                            spec.controller.detect_beams),
-            "min_road_edge_gap_m": float(np.nanmin(edge_gaps_m, initial=math.inf)),
-            "sim_time_s": t_end,
-            "steps": len(trace),
-            "wall_time_s": time.perf_counter() - self.wall_start,
-            "network_vehicles": self.network_vehicles,
-            "trace_sha256": trace.sha256(),
-        }
+        row = ok_row(
+            metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
+                                  spec.controller.detect_beams),
+            run_id=default_run_id(spec) if run_id is None else run_id,
+            seed=spec.scenario.seed,
+            controller=spec.controller.name,
+            backend=self.world.backend,
+            termination=termination,
+            collision=hit is not None,
+            collision_with=hit or "none",
+            collision_time_s=t_end if hit else None,
+            min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
+            sim_time_s=t_end,
+            steps=len(trace),
+            wall_time_s=time.perf_counter() - self.wall_start,
+            network_vehicles=self.network_vehicles,
+            trace_sha256=trace.sha256(),
+        )
         metadata = {
             "spec": spec.to_plain(),
             "road": road.to_plain(),
@@ -165,10 +172,11 @@ class Simulation:
         return Episode(row, trace, metadata)
 
 
-def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None,
-                gui: bool = False) -> Episode:
-    """Run ``spec`` (its seed, its controller, its backend) and return the outcome;
-    with ``gui``, in sumo-gui (same results, at the speed of the step length)."""
+def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
+                cache_dir: Path | None = None, gui: bool = False) -> Episode:
+    """Run ``spec`` (its seed, its controller, its backend) and return the outcome,
+    its row named ``run_id`` (default :func:`default_run_id`); with ``gui``, in
+    sumo-gui (same results, at the speed of the step length)."""
     controller = make_controller(spec.controller)
     road = make_road(spec, cache_dir)
     with make_world(spec, road, cache_dir, gui) as world:
@@ -181,4 +189,4 @@ def run_episode(spec: ScenarioSpec, *, cache_dir: Path | None = None,
             if termination is not None:
                 break
             sim.advance(command)
-    return sim.finish(termination)
+    return sim.finish(termination, run_id)

@@ -1,0 +1,189 @@
+"""The result row: its columns (name, type, meaning) and every kind of row.
+
+One row per run (DESIGN.md section 4: add columns, never rename them). The
+columns come in parts, each filled by one party:
+
+- ``identity``: which run (the task or ``sdc run`` names it; the spec gives the rest)
+- ``status``: ok | error | timeout, and why a run has no outcome
+- ``outcome``: what the episode measured (None when the run produced no outcome)
+- ``metric``: the outcome columns that :func:`analysis.metrics.trace_metrics` computes
+- ``sweep``: where the run sits in its sweep, with one ``p.<path>`` column per
+  swept parameter; only in a sweep's ``results.parquet``
+
+A run's own row (``Episode.row``, ``sdc run --json``) holds every column but the
+sweep's; :func:`sweep_row` adds those. Each constructor returns a complete row,
+None where a column does not apply, and raises :class:`RowKeyError` for a
+missing or unknown key, so a column cannot vanish on its way to the results.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import pyarrow as pa
+
+IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
+PARAM_PREFIX = "p."  # a swept parameter's column: p.<path>, e.g. p.ego.speed_mps
+
+
+@dataclasses.dataclass(frozen=True)
+class Column:
+    name: str
+    arrow_type: pa.DataType
+    part: str  # IDENTITY, STATUS, OUTCOME, METRIC or SWEEP (see the module's docstring)
+    meaning: str
+
+
+#: every column but the ``p.<path>`` ones, in the order of ``results.parquet``
+COLUMNS: tuple[Column, ...] = (
+    Column("run_id", pa.string(), IDENTITY,
+           "the run's ID: the sweep plan's, or <scenario>-<controller>-<seed> for sdc run"),
+    Column("run_index", pa.int64(), SWEEP, "position in the sweep's plan"),
+    Column("sample", pa.int64(), SWEEP, "the scenario sample; its controllers share it"),
+    Column("seed", pa.int64(), IDENTITY, "scenario.seed: SUMO's and the lidar noise's seed"),
+    Column("controller", pa.string(), IDENTITY, "the controller's name"),
+    Column("backend", pa.string(), IDENTITY, "the world simulator: sumo | highway"),
+    Column("status", pa.string(), STATUS, "ok | error | timeout"),
+    Column("error", pa.string(), STATUS, "why an error or timeout row has no outcome"),
+    Column("termination", pa.string(), OUTCOME, "what ended the run: "
+           "collision | duration | route_end"),
+    Column("collision", pa.bool_(), OUTCOME, "the ego's body touched something"),
+    Column("collision_with", pa.string(), OUTCOME, "none | obstacle | vehicle | road_edge"),
+    Column("collision_time_s", pa.float64(), OUTCOME, "simulated time of the collision [s]"),
+    Column("min_gap_obstacle_m", pa.float64(), METRIC,
+           "smallest distance between the ego's body and any obstacle [m]"),
+    Column("min_ttc_s", pa.float64(), METRIC,
+           "smallest constant-velocity time to reach anything in the ego's path [s]"),
+    Column("min_road_edge_gap_m", pa.float64(), OUTCOME,
+           "closest approach of a body corner to a road edge, negative beyond it [m]"),
+    Column("maneuver_started", pa.bool_(), METRIC, "the controller entered avoid_left"),
+    Column("detection_range_m", pa.float64(), METRIC,
+           "shortest central lidar range as the maneuver started [m]"),
+    Column("returned_to_lane", pa.bool_(), METRIC,
+           "the body centre came back within 0.5 m of its lane's centre for 2 s"),
+    Column("return_time_s", pa.float64(), METRIC,
+           "from the maneuver's start to the start of that hold [s]"),
+    Column("max_abs_lane_offset_m", pa.float64(), METRIC,
+           "largest |offset| of the body centre from its lane's centre [m]"),
+    Column("sim_time_s", pa.float64(), OUTCOME, "simulated time at the end of the run [s]"),
+    Column("steps", pa.int64(), OUTCOME, "steps in the trace"),
+    Column("wall_time_s", pa.float64(), OUTCOME,
+           "wall time of the run [s] (of a timeout: until it was stopped)"),
+    Column("network_vehicles", pa.int64(), OUTCOME,
+           "traffic in the whole network as the ego entered"),
+    Column("trace_sha256", pa.string(), OUTCOME,
+           "hash of the trace: same spec and seed, same hash"),
+    Column("traceback", pa.string(), STATUS, "the Python traceback of a run that raised"),
+)
+
+
+def _names(*parts: str) -> tuple[str, ...]:
+    return tuple(c.name for c in COLUMNS if c.part in parts)
+
+
+#: a run's own row, in order (every column but the sweep's)
+RUN_COLUMNS = _names(IDENTITY, STATUS, OUTCOME, METRIC)
+#: what ``sdc run --json`` prints: the run's row but its traceback (which goes to stderr)
+JSON_COLUMNS = tuple(n for n in RUN_COLUMNS if n != "traceback")
+#: the columns :func:`analysis.metrics.trace_metrics` returns
+METRIC_COLUMNS = _names(METRIC)
+_IDENTITY_COLUMNS = _names(IDENTITY)
+_ARROW_TYPES = {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}
+
+
+class RowKeyError(ValueError):
+    """A row (or part of one) with a key missing, or a key it may not hold: one
+    no column defines, or a column this kind of row does not take from its caller."""
+
+    def __init__(self, what: str, missing: Iterable[str], unknown: Iterable[str]):
+        self.missing, self.unknown = sorted(missing), sorted(unknown)
+        problems = []
+        if self.missing:
+            problems.append(f"missing {', '.join(self.missing)}")
+        if self.unknown:
+            problems.append(f"unexpected {', '.join(self.unknown)}")
+        super().__init__(f"{what}: {'; '.join(problems)}; the result row's columns are "
+                         "defined in sdc/run/result_row.py")
+
+
+def check_keys(row: Mapping[str, Any], expected: Iterable[str], what: str = "result row") -> None:
+    """Raise :class:`RowKeyError` unless ``row``'s keys are exactly ``expected``."""
+    expected = set(expected)
+    missing, unknown = expected - row.keys(), row.keys() - expected
+    if missing or unknown:
+        raise RowKeyError(what, missing, unknown)
+
+
+def _plain(value: Any) -> Any:
+    """A Python scalar for a numpy one; None for NaN and infinity."""
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _run_row(kind: str, status: str, given: Mapping[str, Any], names: tuple[str, ...]) -> dict:
+    """A run's complete row: ``given`` must hold exactly ``names``; the rest is None."""
+    check_keys(given, names, f"{kind} row")
+    row = dict.fromkeys(RUN_COLUMNS)
+    row.update({k: _plain(v) for k, v in given.items()}, status=status)
+    return row
+
+
+def ok_row(metrics: Mapping[str, Any], **values: Any) -> dict:
+    """The row of a run that ended: ``metrics`` is what ``trace_metrics`` returned
+    (exactly :data:`METRIC_COLUMNS`), ``values`` every identity and outcome column."""
+    check_keys(metrics, METRIC_COLUMNS, "trace_metrics' result (a metric needs a column)")
+    check_keys(values, _names(IDENTITY, OUTCOME), "ok row")
+    return _run_row("ok", "ok", {**values, **metrics}, _names(IDENTITY, OUTCOME, METRIC))
+
+
+def error_row(**values: Any) -> dict:
+    """The row of a run that raised or whose worker died: the identity columns,
+    ``error`` and ``traceback`` (None when there is none)."""
+    return _run_row("error", "error", values, (*_IDENTITY_COLUMNS, "error", "traceback"))
+
+
+def timeout_row(**values: Any) -> dict:
+    """The row of a run stopped at the run timeout: the identity columns, ``error``
+    and ``wall_time_s`` (how long it ran)."""
+    return _run_row("timeout", "timeout", values, (*_IDENTITY_COLUMNS, "error", "wall_time_s"))
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepColumns:
+    """A run's place in its sweep: the row's ``sweep`` columns."""
+
+    run_index: int
+    sample: int
+    params: Mapping[str, Any]  # swept path -> value; the columns p.<path>
+
+    def values(self) -> dict[str, Any]:
+        return {"run_index": self.run_index, "sample": self.sample,
+                **{PARAM_PREFIX + path: value for path, value in self.params.items()}}
+
+
+def sweep_row(row: Mapping[str, Any], sweep: SweepColumns) -> dict:
+    """A run's row with its sweep's columns, in the order of ``results.parquet``."""
+    check_keys(row, RUN_COLUMNS, "run row")
+    values = {**row, **{k: _plain(v) for k, v in sweep.values().items()}}
+    params = [k for k in values if k.startswith(PARAM_PREFIX)]
+    return {name: values[name] for name in (*(c.name for c in COLUMNS), *params)}
+
+
+def invalid_sample_row(sweep: SweepColumns, **values: Any) -> dict:
+    """The error row of a planned run whose sample made no valid scenario: the
+    identity columns and ``error``, with its sweep's columns."""
+    row = _run_row("invalid sample", "error", values, (*_IDENTITY_COLUMNS, "error"))
+    return sweep_row(row, sweep)
+
+
+def result_schema(param_types: Mapping[str, type]) -> pa.Schema:
+    """The columns of a sweep's ``results.parquet``: every column, then one
+    ``p.<path>`` column per swept parameter, typed by its values' Python type."""
+    params = [(PARAM_PREFIX + path, _ARROW_TYPES[tp]) for path, tp in param_types.items()]
+    return pa.schema([(c.name, c.arrow_type) for c in COLUMNS] + params)
