@@ -2,9 +2,10 @@
 everything else about the package is in pyproject.toml.
 
 Both extensions are optional: without a C compiler the build skips them (with a
-warning) and sdc runs their numpy references, which give the same results bit for
-bit. ``-ffp-contract=off`` keeps every product rounded on its own, as numpy rounds
-it, which is what makes the two paths equal.
+warning) and sdc runs their numpy twins (``scenarios/road_kernels.py``,
+``sdc/car/geometry_kernels.py``; ``SDC_KERNELS=numpy`` forces them), which give the
+same results bit for bit. ``-ffp-contract=off`` keeps every product rounded on its
+own, as numpy rounds it, which is what makes the two paths equal.
 """
 
 from setuptools import Extension, setup

@@ -58,7 +58,7 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
     - ``min_gap_obstacle_m``: the smallest distance between the ego's body box and
       any obstacle box (0 when they touch).
     - ``min_ttc_s``: the smallest time-to-collision with anything in the ego's path
-      (see :func:`analysis.safety.time_to_collision_s`); ``None`` when nothing was.
+      (the car's ``sdc.car.geometry.time_to_collision_s``); ``None`` when nothing was.
     """
     started = "avoid_left" in phase
     detection = None

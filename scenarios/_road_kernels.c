@@ -5,10 +5,9 @@
  * a step asks a few points of a polyline of up to hundreds of segments, and
  * libsumo hands a context subscription's results over as a dict of dicts.
  *
- * The arithmetic is the one scenarios/road_geometry.py and scenarios/sumo_world.py
- * document (same formulas, same order of operations, no fused multiply-adds),
- * so the answers are the same to the last bit as their numpy references in the
- * tests.
+ * The arithmetic is that of the numpy twins in scenarios/road_kernels.py (same
+ * formulas, same order of operations, no fused multiply-adds), which run where
+ * this is not built: the answers are the same to the last bit.
  */
 #include "_buffers.h"
 #include <math.h>

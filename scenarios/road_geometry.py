@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from scenarios import _road_kernels as _kernels
+from scenarios import road_kernels
 from scenarios.scenario_spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
@@ -64,13 +64,14 @@ class RoadGeometry:
         return (lane - (self.lanes - 1) / 2) * self.lane_width_m
 
     def _project(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Road coordinates and edge gaps of (K, 2) points, compiled
-        (``scenarios/_road_kernels.c``): a step asks this of a few points, on polylines
-        of up to hundreds of segments."""
+        """Road coordinates and edge gaps of (K, 2) points (:mod:`scenarios.road_kernels`,
+        compiled where built): a step asks this of a few points, on polylines of up to
+        hundreds of segments."""
         xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
         s_m, d_m, gaps_m = np.empty((3, len(xy)))
-        _kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
-                        self._seg_start_s_m, s_m, d_m, self.half_width_m, self.length_m, gaps_m)
+        road_kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
+                            self._seg_start_s_m, s_m, d_m, self.half_width_m, self.length_m,
+                            gaps_m)
         return s_m, d_m, gaps_m
 
     def to_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -86,8 +87,8 @@ class RoadGeometry:
 
     def locate(self, x_m: float, y_m: float) -> tuple[float, float]:
         """:meth:`to_frenet` of one point, in plain floats (a step's question)."""
-        return _kernels.locate(x_m, y_m, self._seg_start_xy, self._seg_dir, self._seg_len_m,
-                               self._seg_start_s_m)
+        return road_kernels.locate(x_m, y_m, self._seg_start_xy, self._seg_dir,
+                                   self._seg_len_m, self._seg_start_s_m)
 
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,

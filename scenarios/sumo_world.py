@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios import _road_kernels as _kernels
+from scenarios import road_kernels
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
@@ -244,14 +244,14 @@ class SumoWorld:
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
         half a length behind its front bumper, along the yaw. The read of the dict of
-        dicts libsumo and traci hand over is compiled (``scenarios/_road_kernels.c``);
-        in Python it cost more than the step's geometry.
+        dicts libsumo and traci hand over is :func:`scenarios.road_kernels.traffic`
+        (compiled where built: in Python it cost more than the step's geometry).
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
-        count = _kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
-                                 float(ego_box[1]), self._radius_m, boxes, speeds)
+        count = road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+                                     TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
+                                     float(ego_box[1]), self._radius_m, boxes, speeds)
         return boxes[:count], speeds[:count]
 
     def vehicle_count(self) -> int:

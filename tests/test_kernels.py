@@ -1,4 +1,5 @@
-"""The compiled kernels equal their numpy references bit for bit (property tests)."""
+"""The car's kernels: the numpy twins the package falls back on equal the compiled
+code bit for bit (property tests), and the wrappers answer like them."""
 
 from __future__ import annotations
 
@@ -8,39 +9,56 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
 
-from analysis import safety
 from sdc.car import geometry_kernels as kernels
-from sdc.car.geometry import box_gap_m, boxes_overlap, ray_box_ranges, ray_segment_ranges
 
+try:
+    from sdc.car import _geometry_kernels as compiled
+except ImportError:  # built without a C compiler: only the numpy twins are there
+    compiled = None
+
+pytestmark = pytest.mark.filterwarnings("error")  # the twins raise no numpy warnings
+needs_compiled = pytest.mark.skipif(compiled is None, reason="the C extension was not built")
 PROPS = settings(max_examples=300, deadline=None)
 segment_st = st.tuples(*[st.floats(-60.0, 60.0, allow_nan=False)] * 4)
 segments_st = st.lists(segment_st, max_size=6).map(
     lambda rows: np.array(rows, float).reshape(-1, 4))
 
 
-def reference_scan(origin, yaw, angles, boxes, segments, max_range_m):
-    """The straightforward lidar: every ray against every box and segment."""
-    world = yaw + angles
-    return np.minimum(ray_box_ranges(origin, world, boxes, max_range_m),
-                      ray_segment_ranges(origin, world, segments, max_range_m))
+def both_scans(origin, yaw, angles, boxes, more_boxes, segments, max_range_m):
+    """The ranges of the numpy twin and of the compiled scan, the same arguments to both."""
+    args = (float(origin[0]), float(origin[1]), yaw,
+            *(np.ascontiguousarray(a, float) for a in (angles, boxes, more_boxes, segments)),
+            max_range_m)
+    ranges = []
+    for scan in (kernels.scan_numpy, compiled.scan):
+        out = np.full(len(angles), -1.0)
+        assert scan(*args, out) is None
+        ranges.append(out)
+    return ranges
 
 
+def same_bits(found, expected) -> bool:
+    """Equal to the last bit (-0.0 is not 0.0), and of the same types."""
+    return (np.asarray(found).tobytes() == np.asarray(expected).tobytes()
+            and [type(v) for v in found] == [type(v) for v in expected])
+
+
+@needs_compiled
 @PROPS
 @given(scene=ray_scene(), segments=segments_st, max_range=st.sampled_from([5.0, 30.0, 80.0]),
        yaw=st.floats(-4.0, 4.0), split=st.integers(0, 5))
-def test_the_lidar_kernel_returns_the_straightforward_ranges(scene, segments, max_range, yaw,
-                                                              split):
-    """Culling by bounding circle and by segment distance changes nothing: rays from
-    inside a box, grazing ones, ones along a segment and cut-offs included; nor does
-    handing the boxes over as two sets."""
+def test_the_numpy_scan_equals_the_compiled_one(scene, segments, max_range, yaw, split):
+    """The compiled culling by bounding circle and by segment distance changes nothing:
+    rays from inside a box, grazing ones, ones along a segment and cut-offs included;
+    nor does handing the boxes over as two sets."""
     boxes, origin, angles = scene
-    np.testing.assert_array_equal(
-        kernels.lidar_ranges_m(origin, yaw, angles - yaw, boxes[:split], segments, max_range,
-                               boxes[split:]),
-        reference_scan(origin, yaw, angles - yaw, boxes, segments, max_range))
+    twin, fast = both_scans(origin, yaw, angles - yaw, boxes[:split], boxes[split:], segments,
+                            max_range)
+    assert twin.tobytes() == fast.tobytes()
 
 
-def test_the_lidar_kernel_on_a_dense_scan_with_road_edges():
+@needs_compiled
+def test_the_numpy_scan_on_a_dense_scan_with_road_edges():
     rng = np.random.default_rng(5)
     boxes = np.column_stack([rng.uniform(-70, 70, (60, 2)), rng.uniform(-3, 3, 60),
                              rng.uniform(0.5, 12, 60), rng.uniform(0.5, 3, 60)])
@@ -48,63 +66,84 @@ def test_the_lidar_kernel_on_a_dense_scan_with_road_edges():
                       [30.0, -20.0, 31.0, 20.0]])
     angles = np.linspace(np.pi, -np.pi, 720, endpoint=False)
     for origin in (np.zeros(2), boxes[0, :2], np.array([100.0, 0.0])):
-        expected = reference_scan(origin, 0.3, angles, boxes, edges, 80.0)
-        np.testing.assert_array_equal(
-            kernels.lidar_ranges_m(origin, 0.3, angles, boxes[:7], edges, 80.0, boxes[7:]),
-            expected)
-        assert np.isfinite(expected).any()
+        twin, fast = both_scans(origin, 0.3, angles, boxes[:7], boxes[7:], edges, 80.0)
+        assert twin.tobytes() == fast.tobytes()
+        assert np.isfinite(twin).any()
+
+
+@needs_compiled
+def test_the_numpy_scan_keeps_the_sign_of_zero_ranges():
+    """From the outline of a box or a segment the range is 0.0 or -0.0 as the
+    arithmetic falls, and of equal ranges the first box (or the boxes before the
+    segments) wins: the numpy twin gives the compiled bits, signs included."""
+    boxes = np.array([[-1.0, 0.0, 0.0, 2.0, 2.0], [0.0, 3.0, np.pi / 2, 2.0, 2.0]])
+    segments = np.array([[-0.0, 0.0, 0.0, 1.0], [0.0, -1.0, 0.0, 1.0]])
+    angles = np.array([np.pi, -np.pi, 0.0, np.pi / 2, -np.pi / 2, 1.0])
+    for some_boxes, some_segments in ((boxes, np.zeros((0, 4))), (np.zeros((0, 5)), segments),
+                                      (boxes, segments), (boxes[::-1], segments[::-1])):
+        twin, fast = both_scans(np.zeros(2), 0.0, angles, some_boxes, np.zeros((0, 5)),
+                                some_segments, 30.0)
+        assert twin.tobytes() == fast.tobytes()
+        assert (twin == 0).all() and np.signbit(twin).any() and not np.signbit(twin).all()
+
+
+def test_the_lidar_ranges_are_the_nearest_box_or_segment():
+    boxes = np.array([[10.0, 0.0, 0.0, 2.0, 2.0], [0.0, 20.0, 0.0, 2.0, 2.0]])
+    wall = np.array([[-5.0, -30.0, -5.0, 30.0]])
+    angles = np.array([0.0, np.pi / 2, np.pi, -np.pi / 2])
+    ranges = kernels.lidar_ranges_m(np.zeros(2), 0.0, angles, boxes[:1], wall, 25.0, boxes[1:])
+    np.testing.assert_allclose(ranges, [9.0, 19.0, 5.0, np.inf])
+    assert kernels.KERNELS in ("compiled", "numpy")
 
 
 def test_no_boxes_and_no_segments_see_nothing():
     ranges = kernels.lidar_ranges_m(np.zeros(2), 0.0, np.linspace(-1, 1, 5), np.zeros((0, 5)),
                                     np.zeros((0, 4)), 80.0)
     assert np.isinf(ranges).all() and ranges.shape == (5,)
+    assert kernels.contacts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), 5.0, np.zeros((0, 5)),
+                            np.zeros((0, 5)), np.zeros(0)) == (-1, -1, np.inf, np.inf)
 
 
-def reference_contacts(ego, speed, obstacles, traffic, speeds) -> kernels.Contacts:
-    """The ego's contacts from the numpy functions, one question at a time."""
-    def first(mask):
-        return int(np.flatnonzero(mask)[0]) if mask.any() else -1
-
-    return kernels.Contacts(
-        first(boxes_overlap(ego, obstacles)), first(boxes_overlap(ego, traffic)),
-        float(np.min(box_gap_m(ego, obstacles), initial=np.inf)),
-        safety.time_to_collision_s(ego, speed, np.vstack([obstacles, traffic]),
-                                   np.concatenate([np.zeros(len(obstacles)), speeds])))
+def both_contacts(ego, speed, obstacles, traffic, speeds):
+    """The contacts of the numpy twin and of the compiled code, the same arguments to both."""
+    box, *others = (np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic, speeds))
+    return [contacts(box, speed, *others) for contacts in (kernels.contacts_numpy,
+                                                          compiled.contacts)]
 
 
+@needs_compiled
 @PROPS
 @given(ego=box_st, obstacles=st.lists(box_st, max_size=4), traffic=st.lists(box_st, max_size=6),
        speed=st.floats(0.0, 40.0),
        speeds=st.lists(st.floats(0.0, 40.0), min_size=6, max_size=6))
-def test_the_contacts_kernel_equals_the_numpy_functions(ego, obstacles, traffic, speed, speeds):
+def test_the_numpy_contacts_equal_the_compiled_ones(ego, obstacles, traffic, speed, speeds):
     """First overlaps (boxes_overlap), obstacle gap (box_gap_m) and time to collision
-    (analysis.safety) equal the numpy answers bit for bit."""
-    ego = np.array(ego)
+    (time_to_collision_s) of the numpy twin equal the compiled answers bit for bit."""
     obstacles, traffic = (np.array(b, float).reshape(-1, 5) for b in (obstacles, traffic))
-    speeds = np.array(speeds[: len(traffic)])
-    found = kernels.contacts(ego, speed, obstacles, traffic, speeds)
-    expected = reference_contacts(ego, speed, obstacles, traffic, speeds)
-    assert found == expected
-    assert np.array(found).tobytes() == np.array(expected).tobytes()  # -0.0 is not 0.0
+    twin, fast = both_contacts(np.array(ego), speed, obstacles, traffic,
+                               np.array(speeds[: len(traffic)]))
+    assert same_bits(twin, fast)
 
 
-def test_the_contacts_kernel_on_near_misses_and_overlaps():
+@needs_compiled
+def test_the_numpy_contacts_on_near_misses_and_overlaps():
     rng = np.random.default_rng(2)
     ego = np.array([0.0, 0.0, 0.3, 4.85, 1.93])
     others = np.column_stack([rng.uniform(-8, 8, (500, 2)), rng.uniform(-3, 3, 500),
                               rng.uniform(0.5, 6, 500), rng.uniform(0.5, 2.5, 500)])
     speeds = rng.uniform(0, 20, 500)
-    met = {"overlap": 0, "gap": 0}
+    met = {"overlap": 0, "gap": 0, "ttc": 0}
     for k in range(0, 500, 5):
-        obstacles, traffic = others[k: k + 2], others[k + 2: k + 5]
-        found = kernels.contacts(ego, 6.0, obstacles, traffic, speeds[k + 2: k + 5])
-        assert found == reference_contacts(ego, 6.0, obstacles, traffic, speeds[k + 2: k + 5])
-        met["overlap" if found.obstacle_gap_m == 0 else "gap"] += 1
-    assert min(met.values()) > 10  # both kinds were met
+        twin, fast = both_contacts(ego, 6.0, others[k: k + 2], others[k + 2: k + 5],
+                                   speeds[k + 2: k + 5])
+        assert same_bits(twin, fast)
+        met["overlap" if twin[2] == 0 else "gap"] += 1
+        met["ttc"] += 0 < twin[3] < np.inf
+    assert min(met.values()) > 10  # each kind was met
 
 
+@needs_compiled
 def test_a_wrong_array_is_refused_with_its_name():
     with pytest.raises(TypeError, match="traffic"):
-        kernels._kernels.contacts(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros(4, np.float32),
-                                  np.zeros(0))
+        compiled.contacts(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros(4, np.float32),
+                          np.zeros(0))

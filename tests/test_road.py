@@ -7,10 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scenarios import RoadSpec
-from scenarios import _road_kernels as _kernels
+from scenarios import RoadSpec, road_kernels
 from scenarios.road_geometry import RoadGeometry
 from scenarios.sumo_net.build import EDGE_ID, build_network
+
+try:
+    from scenarios import _road_kernels as compiled
+except ImportError:  # built without a C compiler: only the numpy twins are there
+    compiled = None
+
+needs_compiled = pytest.mark.skipif(compiled is None, reason="the C extension was not built")
 
 
 def curve(radius_m: float, lanes: int = 3) -> RoadSpec:
@@ -34,24 +40,22 @@ def test_curve_frenet_round_trip(radius_m):
     assert heading == pytest.approx(100.0 / radius_m, abs=0.01)
 
 
-def reference_frenet(center_xy: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The straightforward projection in numpy: every point on every segment, the
-    nearest one wins (the first and last extended beyond the ends)."""
-    delta = np.diff(center_xy, axis=0)
-    length = np.hypot(delta[:, 0], delta[:, 1])
-    direction = delta / length[:, None]
-    start_s = np.concatenate([[0.0], np.cumsum(length)[:-1]])
-    rel = xy[:, None, :] - center_xy[None, :-1, :]  # (K, S, 2)
-    along = np.einsum("ksj,sj->ks", rel, direction)
-    low, high = np.zeros_like(length), length.copy()
-    low[0], high[-1] = -np.inf, np.inf
-    along = np.clip(along, low, high)
-    foot = center_xy[None, :-1, :] + along[..., None] * direction[None]
-    seg = np.argmin(np.sum((xy[:, None, :] - foot) ** 2, axis=-1), axis=1)
-    k = np.arange(len(xy))
-    r = rel[k, seg]
-    return (start_s[seg] + along[k, seg],
-            direction[seg, 0] * r[:, 1] - direction[seg, 1] * r[:, 0])
+def polyline(road: RoadGeometry) -> tuple[np.ndarray, ...]:
+    """The road's segments as the kernels take them: starts, directions, lengths, s."""
+    return road._seg_start_xy, road._seg_dir, road._seg_len_m, road._seg_start_s_m
+
+
+def frenet_by(frenet, road: RoadGeometry, points: np.ndarray) -> np.ndarray:
+    """s, d and edge gaps of the points, from one implementation of the kernel."""
+    s_m, d_m, gaps_m = found = np.full((3, len(points)), np.nan)
+    frenet(np.ascontiguousarray(points, float), *polyline(road), s_m, d_m, road.half_width_m,
+           road.length_m, gaps_m)
+    return found
+
+
+def locate_by(locate, road: RoadGeometry, points: np.ndarray) -> np.ndarray:
+    """(s, d) of each point, one point at a time, as (2, K)."""
+    return np.array([locate(x, y, *polyline(road)) for x, y in points.tolist()]).reshape(-1, 2).T
 
 
 coordinate = st.floats(-200.0, 200.0, allow_nan=False)
@@ -63,23 +67,28 @@ points_st = st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=10)
 
 @settings(max_examples=300, deadline=None)
 @given(line=polyline_st, points=points_st)
-def test_the_compiled_frenet_projection_equals_the_straightforward_one(line, points):
+def test_the_numpy_frenet_projection_equals_the_compiled_one(line, points):
     """Any polyline (one segment: a straight road), points anywhere, vertices and
-    segment ends included: the same s, d and edge gaps, bit for bit, for many
-    points or one; the heading is the segment's at s."""
+    segment ends included: the numpy twin and the compiled kernel give the same s, d
+    and edge gaps, bit for bit, for many points or one, and so does the road; the
+    heading is the segment's at s."""
     points = np.vstack([points, line, (line[:-1] + line[1:]) / 2])
     road = RoadGeometry(line, 2, 3.5)
-    s_m, d_m = road.to_frenet(points)
-    expected_s, expected_d = reference_frenet(line, points)
-    assert s_m.tobytes() == expected_s.tobytes()
-    assert d_m.tobytes() == expected_d.tobytes()
-    # one point at a time, in plain floats
+    twin = frenet_by(road_kernels.frenet_numpy, road, points)
+    expected_s, expected_d, expected_gaps = twin
+    if compiled is not None:
+        assert frenet_by(compiled.frenet, road, points).tobytes() == twin.tobytes()
+        assert locate_by(compiled.locate, road, points).tobytes() == twin[:2].tobytes()
+    assert locate_by(road_kernels.locate_numpy, road, points).tobytes() == twin[:2].tobytes()
+    # the road asks whichever kernels run
+    assert np.array(road.to_frenet(points)).tobytes() == twin[:2].tobytes()
+    assert road.edge_gaps_m(points).tobytes() == expected_gaps.tobytes()
     located = np.array([road.locate(x, y) for x, y in points.tolist()]).reshape(-1, 2)
-    assert located.T.tobytes() == np.array([expected_s, expected_d]).tobytes()
+    assert located.T.tobytes() == twin[:2].tobytes()
     # the edge gaps: beside the road, the distance to the nearer edge
     alongside = (expected_s >= 0) & (expected_s <= road.length_m)
-    expected_gaps = np.where(alongside, 3.5 - np.abs(expected_d), np.inf)
-    assert road.edge_gaps_m(points).tobytes() == expected_gaps.tobytes()
+    assert expected_gaps.tobytes() == np.where(alongside, 3.5 - np.abs(expected_d),
+                                               np.inf).tobytes()
     # and the heading, of one position or many
     delta = np.diff(line, axis=0)
     length = np.hypot(delta[:, 0], delta[:, 1])
@@ -90,14 +99,26 @@ def test_the_compiled_frenet_projection_equals_the_straightforward_one(line, poi
     assert [road.heading_at_s(s) for s in expected_s.tolist()] == heading[seg].tolist()
 
 
-def test_the_frenet_projection_on_a_long_curve():
+@needs_compiled
+def test_the_numpy_frenet_projection_on_a_long_curve():
     road = RoadGeometry.from_spec(RoadSpec(kind="curve", length_m=1000.0, lanes=3,
                                            curve_radius_m=150.0))
     points = np.random.default_rng(4).uniform(-200, 1000, (2000, 2))
-    s_m, d_m = road.to_frenet(points)
-    expected_s, expected_d = reference_frenet(road.center_xy, points)
+    twin = frenet_by(road_kernels.frenet_numpy, road, points)
     assert len(road.center_xy) > 500
-    assert s_m.tobytes() == expected_s.tobytes() and d_m.tobytes() == expected_d.tobytes()
+    assert frenet_by(compiled.frenet, road, points).tobytes() == twin.tobytes()
+    assert np.isfinite(twin[2]).any() and np.isinf(twin[2]).any()
+
+
+def test_the_projection_takes_the_nearest_segment():
+    """A right angle: each point on the leg it is nearest to, s and d exact."""
+    road = RoadGeometry(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]), 2, 3.5)
+    points = np.array([[4.0, 1.0], [11.0, 6.0], [-2.0, -1.0], [12.0, 14.0], [9.0, 3.0]])
+    for frenet in (road_kernels.frenet_numpy, road_kernels.frenet):
+        s_m, d_m, gaps_m = frenet_by(frenet, road, points)
+        np.testing.assert_array_equal(s_m, [4.0, 16.0, -2.0, 24.0, 13.0])
+        np.testing.assert_array_equal(d_m, [1.0, -1.0, -1.0, -2.0, 1.0])
+        np.testing.assert_array_equal(gaps_m, [2.5, 2.5, np.inf, np.inf, 2.5])
 
 
 def test_straight_road_edges_and_lanes():
@@ -133,13 +154,14 @@ def test_sumo_lanes_match_our_geometry(tmp_path, spec):
         libsumo.close()
 
 
+@needs_compiled
 def test_the_compiled_projection_refuses_wrong_arrays_by_name():
     road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=2))
     line = (road._seg_start_xy, road._seg_dir, road._seg_len_m, road._seg_start_s_m)
     points, out = np.zeros((3, 2)), np.empty(3)
     with pytest.raises(TypeError, match="xy"):
-        _kernels.frenet(np.zeros(3), *line, out, out, 3.5, 100.0, out)
+        compiled.frenet(np.zeros(3), *line, out, out, 3.5, 100.0, out)
     with pytest.raises(TypeError, match="d_out"):
-        _kernels.frenet(points, *line, out, np.empty(3, np.float32), 3.5, 100.0, out)
+        compiled.frenet(points, *line, out, np.empty(3, np.float32), 3.5, 100.0, out)
     with pytest.raises(ValueError, match="gaps_out"):
-        _kernels.frenet(points, *line, out, out, 3.5, 100.0, np.empty(2))
+        compiled.frenet(points, *line, out, out, 3.5, 100.0, np.empty(2))

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import traci.constants as tc
 
+from scenarios import road_kernels
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import in_start_zone, sensing_radius_m, within_m
+from scenarios.snapshot import in_start_zone, sensing_radius_m
 from scenarios.sumo_world import TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M
 from scenarios.world_backends import make_world
 from sdc.car.vehicle import Command
@@ -43,20 +44,15 @@ def every_vehicle_within(world, ego_box, radius_m) -> int:
     return count
 
 
-def subscribed_traffic(world, ego_box, radius_m) -> tuple[np.ndarray, np.ndarray]:
-    """The traffic boxes and speeds of the subscription's results, in numpy: the
-    reference for the compiled read."""
+def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, np.ndarray]:
+    """The traffic boxes and speeds of the subscription's results, read by one
+    implementation of the kernel."""
     nearby = world._sumo.vehicle.getContextSubscriptionResults("ego")
-    rows = np.array([(*v[tc.VAR_POSITION], v[tc.VAR_ANGLE], v[tc.VAR_SPEED])
-                     for vid, v in nearby.items()
-                     if vid != "ego" and not vid.startswith("obstacle.")]).reshape(-1, 4)
-    yaw = np.radians(90.0 - rows[:, 2])
-    boxes = np.column_stack([rows[:, 0] - TRAFFIC_LENGTH_M / 2 * np.cos(yaw),
-                             rows[:, 1] - TRAFFIC_LENGTH_M / 2 * np.sin(yaw), yaw,
-                             np.full(len(rows), TRAFFIC_LENGTH_M),
-                             np.full(len(rows), TRAFFIC_WIDTH_M)])
-    keep = within_m(boxes, ego_box[:2], radius_m)
-    return boxes[keep], rows[keep, 3]
+    boxes, speeds = np.full((len(nearby), 5), np.nan), np.full(len(nearby), np.nan)
+    count = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED), "ego", "obstacle.",
+                    TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]), float(ego_box[1]),
+                    radius_m, boxes, speeds)
+    return boxes[:count], speeds[:count]
 
 
 @pytest.mark.parametrize("backend", ["sumo", "highway"])
@@ -78,8 +74,9 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
             if backend == "sumo":  # the subscription misses nothing within the radius
                 assert len(sim.snapshot.traffic_boxes) == every_vehicle_within(world, sim.box,
                                                                                 radius)
-                # and the compiled read of its results is the numpy formula, bit for bit
-                boxes, speeds = subscribed_traffic(world, sim.box, radius)
+                # and the read of its results is the numpy twin's, bit for bit
+                boxes, speeds = traffic_read_by(road_kernels.traffic_numpy, world, sim.box,
+                                                radius)
                 assert sim.snapshot.traffic_boxes.tobytes() == boxes.tobytes()
                 assert sim.snapshot.traffic_speeds_mps.tobytes() == speeds.tobytes()
             sim.advance(Command(0.0))

@@ -1,9 +1,10 @@
 /*
  * Compiled kernels for the per-step hot path: the lidar scan, and the ego's
- * contacts (overlaps, gap to the obstacles, time to collision). Each is the exact counterpart of a numpy
- * function in sdc/car/geometry.py or analysis/safety.py (same formulas, same order
- * of operations, no fused multiply-adds), which stays the reference the tests
- * compare against.
+ * contacts (overlaps, gap to the obstacles, time to collision). Each is the exact
+ * counterpart of numpy functions in sdc/car/geometry.py (same formulas, same order
+ * of operations, no fused multiply-adds): their composition in
+ * sdc/car/geometry_kernels.py runs where this is not built, and the tests hold the
+ * two to the same bits.
  *
  * Arrays arrive as C-contiguous float64 buffers (the Python wrappers in
  * sdc/car/geometry_kernels.py make sure of that; scenarios/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
@@ -12,7 +13,8 @@
 #include "../../scenarios/_buffers.h"
 #include <math.h>
 
-/* numpy's maximum/minimum for non-NaN input: the first argument wins ties */
+/* maximum/minimum for non-NaN input, the first argument on ties (0.0 against -0.0),
+ * as sdc/car/geometry.py takes them (numpy's own would take the second) */
 static inline double np_max(double a, double b) { return a >= b ? a : b; }
 static inline double np_min(double a, double b) { return a <= b ? a : b; }
 
@@ -186,7 +188,7 @@ static double outline_gap(const double *a, const double *b) {
 
 /* constant-velocity time to collision of box a (speed along its heading) with box
  * b (speed_b along b's heading): inf unless b is in a's lateral corridor ahead and
- * they close or already touch (time_to_collision_s of analysis/safety.py) */
+ * they close or already touch (time_to_collision_s of sdc/car/geometry.py) */
 static double time_to_collision(const double *a, double cos_yaw, double sin_yaw, double speed,
                                 const double *b, double speed_b) {
     double dx = b[0] - a[0], dy = b[1] - a[1];
@@ -207,8 +209,8 @@ static double time_to_collision(const double *a, double cos_yaw, double sin_yaw,
  * this step, as (index of the first obstacle it overlaps or -1, the same for the
  * traffic, its outline gap to the nearest obstacle or inf, its time to collision
  * with any of them, the obstacles standing still). Overlaps are boxes_overlap and
- * gaps box_gap_m of sdc/car/geometry.py; the time is time_to_collision_s of
- * analysis/safety.py over the obstacles, then the traffic. */
+ * gaps box_gap_m of sdc/car/geometry.py; the time is its time_to_collision_s
+ * over the obstacles, then the traffic. */
 static PyObject *contacts(PyObject *self, PyObject *args) {
     PyObject *a_obj, *o_obj, *t_obj, *v_obj;
     double speed;

@@ -1,4 +1,5 @@
-"""Vectorised 2D geometry kernels for the lidar and the gap checks (numpy, float64).
+"""Vectorised 2D geometry for the lidar, the gap checks and the time to collision (numpy,
+float64).
 
 Conventions
 -----------
@@ -12,11 +13,15 @@ Conventions
   inside it (range 0.0), and a ray running exactly along a box edge hits that box.
 * Ranges are distances along the ray in metres; ``np.inf`` means no hit within
   ``max_range_m`` (a hit exactly at ``max_range_m`` counts).
+* Of equal values the first wins (0.0 against -0.0: the nearer one's sign), as in the
+  compiled kernels (numpy's own ``minimum``, ``maximum`` and ``min`` keep the second).
 
 No function loops in Python over beams, boxes or segments.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -36,6 +41,24 @@ def _edges_from_corners(corners_m: np.ndarray) -> np.ndarray:
     return np.concatenate([corners_m, np.roll(corners_m, -1, axis=-2)], axis=-1)
 
 
+def _lesser(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Elementwise minimum, ``a`` on ties."""
+    return np.where(a <= b, a, b)
+
+
+def _greater(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Elementwise maximum, ``a`` on ties."""
+    return np.where(a >= b, a, b)
+
+
+def _nearest(ranges_m: np.ndarray) -> np.ndarray:
+    """Minimum along the last axis, the first of equals; ``inf`` over none."""
+    if ranges_m.shape[-1] == 0:
+        return np.full(ranges_m.shape[:-1], np.inf)
+    first = np.argmin(ranges_m, axis=-1)[..., None]
+    return np.take_along_axis(ranges_m, first, axis=-1)[..., 0]
+
+
 def _slab(origin_m: np.ndarray, dir_m: np.ndarray, half_m: np.ndarray):
     """Entry/exit ray parameters of one slab ``|s| <= half_m`` (all arrays broadcast (B, N))."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # fixed up below
@@ -43,8 +66,8 @@ def _slab(origin_m: np.ndarray, dir_m: np.ndarray, half_m: np.ndarray):
         t_b = (half_m - origin_m) / dir_m
     parallel = dir_m == 0.0
     inside = np.abs(origin_m) <= half_m
-    t_in = np.where(parallel, np.where(inside, -np.inf, np.inf), np.minimum(t_a, t_b))
-    t_out = np.where(parallel, np.where(inside, np.inf, -np.inf), np.maximum(t_a, t_b))
+    t_in = np.where(parallel, np.where(inside, -np.inf, np.inf), _lesser(t_a, t_b))
+    t_out = np.where(parallel, np.where(inside, np.inf, -np.inf), _greater(t_a, t_b))
     return t_in, t_out
 
 
@@ -53,9 +76,9 @@ def _slab_ranges(local_x_m, local_y_m, local_angle_rad, half_len_m, half_wid_m) 
     ``inf`` where a ray misses, 0 where it starts inside (outline included)."""
     tx_in, tx_out = _slab(local_x_m, np.cos(local_angle_rad), half_len_m)
     ty_in, ty_out = _slab(local_y_m, np.sin(local_angle_rad), half_wid_m)
-    t_in, t_out = np.maximum(tx_in, ty_in), np.minimum(tx_out, ty_out)
+    t_in, t_out = _greater(tx_in, ty_in), _lesser(tx_out, ty_out)
     hit = (t_in <= t_out) & (t_out >= 0.0)
-    return np.where(hit, np.maximum(t_in, 0.0), np.inf)
+    return np.where(hit, _greater(t_in, 0.0), np.inf)
 
 
 def _origin_in_box_frames(origin_m: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -81,7 +104,7 @@ def ray_box_ranges(
     range_m = _slab_ranges(local_x_m[None, :], local_y_m[None, :],
                            angles[:, None] - b[None, :, 2],  # (B, N); exact 0 stays exact
                            0.5 * b[None, :, 3], 0.5 * b[None, :, 4])
-    nearest_m = np.min(range_m, axis=1, initial=np.inf)
+    nearest_m = _nearest(range_m)
     return np.where(nearest_m <= max_range_m, nearest_m, np.inf)
 
 
@@ -107,7 +130,7 @@ def ray_segment_ranges(
         t_m = (rel_x * edge_y - rel_y * edge_x) / safe_denom  # along the ray
         u = (rel_x * dir_y - rel_y * dir_x) / safe_denom  # along the segment, 0..1
     hit = ~parallel & (t_m >= 0.0) & (u >= 0.0) & (u <= 1.0)
-    nearest_m = np.min(np.where(hit, t_m, np.inf), axis=1, initial=np.inf)
+    nearest_m = _nearest(np.where(hit, t_m, np.inf))
     return np.where(nearest_m <= max_range_m, nearest_m, np.inf)
 
 
@@ -179,3 +202,33 @@ def boxes_within_m(point_xy: np.ndarray, boxes: np.ndarray, reach_m: float) -> n
     half_diag_m = 0.5 * np.hypot(b[:, 3], b[:, 4])
     centre_m = np.hypot(b[:, 0] - point_xy[0], b[:, 1] - point_xy[1])
     return centre_m <= reach_m + half_diag_m
+
+
+def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.ndarray,
+                        speeds_mps: np.ndarray) -> float:
+    """Time until the ego reaches the nearest object in its path at constant velocities [s].
+
+    In the ego's frame (x along its heading), an object is in the path when its
+    lateral extent overlaps the ego's and it lies ahead of the ego's front. The
+    ego closes in at ``ego_speed - speed * cos(relative heading)``; the TTC is
+    the longitudinal gap over that closing speed, ``inf`` when nothing in the
+    path is being closed in on, 0 when an object in the path already touches.
+    """
+    if len(boxes) == 0:
+        return math.inf
+    cx, cy, yaw, length, width = ego_box
+    cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+    dx, dy = boxes[:, 0] - cx, boxes[:, 1] - cy
+    ahead_m = dx * cos_yaw + dy * sin_yaw
+    lateral_m = -dx * sin_yaw + dy * cos_yaw
+    rel_yaw = boxes[:, 2] - yaw
+    half_len_m, half_wid_m = boxes[:, 3] / 2, boxes[:, 4] / 2
+    extent_x_m = np.abs(half_len_m * np.cos(rel_yaw)) + np.abs(half_wid_m * np.sin(rel_yaw))
+    extent_y_m = np.abs(half_len_m * np.sin(rel_yaw)) + np.abs(half_wid_m * np.cos(rel_yaw))
+    gap_m = ahead_m - extent_x_m - length / 2
+    in_path = (np.abs(lateral_m) < extent_y_m + width / 2) & (ahead_m + extent_x_m > length / 2)
+    closing_mps = ego_speed_mps - speeds_mps * np.cos(rel_yaw)
+    with np.errstate(over="ignore"):  # closing at a crawl: inf, which is right
+        ttc = np.where(gap_m <= 0, 0.0, gap_m / np.where(closing_mps > 0, closing_mps, np.nan))
+    ttc = ttc[in_path & ((gap_m <= 0) | (closing_mps > 0))]
+    return float(ttc.min()) if ttc.size else math.inf

@@ -1,12 +1,14 @@
-"""The per-step hot path in compiled code (``sdc/car/_geometry_kernels.c``), called like numpy.
+"""The car's per-step geometry, called like numpy: compiled (``sdc/car/_geometry_kernels.c``)
+where it was built, else its numpy twins below, chosen once at import
+(:mod:`scenarios.compiled_kernels`; ``SDC_KERNELS=numpy`` forces the twins).
 
-Each function equals its numpy references bit for bit (the property tests in
-``tests/test_kernels.py`` hold them to it): the lidar scan equals
-:func:`sdc.car.geometry.ray_box_ranges` and :func:`sdc.car.geometry.ray_segment_ranges`
-and their minimum; :func:`contacts` equals :func:`sdc.car.geometry.boxes_overlap`,
-:func:`sdc.car.geometry.box_gap_m` and :func:`analysis.safety.time_to_collision_s`.
-The numpy versions say plainly what is computed; these do it without numpy's
-per-call cost, which dominates a step's few small arrays.
+The twins take the compiled functions' arguments and compose the numpy functions
+of :mod:`sdc.car.geometry`: the lidar scan is :func:`~sdc.car.geometry.ray_box_ranges`
+and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; the contacts are
+:func:`~sdc.car.geometry.boxes_overlap`, :func:`~sdc.car.geometry.box_gap_m` and
+:func:`~sdc.car.geometry.time_to_collision_s`. Both paths agree bit for bit
+(``tests/test_kernels.py``); the compiled one avoids numpy's per-call cost, which
+dominates a step's few small arrays.
 """
 
 from __future__ import annotations
@@ -15,8 +17,48 @@ from typing import NamedTuple
 
 import numpy as np
 
+from scenarios.compiled_kernels import COMPILED, NUMPY, compiled_extension
 from scenarios.snapshot import NO_BOXES
-from sdc.car import _geometry_kernels as _kernels
+from sdc.car.geometry import (
+    box_gap_m,
+    boxes_overlap,
+    ray_box_ranges,
+    ray_segment_ranges,
+    time_to_collision_s,
+)
+
+
+def scan_numpy(origin_x_m: float, origin_y_m: float, yaw_rad: float, angles_rad: np.ndarray,
+               boxes: np.ndarray, more_boxes: np.ndarray, segments: np.ndarray,
+               max_range_m: float, out: np.ndarray) -> None:
+    """Into ``out``: the range along each ray of world angle ``yaw_rad + angles_rad`` to
+    the nearest of ``boxes``, ``more_boxes`` and ``segments``, inf beyond ``max_range_m``."""
+    origin_m, world_rad = np.array([origin_x_m, origin_y_m]), yaw_rad + angles_rad
+    box_m = ray_box_ranges(origin_m, world_rad, np.vstack([boxes, more_boxes]), max_range_m)
+    segment_m = ray_segment_ranges(origin_m, world_rad, segments, max_range_m)
+    out[:] = np.where(box_m <= segment_m, box_m, segment_m)  # the box of equals, as in C
+
+
+def _first(mask: np.ndarray) -> int:
+    return int(np.argmax(mask)) if mask.any() else -1
+
+
+def contacts_numpy(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
+                   traffic_boxes: np.ndarray,
+                   traffic_speeds_mps: np.ndarray) -> tuple[int, int, float, float]:
+    """The fields of :class:`Contacts`, one numpy question at a time."""
+    return (_first(boxes_overlap(box, obstacle_boxes)), _first(boxes_overlap(box, traffic_boxes)),
+            float(np.min(box_gap_m(box, obstacle_boxes), initial=np.inf)),
+            time_to_collision_s(box, speed_mps, np.vstack([obstacle_boxes, traffic_boxes]),
+                                np.concatenate([np.zeros(len(obstacle_boxes)),
+                                                traffic_speeds_mps])))
+
+
+_compiled = compiled_extension("sdc.car._geometry_kernels")
+#: which kernels run: "compiled" or "numpy"
+KERNELS = NUMPY if _compiled is None else COMPILED
+_scan = scan_numpy if _compiled is None else _compiled.scan
+_contacts = contacts_numpy if _compiled is None else _compiled.contacts
 
 
 def _dense(array: np.ndarray) -> np.ndarray:
@@ -31,8 +73,8 @@ def lidar_ranges_m(origin_xy: np.ndarray, yaw_rad: float, angles_rad: np.ndarray
     ``boxes``, ``more_boxes`` and ``segments`` [m]; ``inf`` where nothing is hit
     within ``max_range_m``."""
     out = np.empty(len(angles_rad))
-    _kernels.scan(float(origin_xy[0]), float(origin_xy[1]), yaw_rad, _dense(angles_rad),
-                  _dense(boxes), _dense(more_boxes), _dense(segments), max_range_m, out)
+    _scan(float(origin_xy[0]), float(origin_xy[1]), yaw_rad, _dense(angles_rad),
+          _dense(boxes), _dense(more_boxes), _dense(segments), max_range_m, out)
     return out
 
 
@@ -49,5 +91,5 @@ def contacts(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
              traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray) -> Contacts:
     """The ego's overlaps, obstacle gap and time to collision in one pass; obstacles
     stand still, traffic moves at its speeds along its headings."""
-    return Contacts(*_kernels.contacts(_dense(box), speed_mps, _dense(obstacle_boxes),
-                                       _dense(traffic_boxes), _dense(traffic_speeds_mps)))
+    return Contacts(*_contacts(_dense(box), speed_mps, _dense(obstacle_boxes),
+                               _dense(traffic_boxes), _dense(traffic_speeds_mps)))

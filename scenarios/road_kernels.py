@@ -1,0 +1,96 @@
+"""The world's per-step questions: compiled (``scenarios/_road_kernels.c``) where it
+was built, else their numpy twins below, chosen once at import
+(:mod:`scenarios.compiled_kernels`; ``SDC_KERNELS=numpy`` forces the twins).
+
+- :func:`frenet`: road coordinates ``(s, d)`` of points on a polyline and their
+  distance to the nearer road edge (:meth:`scenarios.road_geometry.RoadGeometry.to_frenet`);
+- :func:`locate`: the same of one point, in plain floats;
+- :func:`traffic`: SUMO's context subscription results as traffic boxes and speeds
+  (:meth:`scenarios.sumo_world.SumoWorld._traffic`).
+
+Each twin takes the compiled function's arguments, writes the same outputs and
+computes in the same order (no fused multiply-adds), so the answers agree to the
+last bit (``tests/test_road.py``, ``tests/test_traffic_scale.py``). In numpy a
+step's few points cost more than in C: that is what the compiled code is for.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from scenarios.compiled_kernels import COMPILED, NUMPY, compiled_extension
+
+
+def _project(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+             start_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(s, d)`` of (K, 2) points: each on its nearest segment (the first of equals),
+    the first segment extended backwards and the last one forwards."""
+    rel_x = xy[:, 0, None] - starts[None, :, 0]  # (K, S)
+    rel_y = xy[:, 1, None] - starts[None, :, 1]
+    dir_x, dir_y = directions[:, 0], directions[:, 1]
+    along = rel_x * dir_x + rel_y * dir_y
+    low, high = np.zeros(len(lengths)), lengths.copy()
+    low[0], high[-1] = -np.inf, np.inf
+    along = np.where(along > low, along, low)
+    along = np.where(along < high, along, high)
+    off_x = xy[:, 0, None] - (starts[None, :, 0] + along * dir_x)
+    off_y = xy[:, 1, None] - (starts[None, :, 1] + along * dir_y)
+    seg = np.argmin(off_x * off_x + off_y * off_y, axis=1)
+    k = np.arange(len(xy))
+    return (start_s[seg] + along[k, seg],
+            dir_x[seg] * rel_y[k, seg] - dir_y[seg] * rel_x[k, seg])
+
+
+def frenet_numpy(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray,
+                 lengths: np.ndarray, start_s: np.ndarray, s_out: np.ndarray,
+                 d_out: np.ndarray, half_width_m: float, length_m: float,
+                 gaps_out: np.ndarray) -> None:
+    """Into ``s_out``, ``d_out``: the road coordinates of (K, 2) points on the polyline of
+    segments (``starts`` (S, 2), unit ``directions`` (S, 2), ``lengths`` (S,), ``start_s``
+    (S,)); into ``gaps_out``: ``half_width_m - |d|`` where ``0 <= s <= length_m``, else inf."""
+    s_m, d_m = _project(xy, starts, directions, lengths, start_s)
+    s_out[:], d_out[:] = s_m, d_m
+    gaps_out[:] = np.where((s_m >= 0.0) & (s_m <= length_m), half_width_m - np.abs(d_m), np.inf)
+
+
+def locate_numpy(x_m: float, y_m: float, starts: np.ndarray, directions: np.ndarray,
+                 lengths: np.ndarray, start_s: np.ndarray) -> tuple[float, float]:
+    """``(s, d)`` of one point, as :func:`frenet_numpy` finds them."""
+    s_m, d_m = _project(np.array([[x_m, y_m]]), starts, directions, lengths, start_s)
+    return float(s_m[0]), float(d_m[0])
+
+
+def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, length_m: float,
+                  width_m: float, cx_m: float, cy_m: float, radius_m: float, boxes: np.ndarray,
+                  speeds_mps: np.ndarray) -> int:
+    """Into ``boxes`` and ``speeds_mps``: the vehicles of ``nearby`` (id -> {position key:
+    front bumper (x, y), angle key: SUMO degrees clockwise from north, speed key: m/s},
+    ``keys`` = (position, angle, speed)) other than ``ego_id`` and the ids starting with
+    ``skip_prefix``, whose body centre lies within ``radius_m`` of (cx, cy), in the dict's
+    order; returns how many. A box is ``[cx, cy, yaw, length, width]``, its yaw
+    ``(90 - angle) * pi / 180`` and its centre half a length behind the front bumper."""
+    position, angle, speed = keys
+    rows = np.array([(*values[position], values[angle], values[speed])
+                     for vid, values in nearby.items()
+                     if vid != ego_id and not vid.startswith(skip_prefix)],
+                    dtype=np.float64).reshape(-1, 4)
+    yaw = (90.0 - rows[:, 2]) * (math.pi / 180.0)
+    centre_x = rows[:, 0] - length_m / 2 * np.cos(yaw)
+    centre_y = rows[:, 1] - length_m / 2 * np.sin(yaw)
+    dx, dy = centre_x - cx_m, centre_y - cy_m
+    keep = dx * dx + dy * dy <= radius_m * radius_m
+    count = int(np.count_nonzero(keep))
+    boxes[:count] = np.column_stack([centre_x, centre_y, yaw, np.full(len(rows), length_m),
+                                     np.full(len(rows), width_m)])[keep]
+    speeds_mps[:count] = rows[keep, 3]
+    return count
+
+
+_compiled = compiled_extension("scenarios._road_kernels")
+#: which kernels run: "compiled" or "numpy"
+KERNELS = NUMPY if _compiled is None else COMPILED
+frenet = frenet_numpy if _compiled is None else _compiled.frenet
+locate = locate_numpy if _compiled is None else _compiled.locate
+traffic = traffic_numpy if _compiled is None else _compiled.traffic
