@@ -1,25 +1,25 @@
-"""The report's figures, drawn with matplotlib's Agg backend and returned as PNG bytes."""
+"""The report's figures, returned as PNG bytes.
+
+Each is a bare ``matplotlib.figure.Figure`` saved straight to PNG: no pyplot, so
+drawing one neither selects nor changes the user's matplotlib backend.
+"""
 
 from __future__ import annotations
 
 import io
 
-import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")  # files only; never a window
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from analysis.stats import Method, group_values, rates_by  # noqa: E402
+from analysis.stats import Method, group_values, rates_by
 
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 
 
-def _png(fig) -> bytes:
+def _png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
-    plt.close(fig)
     return buffer.getvalue()
 
 
@@ -38,7 +38,8 @@ def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
 def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wilson") -> bytes:
     """Collision rate per group of ``column``, one line per controller, 95% band."""
     table = rates_by(results, column, method)
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig = Figure(figsize=(7, 4))
+    ax = fig.subplots()
     categories: list[str] = []
     for controller, rows in table.groupby("controller", sort=False):
         rows = rows.dropna(subset=["collision_rate"])
@@ -60,7 +61,8 @@ def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> byte
     gx, gy = group_values(ok[x], 8), group_values(ok[y], 8)
     grid = (ok.assign(_x=gx, _y=gy).groupby(["_y", "_x"], observed=False).collision.mean()
             .unstack("_x"))
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig = Figure(figsize=(7, 4.5))
+    ax = fig.subplots()
     image = ax.imshow(grid.to_numpy(dtype=float), origin="lower", aspect="auto",
                       cmap="viridis", vmin=0, vmax=1)
     ax.set_xticks(range(grid.shape[1]), [str(c) for c in grid.columns], rotation=45,
@@ -74,7 +76,8 @@ def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> byte
 def distributions(results: pd.DataFrame) -> bytes:
     """Histograms of the minimum gap to the obstacle and the minimum TTC, per controller."""
     ok = results[results.status == "ok"]
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
+    fig = Figure(figsize=(10, 3.8))
+    axes = fig.subplots(1, 2)
     for ax, column, unit in ((axes[0], "min_gap_obstacle_m", "m"), (axes[1], "min_ttc_s", "s")):
         values = ok[column].dropna()
         bins = np.linspace(0, max(float(values.max()), 1.0), 25) if len(values) else 10
@@ -89,7 +92,8 @@ def distributions(results: pd.DataFrame) -> bytes:
 def collision_breakdown(results: pd.DataFrame) -> bytes:
     """Collisions by what was hit, per controller, with error and timeout runs beside."""
     controllers = list(dict.fromkeys(results.controller))
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig = Figure(figsize=(7, 3.5))
+    ax = fig.subplots()
     bottom = np.zeros(len(controllers))
     ok = results[results.status == "ok"]
     bars = [(kind, ok[ok.collision_with == kind]) for kind in COLLISION_KINDS]

@@ -2,7 +2,9 @@
 
 Everything comes from the trace and its metadata (spec, road centre line,
 vehicle size), so a recorded run is drawn without SUMO. The view follows the
-ego; beams with a return are drawn strong, the others faint.
+ego; beams with a return are drawn strong, the others faint. Figures are bare
+``matplotlib.figure.Figure`` objects on the Agg canvas: no pyplot, so the user's
+matplotlib backend is left alone.
 """
 
 from __future__ import annotations
@@ -13,23 +15,18 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import animation
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection, PolyCollection
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")  # files only; never a window
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib import animation  # noqa: E402
-from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
-
-from analysis.metrics import central_range_m  # noqa: E402
-from analysis.trace_file import Trace  # noqa: E402
-from scenarios.boxes import box_corners  # noqa: E402
-from scenarios.road_geometry import RoadGeometry  # noqa: E402
-from scenarios.scenario_spec import (
-    ScenarioSpec,  # noqa: E402
-    beam_angles_rad,  # noqa: E402
-)
-from scenarios.snapshot import obstacle_boxes  # noqa: E402
+from analysis.metrics import central_range_m
+from analysis.trace_file import Trace
+from scenarios.boxes import box_corners
+from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec, beam_angles_rad
+from scenarios.snapshot import obstacle_boxes
 
 VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
 
@@ -187,15 +184,19 @@ def _scene_axes(ax, scene: Scene):
     return draw
 
 
+def _figure(**kwargs) -> Figure:
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def frame_rgb(scene: Scene, k: int, width_px: int = 640, height_px: int = 320) -> np.ndarray:
     """Step ``k`` drawn as an (H, W, 3) uint8 image (no strip chart)."""
-    fig = plt.figure(figsize=(width_px / 80, height_px / 80), dpi=80)
+    fig = _figure(figsize=(width_px / 80, height_px / 80), dpi=80)
     ax = fig.add_axes([0.08, 0.12, 0.9, 0.85])
     _scene_axes(ax, scene)(k)
     fig.canvas.draw()
-    image = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
-    plt.close(fig)
-    return image
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
 
 
 def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,
@@ -204,7 +205,8 @@ def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,
     ``on_frame(i, n)`` is called as frame ``i`` of ``n`` is written."""
     path = Path(path)
     steps = frame_steps(len(scene.t_s), every)
-    fig, (ax, strip) = plt.subplots(2, 1, figsize=(8, 6.5), height_ratios=[3, 1.4])
+    fig = _figure(figsize=(8, 6.5))
+    ax, strip = fig.subplots(2, 1, height_ratios=[3, 1.4])
     fig.suptitle(scene.title, fontsize=9)
     draw_scene = _scene_axes(ax, scene)
     t = scene.t_s
@@ -225,7 +227,6 @@ def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,
     writer = (animation.FFMpegWriter(fps=fps) if path.suffix == ".mp4"
               else animation.PillowWriter(fps=fps))
     anim.save(str(path), writer=writer, dpi=80, progress_callback=on_frame)
-    plt.close(fig)
     return len(steps)
 
 

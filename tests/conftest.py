@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import copy
+import os
 
 import pytest
 
@@ -12,3 +13,16 @@ from scenarios.toml_io import read_toml
 def lesson_plain() -> dict:
     """The seed-lesson scenario as a plain mapping, to modify per test."""
     return copy.deepcopy(read_toml(CATALOG_DIR / "seed-lesson.toml"))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def temporary_cache(tmp_path_factory):
+    """The whole session caches in a temporary directory (each xdist worker its own),
+    and so do the processes its tests start: they inherit ``SDC_CACHE_DIR``."""
+    before = os.environ.get("SDC_CACHE_DIR")
+    os.environ["SDC_CACHE_DIR"] = str(tmp_path_factory.mktemp("sdc-cache"))
+    yield
+    if before is None:
+        del os.environ["SDC_CACHE_DIR"]
+    else:
+        os.environ["SDC_CACHE_DIR"] = before

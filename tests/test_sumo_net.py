@@ -61,6 +61,7 @@ def test_seed_avoids_the_obstacle_in_town_and_returns_to_its_lane(seed):
     assert row["max_abs_lane_offset_m"] > 3.2
 
 
+@pytest.mark.slow
 def test_same_seed_same_trace_in_another_process_and_other_seeds_differ(seed):
     spec = town(seed, vehicles=200)
     here = run_episode(spec).row["trace_sha256"]
@@ -80,6 +81,7 @@ def test_random_trips_fill_the_network(seed):
     assert 390 <= row["network_vehicles"] <= 400
 
 
+@pytest.mark.slow
 def test_every_car_that_arrives_starts_a_new_trip(seed):
     """The network keeps its traffic.vehicles cars: without new trips, the grid
     loses more than 5% of 400 in two minutes."""

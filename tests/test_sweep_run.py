@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import inspect
 import json
 import os
 import signal
@@ -17,6 +19,7 @@ from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
+from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, execute
 from sdc.batch.sweep_runner import run_sweep, sweep_columns
 from sdc.run.result_row import RUN_COLUMNS, result_schema
@@ -38,9 +41,7 @@ controllers = ["seed", "lane-keep"]
 "road.speed_limit_mps" = {{ choice = [27.78] }}
 "scenario.duration_s" = {{ choice = [12.0] }}
 """
-# beside the barrel at 0.5 m/s; the second road is 20 km long: its run lasts the whole
-# 10 h of simulated time, over a minute of wall time with the compiled kernels, the
-# first a second or two (the timeouts below leave room for a loaded CI)
+# three short lane-keep runs; the first one hangs under _hangs
 HANGS = f"""[sweep]
 name = "hangs"
 base = "{BASE}"
@@ -48,11 +49,12 @@ sampler = "grid"
 controllers = ["lane-keep"]
 
 [sweep.params]
-"road.length_m" = {{ choice = [150.0, 20000.0] }}
-"ego.lane" = {{ choice = [1] }}
-"ego.speed_mps" = {{ choice = [0.5] }}
-"scenario.duration_s" = {{ choice = [36000.0] }}
+"ego.speed_mps" = {{ choice = [3.0, 3.74, 9.0] }}
+"scenario.duration_s" = {{ choice = [12.0] }}
 """
+HUNG_RUN = "00000-lane-keep"
+HANG_S = 3600.0  # far past any run timeout below: only a stopped worker ends it
+RUN_TIMEOUT_S = 10.0  # a short lesson run takes well under a second
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:
@@ -69,6 +71,42 @@ def comparable(out_dir: Path) -> pd.DataFrame:
 def sweep_cli(*args, **kwargs) -> subprocess.CompletedProcess:
     return subprocess.run([*SDC, "sweep", *map(str, args), "--quiet"], capture_output=True,
                           text=True, timeout=600, **kwargs)
+
+
+def _wait_for(predicate, timeout_s: float):
+    """Poll ``predicate`` until it returns something true, and return that."""
+    deadline = time.monotonic() + timeout_s
+    while not (value := predicate()):
+        assert time.monotonic() < deadline, "timed out waiting"
+        time.sleep(0.05)
+    return value
+
+
+def _gone(pid: int) -> bool:
+    """Whether process ``pid`` has ended (a zombie has ended)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+def _workers(driver_pid: int) -> list[int]:
+    """The worker processes of a local sweep: its driver's spawned children."""
+    pids = []
+    for thread in Path(f"/proc/{driver_pid}/task").iterdir():
+        for pid in (thread / "children").read_text().split():
+            with contextlib.suppress(FileNotFoundError):
+                if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes():
+                    pids.append(int(pid))
+    return pids
+
+
+def _in_a_run(pid: int) -> bool:
+    """Whether worker ``pid`` has taken a run (libsumo is loaded lazily, by the first).
+    The driver hands such a worker runs: while any remain, it always holds one."""
+    with contextlib.suppress(FileNotFoundError):
+        return "/_libsumo" in Path(f"/proc/{pid}/maps").read_text()
+    return False
 
 
 def test_local_and_ray_executors_give_identical_results(tmp_path):
@@ -135,48 +173,103 @@ def test_a_killed_worker_costs_one_run_and_the_sweep_goes_on(tmp_path):
     assert all(row["status"] == "ok" for row in rows.values())
 
 
-def test_a_hung_run_becomes_a_timeout_row(tmp_path):
+def _hangs(task: RunTask) -> dict:
+    """HUNG_RUN sleeps for HANG_S (its process id in a file beside its trace); the
+    others run."""
+    if task.run_id == HUNG_RUN:
+        task.trace_path.with_suffix(".pid").write_text(str(os.getpid()))
+        time.sleep(HANG_S)
+    return execute(task)
+
+
+def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path):
     out = tmp_path / "out"
-    started = time.monotonic()
-    result = sweep_cli(write(tmp_path, "hangs", HANGS), "--out", out, "--workers", "2",
-                       "--run-timeout", "15")
-    assert time.monotonic() - started < 90
-    assert result.returncode == 1, result.stderr
-    results = pd.read_parquet(out / "results.parquet").set_index("p.road.length_m")
-    assert results.status.to_dict() == {150.0: "ok", 20000.0: "timeout"}
-    assert "run timeout of 15 s" in results.error[20000.0]
-    assert results.wall_time_s[20000.0] >= 15
-    assert "1 ok, 0 error, 1 timeout" in result.stdout
+    executor = LocalExecutor(1, run_timeout_s=RUN_TIMEOUT_S, task_fn=_hangs)
+    outcome = run_sweep(load_sweep(write(tmp_path, "hangs", HANGS)), out, executor,
+                        QuietReporter(), traces="all")
+    assert outcome.counts == {"ok": 2, "error": 0, "timeout": 1, "missing": 0}
+    results = pd.read_parquet(out / "results.parquet").set_index("run_id")
+    assert results.status.to_dict() == {HUNG_RUN: "timeout", "00001-lane-keep": "ok",
+                                        "00002-lane-keep": "ok"}  # on a new worker
+    assert f"run timeout of {RUN_TIMEOUT_S:g} s" in results.error[HUNG_RUN]
+    assert results.wall_time_s[HUNG_RUN] >= RUN_TIMEOUT_S
+    assert _gone(int((out / "traces" / f"{HUNG_RUN}.pid").read_text()))  # its worker
 
 
-def test_ray_stops_a_hung_run(tmp_path):
+def test_ray_stops_a_hung_run(tmp_path, monkeypatch):
+    # Ray's workers find _hangs by importing this module
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
+        [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]))
     sweep = load_sweep(write(tmp_path, "hangs", HANGS))
-    tasks = [RunTask(run.run_id, run.spec) for run in expand(sweep)]
-    with RayExecutor(2, run_timeout_s=15) as executor:
+    tasks = [RunTask(run.run_id, run.spec, trace_path=tmp_path / f"{run.run_id}.parquet")
+             for run in expand(sweep)]
+    with RayExecutor(2, run_timeout_s=RUN_TIMEOUT_S, task_fn=_hangs) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
-    assert rows["00000-lane-keep"]["status"] == "ok"
-    assert rows["00001-lane-keep"]["status"] == "timeout"
+        hung_pid = int((tmp_path / f"{HUNG_RUN}.pid").read_text())
+        _wait_for(lambda: _gone(hung_pid), 60)  # Ray's force cancel ends its worker
+    assert {run_id: row["status"] for run_id, row in rows.items()} == {
+        HUNG_RUN: "timeout", "00001-lane-keep": "ok", "00002-lane-keep": "ok"}
+    assert rows[HUNG_RUN]["wall_time_s"] >= RUN_TIMEOUT_S
     assert all(list(row) == list(RUN_COLUMNS) for row in rows.values())
 
 
-def _wait_for(predicate, timeout_s: float) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not predicate():
-        assert time.monotonic() < deadline, "timed out waiting"
-        time.sleep(0.05)
+def test_a_run_that_never_ends_becomes_a_timeout_row_on_the_command_line(tmp_path):
+    out = tmp_path / "out"
+    proc = subprocess.Popen([*SDC, "sweep", str(write(tmp_path, "tiny", TINY)), "--out",
+                             str(out), "--workers", "2", "--run-timeout", f"{RUN_TIMEOUT_S:g}",
+                             "--quiet"], start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        held = _wait_for(lambda: [p for p in _workers(proc.pid) if _in_a_run(p)], 120)[0]
+        os.kill(held, signal.SIGSTOP)  # its run will never end
+        stdout, stderr = proc.communicate(timeout=300)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 1, stderr
+    assert "12 runs: 11 ok, 0 error, 1 timeout, 0 not run" in stdout
+    results = pd.read_parquet(out / "results.parquet")
+    timeout = results[results.status == "timeout"].iloc[0]
+    assert f"run timeout of {RUN_TIMEOUT_S:g} s" in timeout.error
+    assert timeout.wall_time_s >= RUN_TIMEOUT_S
+    assert _gone(held)
 
 
-# 96 lesson runs of a few tenths of a second each: still running when interrupted
-LONGER = TINY.replace('"scenario.duration_s" = { choice = [12.0] }',
-                      '"scenario.duration_s" = { choice = [30.0] }\n'
-                      '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
-                      '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
-LONGER_RUNS = 96
+# 96 short lesson runs: many more than one worker runs while the other starts
+MANY = TINY.replace('"scenario.duration_s" = { choice = [12.0] }',
+                    '"scenario.duration_s" = { choice = [12.0] }\n'
+                    '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
+                    '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
+MANY_RUNS = 96
+FLUSH_S = inspect.signature(ResultStore).parameters["flush_s"].default
+
+
+def _hold_in_flight(proc: subprocess.Popen, out: Path) -> None:
+    """Hold a 2-worker ``sdc sweep`` in flight with rows in a part, whatever the speed.
+
+    A worker that has taken a run is stopped (SIGSTOP): it holds a run that will never
+    end, so the sweep cannot finish. The other is stopped too for longer than the
+    result store's flush interval, so the next row after it resumes is flushed into
+    a part."""
+    held = _wait_for(lambda: [p for p in _workers(proc.pid) if _in_a_run(p)], 120)[0]
+    others = [pid for pid in _workers(proc.pid) if pid != held]
+    for pid in [held, *others]:
+        os.kill(pid, signal.SIGSTOP)
+    time.sleep(1.5 * FLUSH_S)
+    for pid in others:
+        os.kill(pid, signal.SIGCONT)
+    _wait_for(lambda: any((out / "parts").glob("part-*.parquet")), 120)
+
+
+def _rows_kept(out: Path) -> int:
+    files = [out / "results.parquet"] + sorted((out / "parts").glob("part-*.parquet"))
+    return pd.concat([pd.read_parquet(f) for f in files if f.exists()]).run_id.nunique()
 
 
 @pytest.mark.parametrize("how", ["kill -9", "ctrl-c"])
 def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how):
-    path = write(tmp_path, "longer", LONGER)
+    path = write(tmp_path, "many", MANY)
     reference, out = tmp_path / "reference", tmp_path / "out"
     assert sweep_cli(path, "--out", reference, "--workers", "2").returncode == 0
 
@@ -186,27 +279,33 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
                              "--quiet"], start_new_session=True, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    _wait_for(lambda: any((out / "parts").glob("part-*.parquet")), 120)
-    if how == "kill -9":  # the driver and its workers, all at once
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=30)
-        assert not (out / "results.parquet").exists()
-    else:
-        os.killpg(proc.pid, signal.SIGINT)
-        assert proc.wait(timeout=60) == 130, proc.stderr.read()
-        assert "--resume" in proc.stderr.read()
-        manifest = json.loads((out / "manifest.json").read_text())
-        assert manifest["status"] == "interrupted" and manifest["counts"]["missing"] > 0
-        partial = pd.read_parquet(out / "results.parquet")
-        assert 0 < len(partial) < LONGER_RUNS and partial.run_id.is_unique
+    try:
+        _hold_in_flight(proc, out)
+        if how == "kill -9":  # the driver and its workers, all at once
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=30)
+            assert not (out / "results.parquet").exists()
+        else:
+            os.killpg(proc.pid, signal.SIGINT)
+            assert proc.wait(timeout=60) == 130, proc.stderr.read()
+            assert "--resume" in proc.stderr.read()
+            manifest = json.loads((out / "manifest.json").read_text())
+            assert manifest["status"] == "interrupted" and manifest["counts"]["missing"] > 0
+            partial = pd.read_parquet(out / "results.parquet")
+            assert partial.run_id.is_unique and not (out / "parts").exists()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    kept = _rows_kept(out)
+    assert 0 < kept < MANY_RUNS
 
     again = sweep_cli(path, "--out", out, "--workers", "2")
     assert again.returncode == 2 and "--resume" in again.stderr  # no silent overwrite
     resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
     assert resumed.returncode == 0, resumed.stderr
     manifest = json.loads((out / "manifest.json").read_text())
-    assert [s["runs_to_do"] for s in manifest["sessions"]][0] == LONGER_RUNS
-    assert 0 < manifest["sessions"][1]["runs_to_do"] < LONGER_RUNS
+    assert [s["runs_to_do"] for s in manifest["sessions"]] == [MANY_RUNS, MANY_RUNS - kept]
     pd.testing.assert_frame_equal(comparable(out), comparable(reference))
 
 

@@ -13,15 +13,12 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec
 
 EDGE_ID = "road"
-
-
-def default_cache_dir() -> Path:
-    return Path.home() / ".cache" / "sdc" / "networks"
 
 
 def sumo_binary(name: str) -> str:
@@ -51,12 +48,13 @@ def _xml_sources(road: RoadSpec, geometry: RoadGeometry) -> tuple[str, str]:
 
 
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
-    """Path of the ``.net.xml`` for ``road``, built on first use and cached.
+    """Path of the ``.net.xml`` for ``road``, built on first use and cached (in
+    ``cache_dir``, by default :func:`~scenarios.cache_dir.network_cache_dir`).
 
     Concurrent builders of the same network are safe: each writes a temporary
     file and renames it into place.
     """
-    cache_dir = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    cache_dir = Path(cache_dir) if cache_dir is not None else network_cache_dir()
     nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
     tool = sumo_binary("netconvert")
     digest = hashlib.sha256(f"{tool}\n{nodes}\n{edges}".encode()).hexdigest()[:20]

@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.atomic_write import write_atomic
+from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
-from scenarios.sumo_net.build import default_cache_dir
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
 from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, NetFile, NetLane, read_net
 
@@ -160,7 +160,7 @@ def network_area(net: NetFile, cache_dir: Path | None = None) -> DrivableArea:
     """The network's drivable area; its road edges are cached by the file's hash."""
     lanes = list(net.lanes.values())
     name = f"{net.sha256[:20]}.edges-v{EDGE_SEARCH_VERSION}.npy"
-    cached = Path(cache_dir or default_cache_dir()) / name
+    cached = Path(cache_dir or network_cache_dir()) / name
     edges = np.load(cached) if cached.exists() else None
     area = DrivableArea([lane.shape_xy for lane in lanes], [lane.width_m for lane in lanes],
                         [i for i, lane in enumerate(lanes) if not lane.internal],
