@@ -32,7 +32,7 @@ from sdc.run.result_row import (
 )
 
 README = Path(__file__).resolve().parents[1] / "README.md"
-#: DESIGN.md section 4: "add columns, never rename these"
+#: docs/architecture.md, "The result row": "add columns, never rename these"
 CONTRACT = ["run_id", "seed", "controller", "backend", "status", "error", "collision",
             "collision_with", "collision_time_s", "min_gap_obstacle_m", "min_ttc_s",
             "maneuver_started", "detection_range_m", "returned_to_lane", "return_time_s",

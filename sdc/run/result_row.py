@@ -1,6 +1,6 @@
 """The result row: its columns (name, type, meaning) and every kind of row.
 
-One row per run (DESIGN.md section 4: add columns, never rename them). The
+One row per run (docs/architecture.md, "The result row": add columns, never rename them). The
 columns come in parts, each filled by one party:
 
 - ``identity``: which run (the task or ``sdc run`` names it; the spec gives the rest)
