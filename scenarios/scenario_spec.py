@@ -19,14 +19,32 @@ from scenarios.spec_fields import Spec, build, num, to_plain
 
 spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
 
+#: SUMO's clock ticks in whole milliseconds: it rounds any other step length, so
+#: its traffic would run at another rate than the ego, and refuses one under 1 ms
+MIN_STEP_S = 0.001
+#: the most steps one run may take, warm-up included (1000 s at 1 ms steps; any
+#: duration up to the limit at the default 0.064 s steps)
+MAX_STEPS = 1_000_000
+
 
 @spec_class
 class ScenarioMeta(Spec):
     name: str
     duration_s: float = num(gt=0, le=36_000)
-    step_s: float = num(0.064, gt=0, le=1.0)
+    step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)  # a whole number of milliseconds
     seed: int = num(0, ge=0, lt=2**31)
     backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
+
+    def __post_init__(self):
+        super().__post_init__()
+        step_ms = self.step_s * 1000
+        if abs(step_ms - round(step_ms)) > 1e-6:
+            raise SpecError("step_s", f"must be a whole number of milliseconds (SUMO's "
+                            f"resolution), got {self.step_s!r}")
+        if self.duration_s / self.step_s > MAX_STEPS:
+            raise SpecError("duration_s", f"{self.duration_s:g} s is "
+                            f"{self.duration_s / self.step_s:,.0f} steps of {self.step_s:g} s, "
+                            f"more than the {MAX_STEPS:,} a run may take")
 
 
 @spec_class
@@ -296,6 +314,10 @@ def _check_consistency(spec: ScenarioSpec) -> None:
     if spec.scenario.duration_s < spec.scenario.step_s:
         raise SpecError("scenario.duration_s", "must be at least one step (step_s)")
     traffic = spec.traffic
+    steps = (spec.scenario.duration_s + traffic.warm_up_s) / spec.scenario.step_s
+    if steps > MAX_STEPS:
+        raise SpecError("traffic.warm_up_s", f"makes the run {steps:,.0f} steps with "
+                        f"scenario.duration_s, more than the {MAX_STEPS:,} a run may take")
     if traffic.flow_vph_per_lane > 0 and traffic.speed_mean_mps > 1.5 * road.speed_limit_mps:
         raise SpecError(
             "traffic.speed_mean_mps",

@@ -32,6 +32,7 @@ from scenarios.spec_fields import Spec, build, num
 from scenarios.toml_io import load_spec, read_toml
 
 SAMPLERS = ("grid", "random", "sobol", "lhs")
+MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 
@@ -110,6 +111,12 @@ class Param:
         values = range(a[0], a[1] + 1) if self.kind == "int_range" else a
         return values[min(int(u * len(values)), len(values) - 1)]
 
+    def grid_size(self, levels: int) -> int:
+        """How many values :meth:`grid` takes (without making them)."""
+        if self.kind == "int_range":
+            return self.args[1] - self.args[0] + 1
+        return levels if self.kind in ("uniform", "loguniform") else len(self.args)
+
     def grid(self, levels: int) -> list:
         """The values a grid sweep takes: every choice or integer, else ``levels`` points."""
         a = self.args
@@ -179,7 +186,7 @@ def _parse_param(path: str, table: Any, field: str) -> Param:
 class _SweepTable(Spec):
     name: str
     base: str
-    samples: int | None = num(None, gt=0, le=10_000_000)
+    samples: int | None = num(None, gt=0, le=MAX_SAMPLES)
     sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
     seed: int = num(0, ge=0, lt=2**31)
     levels: int | None = num(None, ge=2, le=1000)
@@ -224,12 +231,14 @@ class SweepSpec:
             raise SpecError("sweep.params", "must be a table of path = { distribution = [...] }")
         meta = build(_SweepTable, {**table, "controllers": (), "params": ()}, "sweep")
 
-        base_path = (Path(base_dir) / meta.base).resolve()
+        try:
+            base_path = (Path(base_dir) / meta.base).resolve()
+        except (OSError, ValueError, RuntimeError) as e:  # a NUL byte, a symlink loop
+            raise SpecError("sweep.base", f"is not a usable path ({e})") from None
         try:
             base = load_spec(base_path)
-        except SpecError as e:
-            where = f"{e.field}: " if e.field else ""
-            raise SpecError("sweep.base", f"{base_path}: {where}{e.message}") from None
+        except SpecError as e:  # names the base file
+            raise SpecError("sweep.base", str(e)) from None
         parsed = []
         for path, dist in params.items():
             field = f'sweep.params."{path}"'
@@ -247,6 +256,10 @@ class SweepSpec:
                 if p.kind == "normal":
                     raise SpecError(f'sweep.params."{p.path}".normal',
                                     "has no grid: use uniform or choice with the grid sampler")
+            size = math.prod(p.grid_size(meta.levels or 5) for p in parsed)
+            if size > MAX_SAMPLES:
+                raise SpecError("sweep.params", f"the grid has {size} points, more than "
+                                f"{MAX_SAMPLES:,} (fewer levels or values)")
         else:
             if meta.samples is None:
                 raise SpecError("sweep.samples", f"is required for the {meta.sampler} sampler")
@@ -281,7 +294,12 @@ class SweepSpec:
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    return SweepSpec.from_plain(read_toml(path), Path(path).resolve().parent)
+    """The sweep in a TOML file; every error names the file."""
+    data = read_toml(path, "the sweep file")
+    try:
+        return SweepSpec.from_plain(data, Path(path).resolve().parent)
+    except SpecError as e:
+        raise e.in_file(path) from None
 
 
 @dataclasses.dataclass(frozen=True)
