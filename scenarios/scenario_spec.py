@@ -22,6 +22,11 @@ spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
 #: SUMO's clock ticks in whole milliseconds: it rounds any other step length, so
 #: its traffic would run at another rate than the ego, and refuses one under 1 ms
 MIN_STEP_S = 0.001
+#: the widest curve [m] (a polyline within 1 mm of its arc needs fewer points than
+#: floating point can tell apart beyond)
+MAX_CURVE_RADIUS_M = 1_000_000.0
+#: SUMO's bounds on a vehicle type's speed factor (highway-env's desired speeds too)
+SPEED_FACTOR_BOUNDS = (0.2, 2.0)
 #: the most steps one run may take, warm-up included (1000 s at 1 ms steps; any
 #: duration up to the limit at the default 0.064 s steps)
 MAX_STEPS = 1_000_000
@@ -195,7 +200,7 @@ class ControllerSpec:
         if not isinstance(data, dict):
             raise SpecError(path, f"must be a table, got {type(data).__name__}")
         name = data.get("name", "seed")
-        if name not in CONTROLLER_PARAMS:
+        if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
             known = ", ".join(CONTROLLER_PARAMS)
             raise SpecError(f"{path}.name", f"unknown controller {name!r} (known: {known})")
         params = {k: v for k, v in data.items() if k != "name"}
@@ -305,6 +310,9 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 f"|{radius}| is too tight for a {2 * road.half_width_m:g} m wide road "
                 f"(needs >= {road.half_width_m + 5.0:g})",
             )
+        if abs(radius) > MAX_CURVE_RADIUS_M:
+            raise SpecError("road.curve_radius_m", f"|{radius}| is above {MAX_CURVE_RADIUS_M:g}: "
+                            'a road that straight is kind "straight"')
         if road.length_m / abs(radius) > 1.5 * math.pi:
             raise SpecError("road.length_m", "the curve would turn more than 270 degrees")
     elif road.curve_radius_m is not None:
@@ -324,6 +332,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
             f"{spec.traffic.speed_mean_mps} is above 1.5 x road.speed_limit_mps "
             f"({road.speed_limit_mps})",
         )
+    _check_speed_factor(spec)
 
     model = VEHICLE_MODELS[spec.vehicle.model]
     ego = spec.ego
@@ -358,6 +367,21 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 "ego.start_m",
                 f"the ego starts inside {path} ({obstacle.kind} at {obstacle.position_m} m)",
             )
+
+
+def _check_speed_factor(spec: ScenarioSpec) -> None:
+    """SUMO refuses a traffic type (even with no traffic) whose speed factor, mean
+    ``speed_mean_mps / speed_limit_mps``, stays 3 deviations outside its bounds."""
+    if spec.road.kind == "sumo_net":  # the network's limits, factor 1
+        return
+    traffic, lo, hi = spec.traffic, *SPEED_FACTOR_BOUNDS
+    factor = traffic.speed_mean_mps / spec.road.speed_limit_mps
+    spread = 3 * traffic.speed_dev * factor
+    if traffic.speed_dev > 0 and not (factor - spread <= hi and factor + spread >= lo):
+        raise SpecError("traffic.speed_mean_mps",
+                        f"{traffic.speed_mean_mps} is {factor:.3g} x road.speed_limit_mps "
+                        f"({spec.road.speed_limit_mps}); with speed_dev {traffic.speed_dev} "
+                        f"SUMO needs {lo} to {hi} x within 3 deviations")
 
 
 def _check_road_kind(spec: ScenarioSpec) -> None:

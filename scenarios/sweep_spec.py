@@ -108,8 +108,10 @@ class Param:
             return float(math.exp(math.log(a[0]) + u * (math.log(a[1]) - math.log(a[0]))))
         if self.kind == "normal":
             return float(NormalDist(a[0], a[1]).inv_cdf(min(max(u, 1e-12), 1 - 1e-12)))
-        values = range(a[0], a[1] + 1) if self.kind == "int_range" else a
-        return values[min(int(u * len(values)), len(values) - 1)]
+        if self.kind == "int_range":  # any size of range (len() stops at 2**63)
+            count = a[1] - a[0] + 1
+            return a[0] + min(int(u * count), count - 1)
+        return a[min(int(u * len(a)), len(a) - 1)]
 
     def grid_size(self, levels: int) -> int:
         """How many values :meth:`grid` takes (without making them)."""
@@ -139,7 +141,10 @@ class Param:
 
 
 def _number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    """A finite number; an integer within TOML's (and the result columns') 64 bits."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    return -(2**63) <= value < 2**63 if isinstance(value, int) else math.isfinite(value)
 
 
 def _parse_param(path: str, table: Any, field: str) -> Param:
@@ -161,6 +166,8 @@ def _parse_param(path: str, table: Any, field: str) -> Param:
         kinds = {type(v) for v in args}
         if len(kinds) != 1 or not kinds <= {bool, int, float, str}:
             raise SpecError(field, "values must all be numbers, all strings or all booleans")
+        if kinds == {int} and not all(_number(v) for v in args):
+            raise SpecError(field, "integers must fit in 64 bits")
         return Param(path, kind, tuple(args))
     if len(args) != 2 or not all(_number(v) for v in args):
         raise SpecError(field, f"must be two numbers, got {args!r}")
@@ -221,7 +228,7 @@ class SweepSpec:
         if not isinstance(controllers, list) or not controllers:
             raise SpecError("sweep.controllers", "must be a non-empty list of controller names")
         for i, name in enumerate(controllers):
-            if name not in CONTROLLER_PARAMS:
+            if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
                 raise SpecError(f"sweep.controllers[{i}]", f"unknown controller {name!r} "
                                 f"(known: {', '.join(CONTROLLER_PARAMS)})")
         if len(set(controllers)) != len(controllers):

@@ -1,7 +1,7 @@
 """The ``sdc`` command line.
 
 Exit codes: 0 done (a collision is an outcome, not an error); 1 a run errored;
-2 bad input (the message names the field); 130 interrupted.
+2 bad input (the message names the field or the file); 130 interrupted.
 """
 
 from __future__ import annotations
