@@ -20,9 +20,15 @@ import pandas as pd
 
 from analysis import plots
 from analysis.stats import Method, by_controller, interval, mcnemar, rates_by, safe_envelope
+from scenarios.file_read import read_json, read_parquet, require_keys
 
 SPEED = "p.ego.speed_mps"
 MAX_LISTED_FAILURES = 500
+#: the result columns the report reads (a results file without one is another version's)
+RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
+                  "collision", "collision_with", "collision_time_s", "min_gap_obstacle_m",
+                  "min_ttc_s", "wall_time_s")
+_MANIFEST_KEYS = {"sweep.sweep.name": str}
 
 
 class ReportError(Exception):
@@ -49,13 +55,16 @@ def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
     manifest_path = sweep_dir / "manifest.json"
     if not manifest_path.exists():
         raise ReportError("DIR", f"{sweep_dir} is not a sweep directory (no manifest.json)")
+    manifest = require_keys(read_json(manifest_path, "the sweep manifest"), _MANIFEST_KEYS,
+                            manifest_path, "the sweep manifest")
     files = [sweep_dir / "results.parquet"] + sorted((sweep_dir / "parts").glob("*.parquet"))
-    frames = [pd.read_parquet(f) for f in files if f.exists()]
+    frames = [read_parquet(f, "the results file", required=RESULT_COLUMNS).to_pandas()
+              for f in files if f.exists()]
     if not frames:
         raise ReportError("DIR", f"{sweep_dir} has no results yet")
     results = (pd.concat(frames, ignore_index=True).drop_duplicates("run_id")
                .sort_values("run_index").reset_index(drop=True))
-    return results, json.loads(manifest_path.read_text())
+    return results, manifest
 
 
 def varying_parameters(results: pd.DataFrame) -> list[str]:

@@ -17,7 +17,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.atomic_write import write_atomic
-from scenarios.errors import SdcError
+from scenarios.errors import FileError, SpecError
+from scenarios.file_read import read_parquet, require_keys
+from scenarios.scenario_spec import ScenarioSpec
 
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (
@@ -80,14 +82,40 @@ class Trace:
         write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
+#: the columns :func:`read_trace` needs, with their types
+TRACE_SCHEMA = pa.schema([*((name, pa.float64()) for name in FLOAT_COLUMNS),
+                          ("phase", pa.string()),
+                          *((name, pa.list_(pa.float32())) for name in LIST_COLUMNS)])
+#: the metadata :func:`read_trace` needs, with their types
+_METADATA_KEYS = {"spec": dict, "road.center_xy": list, "road.lanes": int,
+                  "road.lane_width_m": int | float, "vehicle.length_m": int | float,
+                  "vehicle.width_m": int | float,
+                  "vehicle.center_ahead_of_rear_axle_m": int | float}
+
+
+def _metadata(table: pa.Table, path: Path) -> dict:
+    """The run's metadata (spec, road, vehicle, run), checked to be this version's."""
+    raw = (table.schema.metadata or {}).get(METADATA_KEY)
+    if raw is None:
+        raise FileError(path, "the trace is not an sdc trace (no sdc metadata)")
+    try:
+        metadata = json.loads(raw)
+    except (ValueError, RecursionError) as e:
+        raise FileError(path, f"the trace's metadata is not valid JSON ({e})") from None
+    require_keys(metadata, _METADATA_KEYS, path, "the trace")
+    try:
+        ScenarioSpec.from_plain(metadata["spec"])
+    except SpecError as e:
+        raise FileError(path, f"the trace is from another sdc version (its spec: {e})") from None
+    return metadata
+
+
 def read_trace(path: str | Path) -> tuple[Trace, dict]:
-    """A trace and its metadata (spec, road, run) from a Parquet file."""
-    table = pq.read_table(path)
-    missing = [c for c in (*FLOAT_COLUMNS, "phase", *LIST_COLUMNS) if c not in table.column_names]
-    if missing or METADATA_KEY not in (table.schema.metadata or {}):
-        raise SdcError(f"{path}: not an sdc trace of this version "
-                       f"(missing {', '.join(missing) or 'metadata'})")
-    metadata = json.loads(table.schema.metadata[METADATA_KEY])
+    """A trace and its metadata (spec, road, run) from a Parquet file; a file that
+    is not one of this sdc version is a :class:`FileError`."""
+    path = Path(path)
+    table = read_parquet(path, "the trace", schema=TRACE_SCHEMA)
+    metadata = _metadata(table, path)
     floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
     lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]
              for name in LIST_COLUMNS}

@@ -1,14 +1,34 @@
 """The one exception hierarchy of sdc: every error a user can cause by input."""
 
+from __future__ import annotations
+
+from pathlib import Path
+
 
 class SdcError(Exception):
     """Base of every error sdc raises on purpose."""
 
 
 class SpecError(SdcError):
-    """An input value is wrong; ``field`` is its path (``obstacles[0].lane``)."""
+    """An input value is wrong; ``field`` is its path (``obstacles[0].lane``) and
+    ``file``, when known, the file it came from (the message then starts with it)."""
 
-    def __init__(self, field: str, message: str):
+    def __init__(self, field: str, message: str, file: str | Path | None = None):
         self.field = field
         self.message = message
-        super().__init__(f"{field}: {message}" if field else message)
+        self.file = None if file is None else str(file)
+        text = f"{field}: {message}" if field else message
+        super().__init__(f"{self.file}: {text}" if self.file is not None else text)
+
+    def in_file(self, file: str | Path) -> SpecError:
+        """This error naming the file it came from (unchanged if it names one)."""
+        return self if self.file is not None else SpecError(self.field, self.message, file)
+
+
+class FileError(SpecError):
+    """A file that cannot be used: missing, a directory, unreadable, not in its
+    format, truncated, or written by another sdc version. The message starts with
+    the file's path and says what is wrong."""
+
+    def __init__(self, path: str | Path, problem: str):
+        super().__init__("", problem, path)

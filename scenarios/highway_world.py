@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
     NO_BOXES,
     Snapshot,
@@ -28,8 +28,6 @@ from scenarios.snapshot import (
 )
 
 START, END = "start", "end"
-#: SUMO's vType bounds on the speed factor, used for highway-env's desired speeds too
-SPEED_FACTOR_BOUNDS = (0.2, 2.0)
 #: a lane's entry is free when its nearest vehicle is this far beyond it [m]
 ENTRY_CLEARANCE_M = 12.0
 

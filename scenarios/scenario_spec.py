@@ -19,14 +19,37 @@ from scenarios.spec_fields import Spec, build, num, to_plain
 
 spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
 
+#: SUMO's clock ticks in whole milliseconds: it rounds any other step length, so
+#: its traffic would run at another rate than the ego, and refuses one under 1 ms
+MIN_STEP_S = 0.001
+#: the widest curve [m] (a polyline within 1 mm of its arc needs fewer points than
+#: floating point can tell apart beyond)
+MAX_CURVE_RADIUS_M = 1_000_000.0
+#: SUMO's bounds on a vehicle type's speed factor (highway-env's desired speeds too)
+SPEED_FACTOR_BOUNDS = (0.2, 2.0)
+#: the most steps one run may take, warm-up included (1000 s at 1 ms steps; any
+#: duration up to the limit at the default 0.064 s steps)
+MAX_STEPS = 1_000_000
+
 
 @spec_class
 class ScenarioMeta(Spec):
     name: str
     duration_s: float = num(gt=0, le=36_000)
-    step_s: float = num(0.064, gt=0, le=1.0)
+    step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)  # a whole number of milliseconds
     seed: int = num(0, ge=0, lt=2**31)
     backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
+
+    def __post_init__(self):
+        super().__post_init__()
+        step_ms = self.step_s * 1000
+        if abs(step_ms - round(step_ms)) > 1e-6:
+            raise SpecError("step_s", f"must be a whole number of milliseconds (SUMO's "
+                            f"resolution), got {self.step_s!r}")
+        if self.duration_s / self.step_s > MAX_STEPS:
+            raise SpecError("duration_s", f"{self.duration_s:g} s is "
+                            f"{self.duration_s / self.step_s:,.0f} steps of {self.step_s:g} s, "
+                            f"more than the {MAX_STEPS:,} a run may take")
 
 
 @spec_class
@@ -177,7 +200,7 @@ class ControllerSpec:
         if not isinstance(data, dict):
             raise SpecError(path, f"must be a table, got {type(data).__name__}")
         name = data.get("name", "seed")
-        if name not in CONTROLLER_PARAMS:
+        if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
             known = ", ".join(CONTROLLER_PARAMS)
             raise SpecError(f"{path}.name", f"unknown controller {name!r} (known: {known})")
         params = {k: v for k, v in data.items() if k != "name"}
@@ -287,6 +310,9 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 f"|{radius}| is too tight for a {2 * road.half_width_m:g} m wide road "
                 f"(needs >= {road.half_width_m + 5.0:g})",
             )
+        if abs(radius) > MAX_CURVE_RADIUS_M:
+            raise SpecError("road.curve_radius_m", f"|{radius}| is above {MAX_CURVE_RADIUS_M:g}: "
+                            'a road that straight is kind "straight"')
         if road.length_m / abs(radius) > 1.5 * math.pi:
             raise SpecError("road.length_m", "the curve would turn more than 270 degrees")
     elif road.curve_radius_m is not None:
@@ -296,12 +322,17 @@ def _check_consistency(spec: ScenarioSpec) -> None:
     if spec.scenario.duration_s < spec.scenario.step_s:
         raise SpecError("scenario.duration_s", "must be at least one step (step_s)")
     traffic = spec.traffic
+    steps = (spec.scenario.duration_s + traffic.warm_up_s) / spec.scenario.step_s
+    if steps > MAX_STEPS:
+        raise SpecError("traffic.warm_up_s", f"makes the run {steps:,.0f} steps with "
+                        f"scenario.duration_s, more than the {MAX_STEPS:,} a run may take")
     if traffic.flow_vph_per_lane > 0 and traffic.speed_mean_mps > 1.5 * road.speed_limit_mps:
         raise SpecError(
             "traffic.speed_mean_mps",
             f"{spec.traffic.speed_mean_mps} is above 1.5 x road.speed_limit_mps "
             f"({road.speed_limit_mps})",
         )
+    _check_speed_factor(spec)
 
     model = VEHICLE_MODELS[spec.vehicle.model]
     ego = spec.ego
@@ -336,6 +367,21 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 "ego.start_m",
                 f"the ego starts inside {path} ({obstacle.kind} at {obstacle.position_m} m)",
             )
+
+
+def _check_speed_factor(spec: ScenarioSpec) -> None:
+    """SUMO refuses a traffic type (even with no traffic) whose speed factor, mean
+    ``speed_mean_mps / speed_limit_mps``, stays 3 deviations outside its bounds."""
+    if spec.road.kind == "sumo_net":  # the network's limits, factor 1
+        return
+    traffic, lo, hi = spec.traffic, *SPEED_FACTOR_BOUNDS
+    factor = traffic.speed_mean_mps / spec.road.speed_limit_mps
+    spread = 3 * traffic.speed_dev * factor
+    if traffic.speed_dev > 0 and not (factor - spread <= hi and factor + spread >= lo):
+        raise SpecError("traffic.speed_mean_mps",
+                        f"{traffic.speed_mean_mps} is {factor:.3g} x road.speed_limit_mps "
+                        f"({spec.road.speed_limit_mps}); with speed_dev {traffic.speed_dev} "
+                        f"SUMO needs {lo} to {hi} x within 3 deviations")
 
 
 def _check_road_kind(spec: ScenarioSpec) -> None:

@@ -21,7 +21,7 @@ import traci.constants as tc  # plain numbers, shared by libsumo and traci
 from scenarios import road_kernels
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
     Snapshot,
     in_start_zone,
@@ -88,10 +88,11 @@ def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
     traffic = spec.traffic
     network = isinstance(road, NetworkRoad)
     factor = 1.0 if network else traffic.speed_mean_mps / spec.road.speed_limit_mps
+    lo, hi = SPEED_FACTOR_BOUNDS
     lines = [
         "<routes>",
         f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
-        f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},0.2,2.0)"/>',
+        f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>',
         f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}"/>',
     ]
     lines += [

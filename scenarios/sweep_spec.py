@@ -32,6 +32,7 @@ from scenarios.spec_fields import Spec, build, num
 from scenarios.toml_io import load_spec, read_toml
 
 SAMPLERS = ("grid", "random", "sobol", "lhs")
+MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 
@@ -107,8 +108,16 @@ class Param:
             return float(math.exp(math.log(a[0]) + u * (math.log(a[1]) - math.log(a[0]))))
         if self.kind == "normal":
             return float(NormalDist(a[0], a[1]).inv_cdf(min(max(u, 1e-12), 1 - 1e-12)))
-        values = range(a[0], a[1] + 1) if self.kind == "int_range" else a
-        return values[min(int(u * len(values)), len(values) - 1)]
+        if self.kind == "int_range":  # any size of range (len() stops at 2**63)
+            count = a[1] - a[0] + 1
+            return a[0] + min(int(u * count), count - 1)
+        return a[min(int(u * len(a)), len(a) - 1)]
+
+    def grid_size(self, levels: int) -> int:
+        """How many values :meth:`grid` takes (without making them)."""
+        if self.kind == "int_range":
+            return self.args[1] - self.args[0] + 1
+        return levels if self.kind in ("uniform", "loguniform") else len(self.args)
 
     def grid(self, levels: int) -> list:
         """The values a grid sweep takes: every choice or integer, else ``levels`` points."""
@@ -132,7 +141,10 @@ class Param:
 
 
 def _number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    """A finite number; an integer within TOML's (and the result columns') 64 bits."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    return -(2**63) <= value < 2**63 if isinstance(value, int) else math.isfinite(value)
 
 
 def _parse_param(path: str, table: Any, field: str) -> Param:
@@ -154,6 +166,8 @@ def _parse_param(path: str, table: Any, field: str) -> Param:
         kinds = {type(v) for v in args}
         if len(kinds) != 1 or not kinds <= {bool, int, float, str}:
             raise SpecError(field, "values must all be numbers, all strings or all booleans")
+        if kinds == {int} and not all(_number(v) for v in args):
+            raise SpecError(field, "integers must fit in 64 bits")
         return Param(path, kind, tuple(args))
     if len(args) != 2 or not all(_number(v) for v in args):
         raise SpecError(field, f"must be two numbers, got {args!r}")
@@ -179,7 +193,7 @@ def _parse_param(path: str, table: Any, field: str) -> Param:
 class _SweepTable(Spec):
     name: str
     base: str
-    samples: int | None = num(None, gt=0, le=10_000_000)
+    samples: int | None = num(None, gt=0, le=MAX_SAMPLES)
     sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
     seed: int = num(0, ge=0, lt=2**31)
     levels: int | None = num(None, ge=2, le=1000)
@@ -214,7 +228,7 @@ class SweepSpec:
         if not isinstance(controllers, list) or not controllers:
             raise SpecError("sweep.controllers", "must be a non-empty list of controller names")
         for i, name in enumerate(controllers):
-            if name not in CONTROLLER_PARAMS:
+            if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
                 raise SpecError(f"sweep.controllers[{i}]", f"unknown controller {name!r} "
                                 f"(known: {', '.join(CONTROLLER_PARAMS)})")
         if len(set(controllers)) != len(controllers):
@@ -224,12 +238,14 @@ class SweepSpec:
             raise SpecError("sweep.params", "must be a table of path = { distribution = [...] }")
         meta = build(_SweepTable, {**table, "controllers": (), "params": ()}, "sweep")
 
-        base_path = (Path(base_dir) / meta.base).resolve()
+        try:
+            base_path = (Path(base_dir) / meta.base).resolve()
+        except (OSError, ValueError, RuntimeError) as e:  # a NUL byte, a symlink loop
+            raise SpecError("sweep.base", f"is not a usable path ({e})") from None
         try:
             base = load_spec(base_path)
-        except SpecError as e:
-            where = f"{e.field}: " if e.field else ""
-            raise SpecError("sweep.base", f"{base_path}: {where}{e.message}") from None
+        except SpecError as e:  # names the base file
+            raise SpecError("sweep.base", str(e)) from None
         parsed = []
         for path, dist in params.items():
             field = f'sweep.params."{path}"'
@@ -247,6 +263,10 @@ class SweepSpec:
                 if p.kind == "normal":
                     raise SpecError(f'sweep.params."{p.path}".normal',
                                     "has no grid: use uniform or choice with the grid sampler")
+            size = math.prod(p.grid_size(meta.levels or 5) for p in parsed)
+            if size > MAX_SAMPLES:
+                raise SpecError("sweep.params", f"the grid has {size} points, more than "
+                                f"{MAX_SAMPLES:,} (fewer levels or values)")
         else:
             if meta.samples is None:
                 raise SpecError("sweep.samples", f"is required for the {meta.sampler} sampler")
@@ -281,7 +301,12 @@ class SweepSpec:
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    return SweepSpec.from_plain(read_toml(path), Path(path).resolve().parent)
+    """The sweep in a TOML file; every error names the file."""
+    data = read_toml(path, "the sweep file")
+    try:
+        return SweepSpec.from_plain(data, Path(path).resolve().parent)
+    except SpecError as e:
+        raise e.in_file(path) from None
 
 
 @dataclasses.dataclass(frozen=True)

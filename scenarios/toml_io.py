@@ -7,31 +7,39 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from scenarios.errors import SpecError
+from scenarios.errors import FileError, SpecError
+from scenarios.file_read import read_text
 from scenarios.scenario_spec import ScenarioSpec
 
 
-def read_toml(path: str | Path) -> dict:
-    """Parse a TOML file; a missing file or a syntax error is a :class:`SpecError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as e:
-        raise SpecError("", f"cannot read {path}: {e.strerror or e}") from None
+def read_toml(path: str | Path, what: str = "the TOML file") -> dict:
+    """Parse a TOML file; a file that cannot be read or parsed is a :class:`FileError`."""
+    text = read_text(path, what)
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SpecError("", f"{path}: invalid TOML: {e}") from None
+    except (tomllib.TOMLDecodeError, RecursionError) as e:
+        raise FileError(path, f"{what} is invalid TOML ({e})") from None
+
+
+def _resolved(path: Path, spec_path: str | Path) -> str:
+    try:
+        return str(path.resolve())
+    except (OSError, ValueError, RuntimeError) as e:  # a NUL byte, a symlink loop
+        raise SpecError("road.net_file", f"is not a usable path ({e})", spec_path) from None
 
 
 def load_spec(path: str | Path) -> ScenarioSpec:
     """The scenario in a TOML file; a relative ``road.net_file`` is taken from the
-    file's folder (and kept absolute, so the spec runs from anywhere)."""
-    data = read_toml(path)
+    file's folder (and kept absolute, so the spec runs from anywhere). Every error
+    names the file."""
+    data = read_toml(path, "the scenario file")
     road = data.get("road")
     if isinstance(road, dict) and isinstance(road.get("net_file"), str) and road["net_file"]:
-        road["net_file"] = str((Path(path).parent / road["net_file"]).resolve())
-    return ScenarioSpec.from_plain(data)
+        road["net_file"] = _resolved(Path(path).parent / road["net_file"], path)
+    try:
+        return ScenarioSpec.from_plain(data)
+    except SpecError as e:
+        raise e.in_file(path) from None
 
 
 def _value(value: Any) -> str:

@@ -10,10 +10,10 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-from scenarios.errors import SdcError
+from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.build import build_network, sumo_load_error
 
 BACKENDS = ("sumo", "highway")
 
@@ -28,12 +28,19 @@ def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry
 
 
 def check_inputs(spec: ScenarioSpec) -> None:
-    """Check what a run of ``spec`` reads besides the spec (a network file), so a
-    bad one is reported as bad input before anything runs."""
+    """Check what a run of ``spec`` reads besides the spec (a network file) and the
+    road it draws there, so a bad one is reported as bad input before anything runs."""
     if spec.road.kind == "sumo_net":
-        from scenarios.sumo_net.route_road import read_network_file
+        from scenarios.sumo_net.random_trips import trip_edges
+        from scenarios.sumo_net.route_road import network_road
 
-        read_network_file(spec)
+        road = network_road(spec)
+        if spec.traffic.vehicles:
+            trip_edges(road.net)
+        problem = sumo_load_error(road.net.path)
+        if problem is not None:
+            raise SpecError("road.net_file", f"{road.net.path}: SUMO cannot load the network: "
+                                             f"{problem}")
 
 
 def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:

@@ -1,7 +1,7 @@
 """The ``sdc`` command line.
 
 Exit codes: 0 done (a collision is an outcome, not an error); 1 a run errored;
-2 bad input (the message names the field); 130 interrupted.
+2 bad input (the message names the field or the file); 130 interrupted.
 """
 
 from __future__ import annotations
@@ -187,7 +187,7 @@ def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] 
     try:
         return write_report(sweep_dir, html_path=html_path, by=list(by), junit_path=junit,
                             method=interval)
-    except ReportError as e:
+    except (ReportError, SdcError) as e:
         _bad_input(str(e))
 
 
@@ -381,6 +381,8 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     from sdc.run.episode import run_episode
 
     recorded = load_recorded_run(sweep_dir, run_id)
+    # read before the re-simulation: a bad file stops the replay before it starts
+    recorded_trace = read_trace(recorded.trace_path)[0] if recorded.trace_path else None
     for line in version_warnings(recorded.manifest):
         click.echo(line, err=True)
     episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
@@ -394,8 +396,8 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     elif row["status"] != "ok":
         click.echo(f"not comparable: the recorded run ended with status {row['status']}: "
                    f"{row['error']}")
-    elif recorded.trace_path is not None:  # the recorded steps: compare step by step
-        divergence = first_divergence(read_trace(recorded.trace_path)[0], episode.trace)
+    elif recorded_trace is not None:  # the recorded steps: compare step by step
+        divergence = first_divergence(recorded_trace, episode.trace)
         if divergence is not None:
             click.echo(f"DIVERGED: {divergence.describe()}")
         elif row["trace_sha256"] != replayed_sha:

@@ -80,7 +80,7 @@ def test_bad_spec_exits_2_naming_the_field_and_writes_nothing(tmp_path, lesson_p
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["run", "missing.toml"], "cannot read missing.toml"),
+    (["run", "missing.toml"], "missing.toml: cannot read the scenario file: no such file"),
     (["run", LESSON, "--trace", "out.csv"], "--trace"),
     (["run", LESSON, "--trace", "no/such/dir/t.parquet"], "--trace"),
     (["run", LESSON, "--controller", "magic"], "--controller"),

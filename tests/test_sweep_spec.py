@@ -179,10 +179,10 @@ def write_sweep(tmp_path, text: str):
     ('samples = 4\nsampler = "magic"\n', "sweep.sampler"),
 ])
 def test_cli_rejects_bad_sweep_files_with_exit_2(tmp_path, text, field):
-    result = CliRunner().invoke(main, ["sweep", str(write_sweep(tmp_path, text)),
-                                       "--out", str(tmp_path / "out")])
+    path = write_sweep(tmp_path, text)
+    result = CliRunner().invoke(main, ["sweep", str(path), "--out", str(tmp_path / "out")])
     assert result.exit_code == 2, result.output
-    assert f"error: {field}:" in result.output
+    assert f"error: {path}: {field}:" in result.output
     assert "Traceback" not in result.output
     assert not (tmp_path / "out").exists()
 

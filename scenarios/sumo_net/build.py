@@ -28,6 +28,20 @@ def sumo_binary(name: str) -> str:
     return str(Path(sumo.SUMO_HOME) / "bin" / name)
 
 
+def sumo_load_error(net_path: Path) -> str | None:
+    """What goes wrong when SUMO loads the network ``net_path`` (None: nothing). In
+    a process of its own: SUMO crashes on some networks it cannot use."""
+    proc = subprocess.run([sumo_binary("sumo"), "--net-file", str(net_path), "--end", "0",
+                           "--no-step-log", "true", "--no-warnings", "true"],
+                          capture_output=True, text=True, check=False)
+    if proc.returncode == 0:
+        return None
+    if proc.returncode < 0:
+        return f"it crashes (signal {-proc.returncode})"
+    errors = [line for line in proc.stderr.splitlines() if line.startswith("Error")]
+    return "; ".join(errors)[-1000:] or f"sumo exits with status {proc.returncode}"
+
+
 def _xml_sources(road: RoadSpec, geometry: RoadGeometry) -> tuple[str, str]:
     (x0, y0), (x1, y1) = geometry.center_xy[0], geometry.center_xy[-1]
     nodes = (

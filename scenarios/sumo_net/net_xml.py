@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.errors import SdcError
+from scenarios.errors import FileError
+from scenarios.file_read import read_bytes
 
 DEFAULT_LANE_WIDTH_M = 3.2  # SUMO's default when a lane names none
 STRAIGHT, U_TURN = "s", "t"  # SUMO's connection directions (dir) straight on and turnaround
@@ -71,6 +72,13 @@ def _shape(text: str) -> np.ndarray:
     return np.array([[float(v) for v in p.split(",")[:2]] for p in text.split()])
 
 
+def _required(element: ET.Element, name: str) -> str:
+    value = element.get(name)
+    if value is None:
+        raise ValueError(f"<{element.tag} id={element.get('id')!r}> has no {name}")
+    return value
+
+
 def _passenger(element: ET.Element) -> bool:
     allow, disallow = element.get("allow"), element.get("disallow", "")
     if allow is not None and allow != "all" and "passenger" not in allow.split():
@@ -79,26 +87,40 @@ def _passenger(element: ET.Element) -> bool:
 
 
 def read_net(path: str | Path) -> NetFile:
-    """Parse ``path``; an unreadable or malformed file is an :class:`SdcError`."""
+    """Parse ``path``; a file that cannot be read, is not XML or not a SUMO network
+    is a :class:`FileError`."""
     path = Path(path)
+    data = read_bytes(path, "the SUMO network")
     try:
-        data = path.read_bytes()
         root = ET.fromstring(data)
-    except (OSError, ET.ParseError) as e:
-        raise SdcError(f"cannot read SUMO network {path}: {e}") from None
+    except ET.ParseError as e:
+        raise FileError(path, f"the SUMO network is not well-formed XML ({e})") from None
     if root.tag != "net":
-        raise SdcError(f"{path} is not a SUMO network (root element <{root.tag}>)")
+        raise FileError(path, f"is not a SUMO network (root element <{root.tag}>)")
+    try:
+        lanes, turns, junctions = _parse(root)
+    except (TypeError, ValueError, AttributeError) as e:  # a missing or malformed attribute
+        raise FileError(path, f"the SUMO network has a missing or malformed attribute "
+                              f"({e})") from None
+    if not any(not lane.internal for lane in lanes.values()):
+        raise FileError(path, "the SUMO network holds no lanes")
+    return NetFile(path, hashlib.sha256(data).hexdigest(), lanes, turns, junctions)
+
+
+def _parse(root: ET.Element):
+    """The lanes, turns and junction outlines of a ``<net>`` element."""
     lanes: dict[str, NetLane] = {}
     for edge in root.iter("edge"):
         function = edge.get("function", "normal")
         if function not in ("normal", "internal"):
             continue  # crossings, walking areas, connectors
         for lane in edge.iter("lane"):
-            lanes[lane.get("id")] = NetLane(
-                id=lane.get("id"), edge=edge.get("id"), index=int(lane.get("index")),
-                shape_xy=_shape(lane.get("shape")),
+            lane_id = _required(lane, "id")
+            lanes[lane_id] = NetLane(
+                id=lane_id, edge=edge.get("id"), index=int(_required(lane, "index")),
+                shape_xy=_shape(_required(lane, "shape")),
                 width_m=float(lane.get("width", DEFAULT_LANE_WIDTH_M)),
-                sumo_length_m=float(lane.get("length")), internal=function == "internal",
+                sumo_length_m=float(_required(lane, "length")), internal=function == "internal",
                 passenger=_passenger(lane) and _passenger(edge))
     successor: dict[str, list[tuple[str, str | None, str]]] = {}
     for c in root.iter("connection"):
@@ -121,6 +143,4 @@ def read_net(path: str | Path) -> NetFile:
     junctions = tuple(
         _shape(j.get("shape")) for j in root.iter("junction")
         if j.get("type") != "internal" and len(j.get("shape", "").split()) >= 3)
-    if not any(not lane.internal for lane in lanes.values()):
-        raise SdcError(f"{path} holds no lanes")
-    return NetFile(path, hashlib.sha256(data).hexdigest(), lanes, turns, junctions)
+    return lanes, turns, junctions

@@ -10,7 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from scenarios.errors import SpecError
 from scenarios.sumo_net.net_xml import NetFile
+
+
+def trip_edges(net: NetFile) -> list[tuple[str, float]]:
+    """The edges trips start and end on, with their lengths; a network with fewer
+    than two (a trip never ends where it starts) is a :class:`SpecError`."""
+    edges = net.trip_edges()
+    if len(edges) < 2:
+        raise SpecError("traffic.vehicles", f"{net.path}: random trips need two edges open "
+                        f"to cars, the network has {len(edges)}")
+    return edges
 
 
 class RandomTrips:
@@ -18,7 +29,7 @@ class RandomTrips:
     length, never the same edge twice."""
 
     def __init__(self, net: NetFile, rng: np.random.Generator):
-        edges = net.trip_edges()
+        edges = trip_edges(net)
         self.edge_ids = [edge for edge, _ in edges]
         lengths_m = np.array([length_m for _, length_m in edges])
         self._chance = lengths_m / lengths_m.sum()

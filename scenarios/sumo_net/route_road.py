@@ -180,7 +180,7 @@ def read_network_file(spec: ScenarioSpec) -> NetFile:
     """The spec's network file; a missing, unreadable or foreign file is a
     :class:`SpecError` naming ``road.net_file``."""
     path = Path(spec.road.net_file)
-    if not path.is_file():
+    if not path.exists():
         raise SpecError("road.net_file", f"no such file: {path}")
     try:
         return read_net(path)
@@ -195,8 +195,11 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     cannot hold the scenario (an obstacle off the drivable area).
     """
     net = read_network_file(spec)
-    route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
-                       spec.road.route_turns)
+    try:
+        route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
+                           spec.road.route_turns)
+    except SdcError as e:
+        raise SpecError("road.length_m", str(e)) from None
     road = NetworkRoad(net, route, network_area(net, cache_dir))
     for i, obstacle in enumerate(spec.obstacles):
         s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])

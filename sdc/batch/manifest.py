@@ -10,6 +10,7 @@ from importlib import metadata
 from pathlib import Path
 
 from scenarios.atomic_write import write_atomic
+from scenarios.file_read import read_json, require_keys
 
 MANIFEST = "manifest.json"
 _PACKAGES = ("sdc", "libsumo", "eclipse-sumo", "numpy", "scipy", "pandas", "pyarrow", "ray")
@@ -43,9 +44,19 @@ def git_state() -> dict | None:
     return {"commit": commit.stdout.strip(), "dirty": bool(status.stdout.strip())}
 
 
+#: what sdc reads of a manifest, with its type
+_MANIFEST_KEYS = {"sweep.sweep.name": str, "plan_sha256": str, "versions": dict,
+                  "sessions": list}
+
+
 def read_manifest(out_dir: Path) -> dict | None:
+    """``out_dir``'s manifest, None when it has none; one that cannot be read or was
+    written by another sdc version is a :class:`~scenarios.errors.FileError`."""
     path = Path(out_dir) / MANIFEST
-    return json.loads(path.read_text()) if path.exists() else None
+    if not path.exists():
+        return None
+    return require_keys(read_json(path, "the sweep manifest"), _MANIFEST_KEYS, path,
+                        "the sweep manifest")
 
 
 def write_manifest(out_dir: Path, manifest: dict) -> None:

@@ -14,12 +14,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from analysis.trace_file import FLOAT_COLUMNS, Trace
-from scenarios.errors import SdcError
+from scenarios.errors import FileError, SdcError, SpecError
+from scenarios.file_read import read_parquet
 from scenarios.scenario_spec import ScenarioSpec
 from sdc.batch.manifest import package_versions, read_manifest
+
+_PLAN_COLUMNS = ("run_id", "spec_json", "error")
+_RESULT_COLUMNS = ("run_id", "status", "error", "trace_sha256")  # what a replay compares
 
 
 @dataclasses.dataclass(frozen=True)
@@ -47,24 +50,39 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
     """The spec, result row and trace of ``run_id`` in a sweep directory."""
     sweep_dir = Path(sweep_dir)
     manifest = read_manifest(sweep_dir) if sweep_dir.is_dir() else None
-    if manifest is None or not (sweep_dir / "plan.parquet").exists():
+    plan_path = sweep_dir / "plan.parquet"
+    if manifest is None or not plan_path.exists():
         raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no manifest.json)")
-    plan = pd.read_parquet(sweep_dir / "plan.parquet", columns=["run_id", "spec_json", "error"])
+    plan = read_parquet(plan_path, "the plan file", required=_PLAN_COLUMNS).select(
+        list(_PLAN_COLUMNS)).to_pandas()
     match = plan[plan.run_id == run_id]
     if match.empty:
-        shown = ", ".join(plan.run_id.head(4))
+        shown = ", ".join(map(str, plan.run_id.head(4)))
         raise SdcError(f"--run: no run {run_id!r} in {sweep_dir} (runs: {shown}, ...)")
     planned = match.iloc[0]
     if planned.spec_json is None:
         raise SdcError(f"--run: {run_id} has no scenario to replay: {planned.error}")
-    spec = ScenarioSpec.from_plain(json.loads(planned.spec_json))
+    spec = _planned_spec(planned.spec_json, plan_path, run_id)
     results = sweep_dir / "results.parquet"
     row = None
     if results.exists():
-        rows = pd.read_parquet(results, filters=[("run_id", "==", run_id)])
+        table = read_parquet(results, "the results file", required=_RESULT_COLUMNS)
+        rows = table.to_pandas()
+        rows = rows[rows.run_id == run_id]
         row = rows.iloc[0].to_dict() if len(rows) else None
     trace = sweep_dir / "traces" / f"{run_id}.parquet"
     return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest)
+
+
+def _planned_spec(spec_json: str, plan_path: Path, run_id: str) -> ScenarioSpec:
+    try:
+        return ScenarioSpec.from_plain(json.loads(spec_json))
+    except (TypeError, ValueError, RecursionError) as e:  # JSONDecodeError: a ValueError
+        raise FileError(plan_path, f"the plan file holds no readable spec for {run_id} "
+                                   f"({e})") from None
+    except SpecError as e:
+        raise FileError(plan_path, f"the plan file is from another sdc version (the spec "
+                                   f"of {run_id}: {e})") from None
 
 
 def version_warnings(manifest: dict) -> list[str]:

@@ -8,6 +8,7 @@ name and renamed, so a kill leaves whole files only; reading deduplicates by
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -15,6 +16,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from scenarios.atomic_write import write_atomic
+from scenarios.errors import FileError
+from scenarios.file_read import read_parquet
 from sdc.run.result_row import check_keys
 
 
@@ -38,8 +41,8 @@ class ResultStore:
         self.flush_s, self.flush_rows = flush_s, flush_rows
         self._buffer: list[dict] = []
         self._last_flush = time.monotonic()
-        self._next_part = 1 + max((int(p.stem.split("-")[1]) for p in self._part_files()),
-                                  default=-1)
+        self._next_part = 1 + max((int(m[1]) for p in self._part_files()
+                                   if (m := re.fullmatch(r"part-(\d+)", p.stem))), default=-1)
 
     def _part_files(self) -> list[Path]:
         return sorted(self.parts_dir.glob("part-*.parquet"))
@@ -63,8 +66,10 @@ class ResultStore:
 
     def read(self) -> pa.Table:
         """Every stored row (flushed ones), one per ``run_id``, in plan order."""
+        if self.parts_dir.exists() and not self.parts_dir.is_dir():
+            raise FileError(self.parts_dir, "is not a directory (the sweep's result parts)")
         files = ([self.results_path] if self.results_path.exists() else []) + self._part_files()
-        tables = [pq.read_table(f, schema=self.schema) for f in files]
+        tables = [read_parquet(f, "the results file", schema=self.schema) for f in files]
         table = pa.concat_tables(tables) if tables else self.schema.empty_table()
         first = pa.array(_first_of_each(table.column("run_id").to_pylist()), pa.int64())
         return table.take(first).sort_by("run_index")
@@ -76,7 +81,7 @@ class ResultStore:
         _write_atomic(table, self.results_path)
         for part in self._part_files():
             part.unlink()
-        if self.parts_dir.exists():
+        if self.parts_dir.is_dir() and not any(self.parts_dir.iterdir()):  # others' files stay
             self.parts_dir.rmdir()
         return table
 

@@ -95,8 +95,12 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         return manifest
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
         raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    pq.write_table(_plan_table(plan, sweep), out_dir / "plan.parquet")
+    plan_table = _plan_table(plan, sweep)  # before the directory: nothing half-made
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise SdcError(f"--out: cannot create {out_dir}: {e.strerror or e}") from None
+    pq.write_table(plan_table, out_dir / "plan.parquet")
     return {
         "sweep": sweep.to_plain(),
         "base_scenario": sweep.base.to_plain(),

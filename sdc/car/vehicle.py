@@ -42,7 +42,7 @@ class Vehicle:
         lateral acceleration speed^2 * curvature stays within mu * g (the car
         slides wide instead of turning tighter)."""
         curvature = math.tan(steer_rad) / self.model.wheelbase_m
-        if speed_mps > 0:
+        if speed_mps**2 > 0:  # not > 0 alone: a speed under 1e-162 m/s squares to 0
             limit = self.friction_mu * GRAVITY_MPS2 / speed_mps**2
             curvature = max(-limit, min(limit, curvature))
         return curvature
