@@ -20,13 +20,19 @@ ENV_VAR = "SDC_KERNELS"
 NUMPY, COMPILED = "numpy", "compiled"
 
 
-def compiled_extension(name: str) -> ModuleType | None:
-    """The compiled extension module ``name``, or ``None`` where the numpy twins run
-    (it was not built, or ``SDC_KERNELS=numpy``)."""
+def kernel_choice() -> str:
+    """``SDC_KERNELS``'s value (``""``, ``numpy`` or ``compiled``); another is an error."""
     choice = os.environ.get(ENV_VAR, "")
     if choice not in ("", NUMPY, COMPILED):
         raise SdcError(f"{ENV_VAR}: {choice!r} is neither {NUMPY!r} nor {COMPILED!r} "
                        "(unset: the compiled kernels where they were built)")
+    return choice
+
+
+def compiled_extension(name: str) -> ModuleType | None:
+    """The compiled extension module ``name``, or ``None`` where the numpy twins run
+    (it was not built, or ``SDC_KERNELS=numpy``)."""
+    choice = kernel_choice()
     if choice == NUMPY:
         return None
     try:

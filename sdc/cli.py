@@ -15,10 +15,10 @@ from pathlib import Path
 import click
 
 from scenarios import CATALOG_DIR
+from scenarios.compiled_kernels import kernel_choice
 from scenarios.errors import SdcError
 from scenarios.scenario_spec import CONTROLLER_PARAMS, ScenarioSpec
 from scenarios.toml_io import load_spec
-from scenarios.world_backends import check_inputs
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -81,6 +81,10 @@ def main() -> None:
     Exit codes: 0 done (a collision is an outcome), 1 a run errored,
     2 bad input, 130 interrupted.
     """
+    try:
+        kernel_choice()  # checked before any command imports the kernels
+    except SdcError as e:
+        _bad_input(str(e))
 
 
 @main.command()
@@ -107,6 +111,8 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
             spec = spec.with_controller(controller)
         if backend is not None:
             spec = spec.with_backend(backend)
+        from scenarios.world_backends import check_inputs
+
         check_inputs(spec)
         row = run_one(spec, trace)
     except SdcError as e:
@@ -273,6 +279,8 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
         spec = load_sweep(sweep_file)
         if samples is not None:
             spec = spec.with_samples(samples)
+        from scenarios.world_backends import check_inputs
+
         check_inputs(spec.base)
         if dry_run:
             for line in _plan_lines(spec, expand(spec)):

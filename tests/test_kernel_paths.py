@@ -109,3 +109,11 @@ def test_sdc_builds_without_a_c_compiler_and_runs_in_numpy(tmp_path):
     assert which.stdout.split() == ["numpy", "numpy", str(lib / "sdc" / "__init__.py")]
     run = PINNED[0]
     assert run_json(run, "numpy", lib)["trace_sha256"] == run["trace_sha256"]
+
+
+def test_the_command_line_names_a_wrong_sdc_kernels_and_exits_2():
+    spec = REPO / "scenarios" / "catalog" / "seed-lesson.toml"
+    done = python(["-m", "sdc", "run", str(spec)], "fast")
+    assert done.returncode == 2
+    assert done.stderr.startswith("error: SDC_KERNELS: 'fast' is neither")
+    assert "Traceback" not in done.stderr
