@@ -20,6 +20,7 @@ import pandas as pd
 
 from analysis import plots
 from analysis.stats import Method, by_controller, interval, mcnemar, rates_by, safe_envelope
+from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
 
 SPEED = "p.ego.speed_mps"
@@ -31,12 +32,8 @@ RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "sta
 _MANIFEST_KEYS = {"sweep.sweep.name": str}
 
 
-class ReportError(Exception):
+class ReportError(SpecError):
     """A sweep directory or an option the report cannot use; ``field`` names which."""
-
-    def __init__(self, field: str, message: str):
-        super().__init__(f"{field}: {message}")
-        self.field, self.message = field, message
 
 
 @dataclasses.dataclass(frozen=True)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow.compute as pc
 
 from analysis.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.errors import FileError, SdcError, SpecError
@@ -67,9 +68,8 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
     row = None
     if results.exists():
         table = read_parquet(results, "the results file", required=_RESULT_COLUMNS)
-        rows = table.to_pandas()
-        rows = rows[rows.run_id == run_id]
-        row = rows.iloc[0].to_dict() if len(rows) else None
+        rows = table.filter(pc.field("run_id") == run_id).to_pylist()
+        row = rows[0] if rows else None
     trace = sweep_dir / "traces" / f"{run_id}.parquet"
     return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest)
 
