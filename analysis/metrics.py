@@ -10,7 +10,12 @@ import numpy as np
 RETURN_OFFSET_M = 0.5
 #: how long [s] it must stay there
 RETURN_HOLD_S = 2.0
-AVOID_PHASES = ("avoid_left", "avoid_straight", "avoid_right")
+#: a controller's phases named avoid_* are its maneuver
+AVOID_PREFIX = "avoid_"
+
+
+def _avoiding(phase: list[str]) -> np.ndarray:
+    return np.fromiter((p.startswith(AVOID_PREFIX) for p in phase), bool, len(phase))
 
 
 def _nan_to_none(value: float) -> float | None:
@@ -24,10 +29,10 @@ def central_range_m(lidar: np.ndarray, beams: int) -> float:
 
 
 def return_to_lane(t_s: np.ndarray, offset_m: np.ndarray, phase: list[str]):
-    """``(returned, return_time_s)``: after the last avoid phase, did the body centre
+    """``(returned, return_time_s)``: after the last ``avoid_*`` phase, did the body centre
     stay within ``RETURN_OFFSET_M`` of its lane's centre for ``RETURN_HOLD_S``?
     ``return_time_s`` runs from the maneuver's first step to the start of that hold."""
-    avoiding = np.isin(np.asarray(phase), AVOID_PHASES)
+    avoiding = _avoiding(phase)
     if not avoiding.any():
         return False, None
     start = int(np.argmax(avoiding))
@@ -49,7 +54,7 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
                   detect_beams: int) -> dict:
     """Result-row metrics of one run (``None`` where a metric does not apply).
 
-    - ``maneuver_started``: the controller entered ``avoid_left``.
+    - ``maneuver_started``: the controller entered a phase named ``avoid_*``.
     - ``detection_range_m``: the shortest of the ``detect_beams`` central lidar
       ranges at the maneuver's first step (the range at which it started).
     - ``returned_to_lane``, ``return_time_s``: see :func:`return_to_lane`.
@@ -60,10 +65,11 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
     - ``min_ttc_s``: the smallest time-to-collision with anything in the ego's path
       (the car's ``sdc.car.geometry.time_to_collision_s``); ``None`` when nothing was.
     """
-    started = "avoid_left" in phase
+    avoiding = _avoiding(phase)
+    started = bool(avoiding.any())
     detection = None
     if started:
-        detection = central_range_m(lidar[phase.index("avoid_left")], detect_beams)
+        detection = central_range_m(lidar[int(np.argmax(avoiding))], detect_beams)
     returned, return_time = return_to_lane(floats["t_s"], floats["lane_offset_m"], phase)
     offsets = np.abs(floats["lane_offset_m"])
     gaps = floats["obstacle_gap_m"]

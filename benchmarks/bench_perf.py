@@ -63,7 +63,7 @@ from scenarios.scenario_spec import LidarSpec, ScenarioSpec
 from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.world_backends import make_road, make_world
-from sdc.car.controllers import make_controller
+from sdc.car.controller_plugins import make_controller
 from sdc.car.geometry_kernels import contacts
 from sdc.car.sensors import Lidar
 from sdc.run.episode import Simulation
@@ -112,7 +112,7 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
 
     steps_s = []
     with make_world(spec, road) as world:
-        sim = Simulation(spec, world, controller.look_ahead_m)
+        sim = Simulation(spec, world)
         sim.start()
         vehicles = world.vehicle_count()
         libsumo.simulationStep = timed_step  # the world calls it through the module
@@ -120,11 +120,8 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
             sumo_s.clear()
             for _ in range(TIMED_STEPS):
                 start = time.perf_counter()
-                command, phase = controller.step(sim.ranges, sim.lane)
-                sim.record(command, phase)
-                if sim.end_reason() is not None:
+                if sim.control(controller) is not None:
                     break
-                sim.advance(command)
                 steps_s.append(time.perf_counter() - start)
         finally:
             libsumo.simulationStep = sumo_step

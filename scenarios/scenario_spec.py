@@ -8,12 +8,14 @@ lateral offsets are positive to the left (ISO 8855). ``position_m`` and
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from typing import Any, Literal
 
 import numpy as np
 
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.controller_ref import BUILTIN_CONTROLLERS, check_name, controller_label
 from scenarios.errors import SpecError
 from scenarios.spec_fields import Spec, build, num, to_plain
 
@@ -184,45 +186,79 @@ class SeedParams(LaneKeepParams):
     right_periods: int = num(10, ge=0)
 
 
+#: each built-in controller's parameters (its classes are in ``sdc.car.controllers``)
 CONTROLLER_PARAMS: dict[str, type[LaneKeepParams]] = {
     "seed": SeedParams,
     "lane-keep": LaneKeepParams,
 }
+assert tuple(CONTROLLER_PARAMS) == BUILTIN_CONTROLLERS
+#: the preview distance of the lane reading for a controller that names none
+DEFAULT_LOOK_AHEAD_M = LaneKeepParams().look_ahead_m
 
 
 @dataclasses.dataclass(frozen=True)
 class ControllerSpec:
+    """The ``[controller]`` table: a name (see ``scenarios.controller_ref``) and the
+    parameters. A built-in's parameters are validated here, into its params class;
+    a plug-in's are kept as the plain TOML values, for its constructor to judge."""
+
     name: str
-    params: LaneKeepParams
+    params: LaneKeepParams | dict
 
     @classmethod
     def from_plain(cls, data: Any, path: str = "controller") -> ControllerSpec:
         if not isinstance(data, dict):
             raise SpecError(path, f"must be a table, got {type(data).__name__}")
-        name = data.get("name", "seed")
-        if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
-            known = ", ".join(CONTROLLER_PARAMS)
-            raise SpecError(f"{path}.name", f"unknown controller {name!r} (known: {known})")
+        name = check_name(data.get("name", "seed"), f"{path}.name")
         params = {k: v for k, v in data.items() if k != "name"}
-        return cls(name, build(CONTROLLER_PARAMS[name], params, path))
+        if name in CONTROLLER_PARAMS:
+            return cls(name, build(CONTROLLER_PARAMS[name], params, path))
+        return cls(name, params)
+
+    @property
+    def builtin(self) -> bool:
+        return self.name in CONTROLLER_PARAMS
+
+    @property
+    def label(self) -> str:
+        """The short name in run IDs and result rows (``controller_label``)."""
+        return controller_label(self.name)
+
+    def plain_params(self) -> dict:
+        """The parameters as plain values: what the controller's constructor gets."""
+        if isinstance(self.params, dict):
+            return json.loads(json.dumps(self.params))  # a deep copy the plug-in may keep
+        return to_plain(self.params)
 
     def to_plain(self) -> dict:
-        return {"name": self.name, **to_plain(self.params)}
+        return {"name": self.name, **self.plain_params()}
+
+    @property
+    def look_ahead_m(self) -> float:
+        """Where the lane reading's preview offset is taken, ahead of the body centre."""
+        value = (self.params.get("look_ahead_m") if isinstance(self.params, dict)
+                 else self.params.look_ahead_m)
+        return float(value) if isinstance(value, int | float) else DEFAULT_LOOK_AHEAD_M
 
     @property
     def detect_beams(self) -> int:
         """The central beams the seed controller watches (the lesson's 11 for the others):
         their shortest range is the detection range in metrics and drawings."""
-        return getattr(self.params, "detect_beams", SeedParams().detect_beams)
+        value = getattr(self.params, "detect_beams", None)
+        return value if isinstance(value, int) else SeedParams().detect_beams
 
     def renamed(self, name: str) -> ControllerSpec:
-        """The controller ``name`` with every parameter the two share carried over."""
-        plain = self.to_plain()
-        target = CONTROLLER_PARAMS.get(name)
-        shared = {f.name for f in dataclasses.fields(target)} if target else set()
+        """The controller ``name``, with the parameters it shares with this one: a
+        built-in takes the fields its params class has, a plug-in takes all of these
+        parameters when it is this same plug-in and none otherwise."""
+        if name == self.name:
+            return self
+        if name not in CONTROLLER_PARAMS:
+            return ControllerSpec.from_plain({"name": name})
+        shared = {f.name for f in dataclasses.fields(CONTROLLER_PARAMS[name])}
+        plain = self.plain_params()
         return ControllerSpec.from_plain(
-            {"name": name, **{k: v for k, v in plain.items() if k in shared}}
-        )
+            {"name": name, **{k: v for k, v in plain.items() if k in shared}})
 
 
 @dataclasses.dataclass(frozen=True)

@@ -26,6 +26,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from scenarios.controller_ref import controller_label, resolve_file
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
 from scenarios.spec_fields import Spec, build, num
@@ -49,10 +50,18 @@ def parse_path(path: str) -> list[tuple[str, int | None]]:
 
 
 def _field_names(obj: Any) -> set[str]:
-    if isinstance(obj, ControllerSpec):  # any controller's parameters, and the name itself
-        return {"name"} | {f.name for p in CONTROLLER_PARAMS.values()
-                           for f in dataclasses.fields(p)}
+    if isinstance(obj, ControllerSpec):  # any built-in's parameters, a plug-in's own, the name
+        own = set(obj.params) if isinstance(obj.params, dict) else set()
+        return {"name"} | own | {f.name for p in CONTROLLER_PARAMS.values()
+                                 for f in dataclasses.fields(p)}
     return {f.name for f in dataclasses.fields(obj)}
+
+
+def _field_value(obj: Any, name: str) -> Any:
+    if isinstance(obj, ControllerSpec) and name != "name":
+        params = obj.params
+        return params.get(name) if isinstance(params, dict) else getattr(params, name, None)
+    return getattr(obj, name, None)
 
 
 def check_path(spec: ScenarioSpec, path: str) -> None:
@@ -65,8 +74,7 @@ def check_path(spec: ScenarioSpec, path: str) -> None:
             known = ", ".join(sorted(_field_names(obj))) if dataclasses.is_dataclass(obj) else ""
             raise ValueError(f"no field {name!r} in {where or 'the scenario'}"
                              + (f" (known: {known})" if known else ""))
-        obj = getattr(obj.params if isinstance(obj, ControllerSpec) and name != "name" else obj,
-                      name, None)
+        obj = _field_value(obj, name)
         if index is not None:
             if not isinstance(obj, tuple):
                 raise ValueError(f"{name} is not a list")
@@ -227,12 +235,17 @@ class SweepSpec:
         controllers = table.get("controllers", ["seed"])
         if not isinstance(controllers, list) or not controllers:
             raise SpecError("sweep.controllers", "must be a non-empty list of controller names")
+        controllers = [resolve_file(name, base_dir, f"sweep.controllers[{i}]")
+                       for i, name in enumerate(controllers)]
+        labels: dict[str, str] = {}
         for i, name in enumerate(controllers):
-            if not isinstance(name, str) or name not in CONTROLLER_PARAMS:
-                raise SpecError(f"sweep.controllers[{i}]", f"unknown controller {name!r} "
-                                f"(known: {', '.join(CONTROLLER_PARAMS)})")
-        if len(set(controllers)) != len(controllers):
-            raise SpecError("sweep.controllers", "lists a controller twice")
+            label = controller_label(name)
+            if label in labels:
+                what = ("lists a controller twice" if labels[label] == name else
+                        f"names two controllers that go by {label!r} in run IDs "
+                        f"({labels[label]} and {name}): rename a class")
+                raise SpecError(f"sweep.controllers[{i}]", what)
+            labels[label] = name
         params = table.get("params", {})
         if not isinstance(params, dict):
             raise SpecError("sweep.params", "must be a table of path = { distribution = [...] }")
@@ -317,7 +330,7 @@ class PlannedRun:
     index: int  # position in the plan
     run_id: str
     sample: int
-    controller: str
+    controller: str  # its label (scenarios.controller_ref.controller_label)
     seed: int
     backend: str
     params: dict[str, Any]
@@ -375,9 +388,10 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
             shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
             error = f"invalid scenario from sample {i} ({shown}): {e}"
         for controller in sweep.controllers:
+            label = controller_label(controller)
             plan.append(PlannedRun(
-                index=len(plan), run_id=f"{i:0{width}d}-{controller}", sample=i,
-                controller=controller, seed=int(plain["scenario"]["seed"]),
+                index=len(plan), run_id=f"{i:0{width}d}-{label}", sample=i,
+                controller=label, seed=int(plain["scenario"]["seed"]),
                 backend=str(plain["scenario"].get("backend", "sumo")), params=values,
                 spec=spec.with_controller(controller) if spec else None, error=error,
             ))

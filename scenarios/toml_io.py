@@ -7,6 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from scenarios.controller_ref import resolve_file
 from scenarios.errors import FileError, SpecError
 from scenarios.file_read import read_text
 from scenarios.scenario_spec import ScenarioSpec
@@ -29,14 +30,18 @@ def _resolved(path: Path, spec_path: str | Path) -> str:
 
 
 def load_spec(path: str | Path) -> ScenarioSpec:
-    """The scenario in a TOML file; a relative ``road.net_file`` is taken from the
-    file's folder (and kept absolute, so the spec runs from anywhere). Every error
-    names the file."""
+    """The scenario in a TOML file; a relative ``road.net_file`` or controller file
+    is taken from the file's folder (and kept absolute, so the spec runs from
+    anywhere). Every error names the file."""
     data = read_toml(path, "the scenario file")
     road = data.get("road")
     if isinstance(road, dict) and isinstance(road.get("net_file"), str) and road["net_file"]:
         road["net_file"] = _resolved(Path(path).parent / road["net_file"], path)
     try:
+        controller = data.get("controller")
+        if isinstance(controller, dict) and "name" in controller:
+            controller["name"] = resolve_file(controller["name"], Path(path).parent,
+                                              "controller.name")
         return ScenarioSpec.from_plain(data)
     except SpecError as e:
         raise e.in_file(path) from None

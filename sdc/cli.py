@@ -16,8 +16,9 @@ import click
 
 from scenarios import CATALOG_DIR
 from scenarios.compiled_kernels import kernel_choice
+from scenarios.controller_ref import resolve_file
 from scenarios.errors import SdcError
-from scenarios.scenario_spec import CONTROLLER_PARAMS, ScenarioSpec
+from scenarios.scenario_spec import ScenarioSpec
 from scenarios.toml_io import load_spec
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -91,8 +92,10 @@ def main() -> None:
 @click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1),
               help="Override the spec's scenario.seed (SUMO's and the lidar noise's seed).")
-@click.option("--controller", type=click.Choice(sorted(CONTROLLER_PARAMS)),
-              help="Override the spec's controller (shared parameters carry over).")
+@click.option("--controller", metavar="NAME",
+              help="Override the spec's controller: a built-in (seed, lane-keep, avoid), "
+                   "FILE.py:Class (from the working directory), package.module:Class, or an "
+                   "installed plug-in's name (shared parameters carry over).")
 @click.option("--backend", type=click.Choice(["sumo", "highway"]),
               help="Override the spec's scenario.backend (the world simulator).")
 @click.option("--trace", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.parquet",
@@ -108,12 +111,16 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
         if seed is not None:
             spec = spec.with_seed(seed)
         if controller is not None:
-            spec = spec.with_controller(controller)
+            spec = spec.with_controller(resolve_file(controller, Path.cwd(), "--controller"))
         if backend is not None:
             spec = spec.with_backend(backend)
         from scenarios.world_backends import check_inputs
+        from sdc.car.controller_plugins import make_controller
 
         check_inputs(spec)
+        # a plug-in that cannot be built is bad input, before any run
+        make_controller(spec.controller, "controller.name" if controller is None
+                        else "--controller")
         row = run_one(spec, trace)
     except SdcError as e:
         _bad_input(str(e))
@@ -282,6 +289,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
         from scenarios.world_backends import check_inputs
 
         check_inputs(spec.base)
+        _check_controllers(spec, sweep_file)
         if dry_run:
             for line in _plan_lines(spec, expand(spec)):
                 click.echo(line)
@@ -304,6 +312,20 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
                    err=True)
         sys.exit(EXIT_INTERRUPTED)
     sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
+
+
+def _check_controllers(sweep, sweep_file: Path) -> None:
+    """Build each of the sweep's controllers once on its base scenario: one that
+    cannot be found or built is bad input, before any run."""
+    from scenarios.errors import SpecError
+    from sdc.car.controller_plugins import make_controller
+
+    for i, name in enumerate(sweep.controllers):
+        try:
+            make_controller(sweep.base.with_controller(name).controller,
+                            f"sweep.controllers[{i}]")
+        except SpecError as e:
+            raise e.in_file(sweep_file) from None
 
 
 def _has_display() -> bool:

@@ -101,7 +101,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         spec = self.scenario.with_seed(scenario_seed)
         self.road = make_road(spec, self.cache_dir)  # a network route depends on the seed
         self._world = make_world(spec, self.road, self.cache_dir)
-        self._sim = Simulation(spec, self._world, spec.controller.params.look_ahead_m)
+        self._sim = Simulation(spec, self._world)
         self._sim.start()
         self._phase = "agent"
         return self._observation(), self._info()

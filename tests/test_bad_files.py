@@ -290,7 +290,7 @@ def test_an_unhashable_controller_name_is_bad_input(tmp_path, lesson_plain):
     lesson_plain["controller"]["name"] = ["seed"]
     path = tmp_path / "spec.toml"
     path.write_text(dumps_plain(lesson_plain))
-    assert "controller.name: unknown controller" in assert_bad_file(["run", path], path)
+    assert "controller.name: must be a controller name" in assert_bad_file(["run", path], path)
     (tmp_path / "short.toml").write_text(SHORT)
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(SWEEP.replace("seed = 3\n", 'seed = 3\ncontrollers = [["seed"]]\n'))

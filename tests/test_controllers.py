@@ -2,7 +2,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, SeedParams
+from scenarios.bodies import VEHICLE_MODELS
+from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, beam_angles_rad
+from sdc.car.controller_api import Observation
+from sdc.car.controller_plugins import make_controller
 from sdc.car.controllers import (
     AVOID_LEFT,
     AVOID_RIGHT,
@@ -10,11 +13,20 @@ from sdc.car.controllers import (
     LANE_KEEP,
     LaneKeepController,
     SeedController,
-    make_controller,
 )
 from sdc.car.sensors import LaneReading
 
 CLEAR = np.full(180, np.inf)
+
+
+def obs(ranges: np.ndarray, lane: LaneReading | None) -> Observation:
+    return Observation(0.0, 0.064, ranges, beam_angles_rad(180, 180.0), 3.85, lane, 3.5,
+                       3.74, 0.0, VEHICLE_MODELS["x5-lesson"])
+
+
+def steps(controller, ranges, lane):
+    command = controller.step(obs(ranges, lane))
+    return command, controller.phase
 
 
 def reading(preview_offset_m: float) -> LaneReading:
@@ -28,20 +40,20 @@ def obstacle_at(range_m: float, beam: int = 90) -> np.ndarray:
 
 
 def test_seed_runs_left_straight_right_open_loop_then_keeps_the_lane():
-    controller = SeedController(SeedParams())
-    command, phase = controller.step(obstacle_at(4.9), reading(0.0))
-    steps = [(command.steer_rad, phase)]
+    controller = SeedController({})
+    command, phase = steps(controller, obstacle_at(4.9), reading(0.0))
+    seen = [(command.steer_rad, phase)]
     for _ in range(39):  # sensors are ignored meanwhile, whatever they say
-        command, phase = controller.step(obstacle_at(1.0), reading(3.0))
-        steps.append((command.steer_rad, phase))
-    assert steps == ([(0.7, AVOID_LEFT)] * 10 + [(0.0, AVOID_STRAIGHT)] * 20
+        command, phase = steps(controller, obstacle_at(1.0), reading(3.0))
+        seen.append((command.steer_rad, phase))
+    assert seen == ([(0.7, AVOID_LEFT)] * 10 + [(0.0, AVOID_STRAIGHT)] * 20
                      + [(-0.7, AVOID_RIGHT)] * 10)
-    command, phase = controller.step(CLEAR, reading(2.0))  # left of the lane: steer right
+    command, phase = steps(controller, CLEAR, reading(2.0))  # left of the lane: steer right
     assert (command.steer_rad, phase) == (-0.1, LANE_KEEP)
 
 
 def test_seed_detection_window_is_the_11_central_beams_below_5_m():
-    controller = SeedController(SeedParams())
+    controller = SeedController({})
     assert controller.detects(obstacle_at(4.99, 85)) and controller.detects(obstacle_at(4.99, 95))
     assert not controller.detects(obstacle_at(4.99, 84))
     assert not controller.detects(obstacle_at(4.99, 96))
@@ -49,14 +61,14 @@ def test_seed_detection_window_is_the_11_central_beams_below_5_m():
 
 
 def test_lane_keeping_is_bang_bang_and_keeps_the_last_angle():
-    controller = LaneKeepController(LaneKeepParams(deadband_m=0.05))
-    assert controller.step(CLEAR, reading(-0.3))[0].steer_rad == 0.1  # right of centre: left
-    assert controller.step(CLEAR, reading(0.01))[0].steer_rad == 0.1  # in the band: keep
-    assert controller.step(CLEAR, reading(0.3))[0].steer_rad == -0.1
-    assert controller.step(CLEAR, None)[0].steer_rad == -0.1  # lane not sensed: keep
+    controller = LaneKeepController({"deadband_m": 0.05})
+    assert steps(controller, CLEAR, reading(-0.3))[0].steer_rad == 0.1  # right of centre: left
+    assert steps(controller, CLEAR, reading(0.01))[0].steer_rad == 0.1  # in the band: keep
+    assert steps(controller, CLEAR, reading(0.3))[0].steer_rad == -0.1
+    assert steps(controller, CLEAR, None)[0].steer_rad == -0.1  # lane not sensed: keep
 
 
 def test_lane_keep_never_avoids():
     controller = make_controller(ControllerSpec("lane-keep", LaneKeepParams()))
-    command, phase = controller.step(obstacle_at(0.5), reading(0.0))
+    command, phase = steps(controller, obstacle_at(0.5), reading(0.0))
     assert phase == LANE_KEEP and command.steer_rad == 0.0

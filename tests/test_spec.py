@@ -83,7 +83,7 @@ BAD_INPUTS = [
     ("ego.colour", "red", "ego.colour"),  # unknown key
     ("lidar.beams", 0, "lidar.beams"),
     ("lidar.fov_deg", 400.0, "lidar.fov_deg"),
-    ("controller.name", "magic", "controller.name"),
+    ("controller.name", "no such thing", "controller.name"),
     ("controller.detect_beams", 2.5, "controller.detect_beams"),
     ("obstacles[0].kind", "cow", "obstacles[0].kind"),
     ("obstacles[0].lateral_offset_m", 9.0, "obstacles[0].lateral_offset_m"),

@@ -139,7 +139,9 @@ def test_an_invalid_sample_is_reported_with_its_values():
     ({"samples": 0}, "sweep.samples", "> 0"),
     ({"samples": -5}, "sweep.samples", "> 0"),
     ({"sampler": "halton"}, "sweep.sampler", "must be one of"),
-    ({"controllers": ["seed", "pid"]}, "sweep.controllers[1]", "unknown controller"),
+    ({"controllers": ["seed", "p i d"]}, "sweep.controllers[1]", "unknown controller"),
+    ({"controllers": ["seed", "a.py:Seed", "b.py:Seed"]}, "sweep.controllers[2]",
+     "go by 'Seed' in run IDs"),
     ({"controllers": []}, "sweep.controllers", "non-empty"),
     ({"base": "nowhere.toml"}, "sweep.base", "cannot read"),
     ({"levels": 4}, "sweep.levels", "grid"),
@@ -177,6 +179,7 @@ def write_sweep(tmp_path, text: str):
      'sweep.params."ego.speed_mps".uniform'),
     ("samples = 0\n", "sweep.samples"),
     ('samples = 4\nsampler = "magic"\n', "sweep.sampler"),
+    ('samples = 4\ncontrollers = ["seed", "pid"]\n', "sweep.controllers[1]"),
 ])
 def test_cli_rejects_bad_sweep_files_with_exit_2(tmp_path, text, field):
     path = write_sweep(tmp_path, text)

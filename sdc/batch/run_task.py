@@ -31,7 +31,7 @@ class RunTask:
 def _identity(task: RunTask) -> dict:
     spec = task.spec
     return {"run_id": task.run_id, "seed": spec.scenario.seed,
-            "controller": spec.controller.name, "backend": spec.scenario.backend}
+            "controller": spec.controller.label, "backend": spec.scenario.backend}
 
 
 def task_row(task: RunTask, row: dict) -> dict:

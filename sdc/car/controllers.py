@@ -1,21 +1,22 @@
-"""Controllers: from a range image and a lane reading to a steering command.
+"""The built-in controllers: from an :class:`Observation` to a :class:`Command`.
 
-Every controller returns a :class:`~sdc.car.vehicle.Command` (ISO 8855: positive
-steering turns left; the lesson's Webots code uses the opposite sign) and the
-phase it is in, which the trace records every step.
+They follow the same protocol as any plug-in (``sdc.car.controller_api``): built
+from the ``[controller]`` table's plain values, stepped with an observation,
+their ``phase`` recorded every step. Steering is ISO 8855: positive turns left
+(the lesson's Webots code uses the opposite sign).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, SeedParams
+from scenarios.scenario_spec import LaneKeepParams, SeedParams
+from scenarios.spec_fields import build
+from sdc.car.controller_api import Command, Observation
 from sdc.car.sensors import LaneReading
-from sdc.car.vehicle import Command
 
 LANE_KEEP, AVOID_LEFT, AVOID_STRAIGHT, AVOID_RIGHT = (
     "lane_keep", "avoid_left", "avoid_straight", "avoid_right")
-PHASES = (LANE_KEEP, AVOID_LEFT, AVOID_STRAIGHT, AVOID_RIGHT)
 
 
 class LaneKeeper:
@@ -42,12 +43,13 @@ class LaneKeeper:
 class LaneKeepController:
     """The control group: lane keeping only, never avoids."""
 
-    def __init__(self, params: LaneKeepParams):
-        self.look_ahead_m = params.look_ahead_m
-        self._keeper = LaneKeeper(params)
+    phase = LANE_KEEP
 
-    def step(self, ranges: np.ndarray, lane: LaneReading | None) -> tuple[Command, str]:
-        return Command(self._keeper.steer(lane)), LANE_KEEP
+    def __init__(self, params: dict):
+        self._keeper = LaneKeeper(build(LaneKeepParams, params, "controller"))
+
+    def step(self, obs: Observation) -> Command:
+        return Command(self._keeper.steer(obs.lane))
 
 
 class SeedController:
@@ -59,11 +61,11 @@ class SeedController:
     ignored meanwhile), then resume lane keeping. Speed is left unchanged.
     """
 
-    def __init__(self, params: SeedParams):
-        self.params = params
-        self.look_ahead_m = params.look_ahead_m
-        self._keeper = LaneKeeper(params)
+    def __init__(self, params: dict):
+        self.params = build(SeedParams, params, "controller")
+        self._keeper = LaneKeeper(self.params)
         self._plan: list[tuple[float, str]] = []
+        self.phase = LANE_KEEP
 
     def detects(self, ranges: np.ndarray) -> bool:
         center = len(ranges) // 2
@@ -71,21 +73,16 @@ class SeedController:
         window = ranges[max(0, center - half): center - half + self.params.detect_beams]
         return bool(np.any(window < self.params.detect_range_m))
 
-    def step(self, ranges: np.ndarray, lane: LaneReading | None) -> tuple[Command, str]:
+    def step(self, obs: Observation) -> Command:
         p = self.params
-        if not self._plan and self.detects(ranges):
+        if not self._plan and self.detects(obs.ranges_m):
             self._plan = ([(p.avoid_steer_rad, AVOID_LEFT)] * p.left_periods
                           + [(0.0, AVOID_STRAIGHT)] * p.straight_periods
                           + [(-p.avoid_steer_rad, AVOID_RIGHT)] * p.right_periods)
             self._plan.reverse()
         if self._plan:
-            steer_rad, phase = self._plan.pop()
+            steer_rad, self.phase = self._plan.pop()
             self._keeper.steer_rad = steer_rad  # lane keeping resumes from the last angle
-            return Command(steer_rad), phase
-        return Command(self._keeper.steer(lane)), LANE_KEEP
-
-
-def make_controller(spec: ControllerSpec) -> SeedController | LaneKeepController:
-    if spec.name == "seed":
-        return SeedController(spec.params)
-    return LaneKeepController(spec.params)
+            return Command(steer_rad)
+        self.phase = LANE_KEEP
+        return Command(self._keeper.steer(obs.lane))

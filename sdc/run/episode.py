@@ -23,7 +23,8 @@ from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.world_backends import make_road, make_world
 from sdc.car.collision import collision_with
-from sdc.car.controllers import make_controller
+from sdc.car.controller_api import Observation
+from sdc.car.controller_plugins import make_controller
 from sdc.car.geometry_kernels import contacts
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
@@ -43,9 +44,13 @@ class Episode:
         self.trace.write(path, self.metadata)
 
 
+class ControllerError(Exception):
+    """A controller broke the protocol during a run (the run becomes an error row)."""
+
+
 def default_run_id(spec: ScenarioSpec) -> str:
     """A run's ID outside a sweep: ``<scenario>-<controller>-<seed>``."""
-    return f"{spec.scenario.name}-{spec.controller.name}-{spec.scenario.seed}"
+    return f"{spec.scenario.name}-{spec.controller.label}-{spec.scenario.seed}"
 
 
 def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> VehicleState:
@@ -67,14 +72,17 @@ class Simulation:
     gives the :class:`Episode`.
     """
 
-    def __init__(self, spec: ScenarioSpec, world, look_ahead_m: float):
-        self.spec, self.world, self.look_ahead_m = spec, world, look_ahead_m
+    def __init__(self, spec: ScenarioSpec, world, look_ahead_m: float | None = None):
+        self.spec, self.world = spec, world
+        self.look_ahead_m = (spec.controller.look_ahead_m if look_ahead_m is None
+                             else look_ahead_m)
         self.road = world.road
         self.model = VEHICLE_MODELS[spec.vehicle.model]
         self.vehicle = Vehicle(self.model, spec.vehicle.friction_mu)
         edges = self.road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
         self.lidar = Lidar(spec.lidar, edges, np.random.default_rng(spec.scenario.seed))
         self.lane_sensor = LaneSensor(self.road, spec.ego.lane)
+        self.lane_width_m = self.road.lane_width_m
         self.recorder = TraceRecorder()
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
@@ -95,9 +103,17 @@ class Simulation:
         self.ranges = self.lidar.scan(
             self.vehicle.point_ahead(state, self.spec.lidar.mount_ahead_m), state.yaw_rad,
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
+        self.ranges.flags.writeable = False  # a controller sees what the trace records
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
         self.contacts = contacts(self.box, state.speed_mps, snapshot.obstacle_boxes,
                                  snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
+
+    def observation(self) -> Observation:
+        """What the controller sees at the current step."""
+        state = self.state
+        return Observation(self.k * self.step_s, self.step_s, self.ranges,
+                           self.lidar.angles_rad, self.spec.lidar.mount_ahead_m, self.lane,
+                           self.lane_width_m, state.speed_mps, state.steer_rad, self.model)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
@@ -131,6 +147,22 @@ class Simulation:
         self.k += 1
         self._sense()
 
+    def control(self, controller) -> str | None:
+        """One step under ``controller`` (the protocol of ``sdc.car.controller_api``):
+        it decides from the observation, the step is recorded, and the run either
+        ends here (the reason is returned) or the car moves on (None)."""
+        command = controller.step(self.observation())
+        if type(command) is not Command or not (math.isfinite(command.steer_rad)
+                                                and math.isfinite(command.accel_mps2)):
+            raise ControllerError(
+                f"{self.spec.controller.label}.step returned {command!r} at step {self.k}, "
+                "not a Command(steer_rad, accel_mps2) of finite floats")
+        self.record(command, str(getattr(controller, "phase", "")))
+        termination = self.end_reason()
+        if termination is None:
+            self.advance(command)
+        return termination
+
     def finish(self, termination: str, run_id: str | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
         :func:`default_run_id`)."""
@@ -146,7 +178,7 @@ class Simulation:
                                   spec.controller.detect_beams),
             run_id=default_run_id(spec) if run_id is None else run_id,
             seed=spec.scenario.seed,
-            controller=spec.controller.name,
+            controller=spec.controller.label,
             backend=self.world.backend,
             termination=termination,
             collision=hit is not None,
@@ -180,13 +212,9 @@ def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
     controller = make_controller(spec.controller)
     road = make_road(spec, cache_dir)
     with make_world(spec, road, cache_dir, gui) as world:
-        sim = Simulation(spec, world, controller.look_ahead_m)
+        sim = Simulation(spec, world)
         sim.start()
-        while True:
-            command, phase = controller.step(sim.ranges, sim.lane)
-            sim.record(command, phase)
-            termination = sim.end_reason()
-            if termination is not None:
-                break
-            sim.advance(command)
+        termination = None
+        while termination is None:
+            termination = sim.control(controller)
     return sim.finish(termination, run_id)

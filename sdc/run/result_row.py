@@ -59,7 +59,7 @@ COLUMNS: tuple[Column, ...] = (
            "smallest constant-velocity time to reach anything in the ego's path [s]"),
     Column("min_road_edge_gap_m", pa.float64(), OUTCOME,
            "closest approach of a body corner to a road edge, negative beyond it [m]"),
-    Column("maneuver_started", pa.bool_(), METRIC, "the controller entered avoid_left"),
+    Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
     Column("detection_range_m", pa.float64(), METRIC,
            "shortest central lidar range as the maneuver started [m]"),
     Column("returned_to_lane", pa.bool_(), METRIC,

@@ -1,0 +1,46 @@
+"""The controller protocol: what every controller, built-in or plug-in, follows.
+
+A controller is any class with::
+
+    def __init__(self, params: dict): ...     # the [controller] table without "name"
+    def step(self, obs: Observation) -> Command: ...
+    phase: str          # optional: read after each step and recorded in the trace
+    look_ahead_m        # (not an attribute: the lane reading's preview distance is
+                        #  the [controller] table's look_ahead_m, default 5 m)
+
+One instance drives one run; ``step`` is called once per step, before the car
+moves. Phases named ``avoid_*`` count as the maneuver in the result metrics
+(``maneuver_started``, ``returned_to_lane``). A controller must be deterministic
+given its observations: the trace of a run is compared bit for bit on replay.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple, Protocol
+
+import numpy as np
+
+from scenarios.bodies import VehicleModel
+from sdc.car.sensors import LaneReading
+from sdc.car.vehicle import Command
+
+__all__ = ["Command", "Controller", "LaneReading", "Observation", "VehicleModel"]
+
+
+class Observation(NamedTuple):
+    """What the car senses at one step (ISO 8855: x ahead, y and angles to the left)."""
+
+    t_s: float  # time since the run started
+    step_s: float  # the control period: the time until the next step
+    ranges_m: np.ndarray  # the range image, read-only; inf = no return within range
+    beam_angles_rad: np.ndarray  # each beam's direction from the heading, index 0 leftmost
+    lidar_ahead_m: float  # where the lidar sits, ahead of the rear axle
+    lane: LaneReading | None  # offset, heading error, preview offset, s; None off the ends
+    lane_width_m: float  # the width of the car's lane
+    speed_mps: float
+    steer_rad: float  # the road-wheel angle reached (the steering lags the command)
+    vehicle: VehicleModel  # the car's size and actuator limits
+
+
+class Controller(Protocol):
+    def step(self, obs: Observation) -> Command: ...
