@@ -17,7 +17,7 @@ import click
 from scenarios import CATALOG_DIR
 from scenarios.compiled_kernels import kernel_choice
 from scenarios.controller_ref import resolve_file
-from scenarios.errors import SdcError
+from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.toml_io import load_spec
 
@@ -118,9 +118,10 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
         from sdc.car.controller_plugins import make_controller
 
         check_inputs(spec)
-        # a plug-in that cannot be built is bad input, before any run
-        make_controller(spec.controller, "controller.name" if controller is None
-                        else "--controller")
+        try:  # a plug-in that cannot be built is bad input, before any run
+            make_controller(spec.controller, "--controller" if controller else "controller.name")
+        except SpecError as e:
+            raise (e if controller else e.in_file(spec_file)) from None
         row = run_one(spec, trace)
     except SdcError as e:
         _bad_input(str(e))
@@ -317,7 +318,6 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
 def _check_controllers(sweep, sweep_file: Path) -> None:
     """Build each of the sweep's controllers once on its base scenario: one that
     cannot be found or built is bad input, before any run."""
-    from scenarios.errors import SpecError
     from sdc.car.controller_plugins import make_controller
 
     for i, name in enumerate(sweep.controllers):

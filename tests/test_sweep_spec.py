@@ -10,6 +10,7 @@ from click.testing import CliRunner
 from scenarios import CATALOG_DIR
 from scenarios.errors import SpecError
 from scenarios.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256, sample_values
+from scenarios.toml_io import dumps_plain
 from sdc.cli import main
 
 BASE = str(CATALOG_DIR / "seed-lesson.toml")
@@ -210,3 +211,24 @@ def test_cli_sweep_needs_an_out_dir_and_checks_samples(tmp_path):
     assert result.exit_code == 2 and "--out" in result.output
     result = CliRunner().invoke(main, ["sweep", str(path), "--samples", "0", "--dry-run"])
     assert result.exit_code == 2 and "--samples" in result.output
+
+
+def test_a_plugin_controller_takes_its_own_swept_parameters(tmp_path, lesson_plain):
+    """A file controller is named relative to the file that names it, goes by its
+    class name in run IDs, and its [controller] parameters sweep like a built-in's;
+    the built-in beside it keeps only the parameters it knows."""
+    (tmp_path / "ctl").mkdir()
+    lesson_plain["controller"] = {"name": "ctl/mine.py:Mine", "gain": 1.0, "look_ahead_m": 8.0}
+    (tmp_path / "base.toml").write_text(dumps_plain(lesson_plain))
+    (tmp_path / "sweep.toml").write_text(
+        '[sweep]\nname = "p"\nbase = "base.toml"\nsamples = 3\n'
+        'controllers = ["ctl/mine.py:Mine", "lane-keep"]\n'
+        '[sweep.params]\n"controller.gain" = { uniform = [2.0, 3.0] }\n')
+    sweep = load_sweep(tmp_path / "sweep.toml")
+    assert sweep.controllers == (f"{tmp_path / 'ctl' / 'mine.py'}:Mine", "lane-keep")
+    plan = expand(sweep)
+    assert [r.run_id for r in plan[:2]] == ["00000-Mine", "00000-lane-keep"]
+    mine, lane_keep = plan[0].spec.controller, plan[1].spec.controller
+    assert 2.0 <= mine.params["gain"] <= 3.0 and mine.params["look_ahead_m"] == 8.0
+    assert mine.label == "Mine" and mine.look_ahead_m == 8.0
+    assert lane_keep.params.look_ahead_m == 8.0 and not hasattr(lane_keep.params, "gain")

@@ -10,7 +10,10 @@ from importlib import metadata
 from pathlib import Path
 
 from scenarios.atomic_write import write_atomic
+from scenarios.controller_ref import controller_label
+from scenarios.errors import SdcError
 from scenarios.file_read import read_json, require_keys
+from sdc.car.controller_plugins import controller_source
 
 MANIFEST = "manifest.json"
 _PACKAGES = ("sdc", "libsumo", "eclipse-sumo", "numpy", "scipy", "pandas", "pyarrow", "ray")
@@ -42,6 +45,31 @@ def git_state() -> dict | None:
     except (OSError, subprocess.SubprocessError):
         return None
     return {"commit": commit.stdout.strip(), "dirty": bool(status.stdout.strip())}
+
+
+def controller_sources(names) -> dict[str, dict]:
+    """Each controller's label and where its code comes from (a plug-in's file with
+    its sha256: ``sdc.car.controller_plugins.controller_source``)."""
+    return {controller_label(name): controller_source(name) for name in names}
+
+
+def controller_changes(manifest: dict) -> list[str]:
+    """One line per plug-in controller whose file is gone or differs from the one
+    the sweep recorded (manifests without controllers: none)."""
+    lines = []
+    for label, recorded in (manifest.get("controllers") or {}).items():
+        if not isinstance(recorded, dict) or "sha256" not in recorded:
+            continue
+        try:
+            now = controller_source(recorded["name"])
+        except SdcError as e:
+            lines.append(f"the controller {label} cannot be loaded now ({e})")
+            continue
+        if now.get("sha256") != recorded["sha256"]:
+            lines.append(f"the controller {label} changed since the sweep ran: "
+                         f"{recorded.get('file')} had sha256 {recorded['sha256'][:12]}..., "
+                         f"now {str(now.get('sha256'))[:12]}...")
+    return lines
 
 
 #: what sdc reads of a manifest, with its type

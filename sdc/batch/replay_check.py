@@ -20,7 +20,7 @@ from analysis.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.errors import FileError, SdcError, SpecError
 from scenarios.file_read import read_parquet
 from scenarios.scenario_spec import ScenarioSpec
-from sdc.batch.manifest import package_versions, read_manifest
+from sdc.batch.manifest import controller_changes, package_versions, read_manifest
 
 _PLAN_COLUMNS = ("run_id", "spec_json", "error")
 _RESULT_COLUMNS = ("run_id", "status", "error", "trace_sha256")  # what a replay compares
@@ -86,11 +86,13 @@ def _planned_spec(spec_json: str, plan_path: Path, run_id: str) -> ScenarioSpec:
 
 
 def version_warnings(manifest: dict) -> list[str]:
-    """One line per package whose version differs from the sweep's."""
+    """One line per package whose version differs from the sweep's, and per
+    plug-in controller whose file changed since."""
     now = package_versions()
     recorded = manifest.get("versions", {})
-    return [f"warning: the sweep ran with {name} {recorded[name]}, this is {now.get(name)}"
-            for name in recorded if name != "ray" and recorded[name] != now.get(name)]
+    return ([f"warning: the sweep ran with {name} {recorded[name]}, this is {now.get(name)}"
+             for name in recorded if name != "ray" and recorded[name] != now.get(name)]
+            + [f"warning: {line}" for line in controller_changes(manifest)])
 
 
 def _first_float_mismatch(a: np.ndarray, b: np.ndarray) -> int | None:

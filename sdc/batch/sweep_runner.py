@@ -23,7 +23,15 @@ import pyarrow.parquet as pq
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.world_backends import prepare_network
-from sdc.batch.manifest import git_state, now_iso, package_versions, read_manifest, write_manifest
+from sdc.batch.manifest import (
+    controller_changes,
+    controller_sources,
+    git_state,
+    now_iso,
+    package_versions,
+    read_manifest,
+    write_manifest,
+)
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
 from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
@@ -92,6 +100,9 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest['sweep']['sweep']['name']!r}, another plan); "
                            "resume it with the sweep file that started it")
+        for line in controller_changes(manifest):
+            raise SdcError(f"--resume: {line}; the sweep would mix two versions of it "
+                           "(restore it, or start a new sweep)")
         return manifest
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
         raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")
@@ -108,6 +119,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         "runs": len(plan),
         "samples": len({r.sample for r in plan}),
         "versions": package_versions(),
+        "controllers": controller_sources(sweep.controllers),
         "git": git_state(),
         "started_at": now_iso(),
         "ended_at": None,
