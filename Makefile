@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_gym.py
 	$(BIN)/python benchmarks/bench_perf.py
+	$(BIN)/python benchmarks/bench_controllers.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build

@@ -147,17 +147,23 @@ class Simulation:
         self.k += 1
         self._sense()
 
-    def control(self, controller) -> str | None:
-        """One step under ``controller`` (the protocol of ``sdc.car.controller_api``):
-        it decides from the observation, the step is recorded, and the run either
-        ends here (the reason is returned) or the car moves on (None)."""
+    def decide(self, controller) -> tuple[Command, str]:
+        """``controller``'s command and phase at this step (the protocol of
+        ``sdc.car.controller_api``); anything but a Command of finite floats is a
+        :class:`ControllerError`."""
         command = controller.step(self.observation())
         if type(command) is not Command or not (math.isfinite(command.steer_rad)
                                                 and math.isfinite(command.accel_mps2)):
             raise ControllerError(
                 f"{self.spec.controller.label}.step returned {command!r} at step {self.k}, "
                 "not a Command(steer_rad, accel_mps2) of finite floats")
-        self.record(command, str(getattr(controller, "phase", "")))
+        return command, str(getattr(controller, "phase", ""))
+
+    def control(self, controller) -> str | None:
+        """One step under ``controller``: it decides, the step is recorded, and the
+        run either ends here (the reason is returned) or the car moves on (None)."""
+        command, phase = self.decide(controller)
+        self.record(command, phase)
         termination = self.end_reason()
         if termination is None:
             self.advance(command)
