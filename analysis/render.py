@@ -102,7 +102,7 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
         central_range_m=np.array([central_range_m(r, spec.controller.detect_beams)
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
-        title=(f"{spec.scenario.name}  controller {spec.controller.name}  seed "
+        title=(f"{spec.scenario.name}  controller {spec.controller.label}  seed "
                f"{spec.scenario.seed}  ({run.get('termination', '?')}"
                + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
                   else "") + ")"),
