@@ -196,6 +196,22 @@ assert tuple(CONTROLLER_PARAMS) == BUILTIN_CONTROLLERS
 DEFAULT_LOOK_AHEAD_M = LaneKeepParams().look_ahead_m
 
 
+def _check_plain(value: Any, field: str) -> None:
+    """A plug-in's parameter must be plain data (numbers, strings, booleans, and
+    lists and tables of them): what a manifest and a plan can hold."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _check_plain(item, f"{field}.{key}")
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            _check_plain(item, f"{field}[{i}]")
+    elif isinstance(value, float) and not math.isfinite(value):
+        raise SpecError(field, f"must be a finite number, got {value!r}")
+    elif not isinstance(value, str | int | float | bool):
+        raise SpecError(field, f"must be a number, string, boolean, array or table, "
+                        f"got {type(value).__name__}")
+
+
 @dataclasses.dataclass(frozen=True)
 class ControllerSpec:
     """The ``[controller]`` table: a name (see ``scenarios.controller_ref``) and the
@@ -213,6 +229,8 @@ class ControllerSpec:
         params = {k: v for k, v in data.items() if k != "name"}
         if name in CONTROLLER_PARAMS:
             return cls(name, build(CONTROLLER_PARAMS[name], params, path))
+        for key, value in params.items():
+            _check_plain(value, f"{path}.{key}")
         return cls(name, params)
 
     @property

@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import datetime
 import tomllib
 
 import pytest
@@ -131,3 +132,16 @@ def test_invalid_toml_is_a_spec_error(tmp_path):
     bad.write_text("[scenario\nname = 1\n")
     with pytest.raises(SpecError, match="invalid TOML"):
         load_spec(bad)
+
+
+@pytest.mark.parametrize(("value", "field"), [
+    (datetime.date(1979, 5, 27), "controller.gain"),  # what TOML reads as a date
+    (float("nan"), "controller.gain"),
+    ([1.0, float("inf")], "controller.gain[1]"),
+    ({"inner": float("nan")}, "controller.gain.inner"),
+])
+def test_a_plugins_parameters_must_be_plain_data(lesson_plain, value, field):
+    lesson_plain["controller"] = {"name": "mine.py:Mine", "gain": value}
+    with pytest.raises(SpecError) as caught:
+        ScenarioSpec.from_plain(lesson_plain)
+    assert caught.value.field == field
