@@ -73,27 +73,26 @@ def step_us(name: str, observations: list) -> float:
     return 1e6 * statistics.median(rounds)
 
 
-def decide_us(sim: Simulation, controller) -> float:
-    """Median over rounds of the mean time of ``sim.decide(controller)`` [us]."""
+def call_us(call) -> float:
+    """Median over rounds of the mean time of ``call()`` over CALLS calls [us]."""
     rounds = []
     for _ in range(REPETITIONS):
         start = time.perf_counter()
         for _ in range(CALLS):
-            sim.decide(controller)
+            call()
         rounds.append((time.perf_counter() - start) / CALLS)
     return 1e6 * statistics.median(rounds)
+
+
+def decide_us(sim: Simulation, controller) -> float:
+    """``sim.decide(controller)``: the controller's step inside the protocol [us]."""
+    return call_us(lambda: sim.decide(controller))
 
 
 def bare_us(sim: Simulation, controller) -> float:
-    """The same as :func:`decide_us` for ``controller.step`` on a ready observation."""
+    """``controller.step`` alone, on an observation made beforehand [us]."""
     obs = sim.observation()
-    rounds = []
-    for _ in range(REPETITIONS):
-        start = time.perf_counter()
-        for _ in range(CALLS):
-            controller.step(obs)
-        rounds.append((time.perf_counter() - start) / CALLS)
-    return 1e6 * statistics.median(rounds)
+    return call_us(lambda: controller.step(obs))
 
 
 def main() -> None:
