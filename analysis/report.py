@@ -19,7 +19,15 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
-from analysis.stats import Method, by_controller, interval, mcnemar, rates_by, safe_envelope
+from analysis.stats import (
+    Method,
+    by_controller,
+    interval,
+    mcnemar,
+    rates_by,
+    safe_envelope,
+    stop_possible_summary,
+)
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
 
@@ -106,6 +114,8 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
                         results.groupby("backend", sort=False)}
                        if results.backend.nunique() > 1 else {}),
         "paired": [mcnemar(results, a, b) for a, b in itertools.combinations(controllers, 2)],
+        # the same where braking alone could have stopped the car before the obstacle
+        "stop_possible": stop_possible_summary(results, controllers),
         "by": grouped,
         "envelope": ([safe_envelope(results, SPEED, c) for c in controllers]
                      if SPEED in results.columns else []),
@@ -114,6 +124,13 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
 
 def _pct(value) -> str:
     return "-" if value is None else f"{100 * value:.1f}%"
+
+
+def _rate_row(keys: list[str], numbers: dict, method: Method) -> list[str]:
+    low, high = interval(numbers, method)
+    return [*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
+            _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
+            str(numbers["n_error"]), str(numbers["n_timeout"])]
 
 
 def headline_rows(summary: dict) -> list[list[str]]:
@@ -128,22 +145,40 @@ def headline_rows(summary: dict) -> list[list[str]]:
         groups = [([c], numbers) for c, numbers in summary["by_controller"].items()]
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
              "rate", "95% interval", "errors", "timeouts"]]
-    for keys, numbers in groups:
-        low, high = interval(numbers, summary["interval"])
-        rows.append([*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
-                     _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
-                     str(numbers["n_error"]), str(numbers["n_timeout"])])
-    return rows
+    return rows + [_rate_row(keys, numbers, summary["interval"]) for keys, numbers in groups]
+
+
+def stop_title(summary: dict) -> str:
+    """What the stop-possible table holds, with its count of samples."""
+    stop = summary["stop_possible"]
+    if not stop["recorded"]:
+        return ("where braking alone could stop in time: not recorded "
+                "(results from before the stop_possible column)")
+    return (f"where braking alone could stop in time (v^2 / 2a <= gap), "
+            f"{stop['samples_stop_possible']} of {stop['samples']} samples run:")
+
+
+def stop_rows(summary: dict) -> list[list[str]]:
+    """Per controller, the rate among the samples where a stop was possible; the
+    headline's columns (backend: all), no rows when it was not recorded."""
+    stop = summary["stop_possible"]
+    backend = ["all"] if summary["by_backend"] else []
+    return [_rate_row([c, *backend], numbers, summary["interval"])
+            for c, numbers in stop.get("by_controller", {}).items()]
+
+
+def _paired(pair: dict, where: str = "") -> str:
+    return (f"{pair['a']} vs {pair['b']}{where} on {pair['pairs']} shared scenarios: only "
+            f"{pair['a']} collided in {pair['only_a']}, only {pair['b']} in {pair['only_b']}, "
+            f"both in {pair['both']}; McNemar exact p = {pair['p_value']:.3g}")
 
 
 def findings(summary: dict) -> list[str]:
-    """Sentences for the paired comparison and the safe envelope."""
-    lines = []
-    for pair in summary["paired"]:
-        lines.append(
-            f"{pair['a']} vs {pair['b']} on {pair['pairs']} shared scenarios: only "
-            f"{pair['a']} collided in {pair['only_a']}, only {pair['b']} in {pair['only_b']}, "
-            f"both in {pair['both']}; McNemar exact p = {pair['p_value']:.3g}")
+    """Sentences for the paired comparisons (all samples, those where a stop was
+    possible) and the safe envelope."""
+    lines = [_paired(pair) for pair in summary["paired"]]
+    lines += [_paired(pair, ", where a stop was possible,")
+              for pair in summary["stop_possible"].get("paired", [])]
     for envelope in summary["envelope"]:
         if envelope["crossing_group"] is None:
             text = "stays at or below 5% over the whole range"
@@ -157,10 +192,14 @@ def findings(summary: dict) -> list[str]:
 
 
 def terminal_table(summary: dict) -> list[str]:
-    rows = headline_rows(summary)
-    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    return ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
-            for row in rows]
+    """The headline, then the rates where a stop was possible in the same columns."""
+    rows, stop = headline_rows(summary), stop_rows(summary)
+    widths = [max(len(r[i]) for r in rows + stop) for i in range(len(rows[0]))]
+
+    def line(row):
+        return "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
+
+    return [*map(line, rows), stop_title(summary), *map(line, stop)]
 
 
 def failures(results: pd.DataFrame) -> pd.DataFrame:
@@ -180,15 +219,21 @@ def _outcome(row) -> str:
     return f"collision with {row.collision_with} at {row.collision_time_s:.2f} s"
 
 
+def _markdown_table(rows: list[list[str]]) -> list[str]:
+    return ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0]),
+            *("| " + " | ".join(r) + " |" for r in rows[1:])]
+
+
 def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
     rows = headline_rows(summary)
     lines = [f"# Collision report: {summary['sweep']}", "",
              f"{summary['runs']} runs ({summary['counts']['ok']} ok, "
              f"{summary['counts']['error']} error, {summary['counts']['timeout']} timeout); "
-             f"intervals: {summary['interval']} 95%.", "",
-             "| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
-    lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
-    lines += [""] + [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", ""]
+             f"intervals: {summary['interval']} 95%.", "", *_markdown_table(rows), "",
+             f"Collision rates {stop_title(summary)}", ""]
+    if summary["stop_possible"]["recorded"]:
+        lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
+    lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", ""]
     bad = failures(results)
     for row in bad.head(MAX_LISTED_FAILURES).itertuples():
         lines.append(f"- `{row.run_id}` ({row.controller}): {_outcome(row)} — "
@@ -238,6 +283,9 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"(errors and timeouts are not counted as safe). Intervals: "
              f"{html.escape(summary['interval'])} 95%.</p>",
              _table_html(headline_rows(summary)),
+             f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
+             (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
+              if summary["stop_possible"]["recorded"] else ""),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
     for title, png in images:
         data = base64.b64encode(png).decode()

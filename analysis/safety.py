@@ -1,15 +1,18 @@
 """Safety margins of a run: the closest approach to the road edge (the time to
-collision is the car's, recorded in the trace: ``sdc.car.geometry.time_to_collision_s``).
+collision is the car's, recorded in the trace: ``sdc.car.geometry.time_to_collision_s``),
+and whether braking alone could have stopped the car before the obstacle ahead.
 
-Plain numpy on boxes ``[cx_m, cy_m, yaw_rad, length_m, width_m]``; no simulator.
+Plain numpy on boxes ``[cx_m, cy_m, yaw_rad, length_m, width_m]`` and the spec; no simulator.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from scenarios.bodies import VehicleModel
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
+from scenarios.scenario_spec import ScenarioSpec
 
 
 def road_edge_gaps_m(body_boxes: np.ndarray, road: RoadGeometry) -> np.ndarray:
@@ -18,3 +21,41 @@ def road_edge_gaps_m(body_boxes: np.ndarray, road: RoadGeometry) -> np.ndarray:
     corners = box_corners(body_boxes)  # (N, 4, 2)
     gaps = road.edge_gaps_m(corners.reshape(-1, 2)).reshape(-1, 4).min(axis=1)
     return np.where(np.isposinf(gaps), np.nan, gaps)
+
+
+def stop_gap_m(spec: ScenarioSpec, road: RoadGeometry, model: VehicleModel) -> float | None:
+    """The gap at the run's start from the ego's front bumper to the rear of the
+    nearest obstacle ahead in its path, along its lane [m]; None when there is none.
+
+    The path is the band the ego's body covers driving straight along its lane's
+    centre: an obstacle is in it when its box overlaps that band laterally, whatever
+    its lane (an obstacle in the next lane whose ``lateral_offset_m`` reaches into
+    the band counts; one in the ego's lane offset out of it does not). Positions are
+    along the road (``start_m`` and ``position_m`` locate body centres; a
+    ``sumo_net`` road is the route's lane, with an obstacle moved off a junction
+    where the world puts it), so the gap is the centres' distance along the ego's
+    lane minus the two half lengths. On a curve the ego's lane is longer or shorter
+    than the centre line: its arc is ``1 - d / curve_radius_m`` times the centre
+    line's, ``d`` the lane centre's offset.
+    """
+    ego, band_half_m = spec.ego, model.width_m / 2
+    ego_d_m = road.lane_center_d_m(ego.lane)
+    lane_scale = 1 - ego_d_m / spec.road.curve_radius_m if spec.road.kind == "curve" else 1.0
+    gaps_m = []
+    for obstacle in spec.obstacles:
+        length_m, width_m = obstacle.size_m
+        d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
+        if abs(d_m - ego_d_m) >= band_half_m + width_m / 2:
+            continue  # beside the path
+        ahead_m = (road.place_s_m(obstacle.position_m, length_m) - ego.start_m) * lane_scale
+        if ahead_m > 0:  # its centre ahead of the ego's; 0 if touching (the spec refuses it)
+            gaps_m.append(max(0.0, ahead_m - (model.length_m + length_m) / 2))
+    return min(gaps_m, default=None)
+
+
+def stop_possible(speed_mps: float, max_decel_mps2: float, gap_m: float | None) -> bool | None:
+    """Can braking alone stop the car within ``gap_m``: ``speed^2 / (2 decel) <= gap``
+    (None when there is no gap: nothing in the path)."""
+    if gap_m is None:
+        return None
+    return speed_mps**2 / (2 * max_decel_mps2) <= gap_m

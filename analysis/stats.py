@@ -6,6 +6,7 @@ counted beside it, never as "no collision".
 
 from __future__ import annotations
 
+import itertools
 import math
 from statistics import NormalDist
 from typing import Literal
@@ -106,8 +107,9 @@ def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
     among the discordant pairs at 1/2.
     """
     ok = results[results.status == "ok"]
-    pairs = ok.pivot_table(index="sample", columns="controller", values="collision",
-                           aggfunc="first").dropna(subset=[a, b])
+    pairs = (ok.pivot_table(index="sample", columns="controller", values="collision",
+                            aggfunc="first") if len(ok) else pd.DataFrame())
+    pairs = pairs.reindex(columns=[a, b]).dropna()  # a controller without an ok run: no pair
     ca, cb = pairs[a].astype(bool), pairs[b].astype(bool)
     only_a, only_b = int((ca & ~cb).sum()), int((~ca & cb).sum())
     discordant = only_a + only_b
@@ -115,6 +117,34 @@ def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
     return {"a": a, "b": b, "pairs": len(pairs), "both": int((ca & cb).sum()),
             "neither": int((~ca & ~cb).sum()), "only_a": only_a, "only_b": only_b,
             "p_value": p}
+
+
+def sample_stop_possible(results: pd.DataFrame) -> pd.Series | None:
+    """Per sample with an obstacle in the ego's path, whether braking alone could stop
+    the car before it (``stop_possible`` depends on the sample's scenario alone, so every
+    controller's ok run of a sample holds the same); None when the results do not
+    record it (written before the column)."""
+    if "stop_possible" not in results.columns:
+        return None
+    known = results.dropna(subset=["stop_possible"])
+    return known.groupby("sample").stop_possible.first().astype(bool)
+
+
+def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> dict:
+    """The collision rates and the paired comparisons restricted to the samples where
+    a brake-only stop was possible; ``{"recorded": False}`` without the column."""
+    flags = sample_stop_possible(results)
+    if flags is None:
+        return {"recorded": False}
+    possible = results[results["sample"].isin(flags.index[flags])]
+    return {"recorded": True,
+            "samples": int(results["sample"][results.status == "ok"].nunique()),  # with a run
+            "samples_obstacle_in_path": len(flags),
+            "samples_stop_possible": int(flags.sum()),
+            "by_controller": {c: rate_summary(possible[possible.controller == c])
+                              for c in controllers},
+            "paired": [mcnemar(possible, a, b)
+                       for a, b in itertools.combinations(controllers, 2)]}
 
 
 def safe_envelope(results: pd.DataFrame, column: str, controller: str,

@@ -119,9 +119,12 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
     args = ["demo", "--out", str(out), "--samples", "3", "--workers", "2"]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
-    rows = {line.split()[0]: line.split() for line in result.output.splitlines()
-            if len(line.split()) > 1 and line.split()[1].isdigit()}
+    rows = {}  # the headline's (the first); the rates where a stop was possible follow
+    for line in result.output.splitlines():
+        if len(line.split()) > 1 and line.split()[1].isdigit():
+            rows.setdefault(line.split()[0], line.split())
     assert rows["seed"][1] == "3" and rows["lane-keep"][1:4] == ["3", "3", "100.0%"]
+    assert "where braking alone could stop in time" in result.output
     assert (out / "report.html").exists() and (out / "summary.json").exists()
     rerun = CliRunner().invoke(main, args)  # a finished demo is reported again, not rerun
     assert rerun.exit_code == 0 and rerun.stdout == result.stdout

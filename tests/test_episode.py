@@ -38,6 +38,9 @@ def test_seed_lesson_lane_keep_hits_the_barrel(lesson):
     assert row["termination"] == "collision"
     # the barrel's near face is at 39.7 m, the ego's front starts at 12.425 m
     assert row["collision_time_s"] == pytest.approx((39.7 - 12.425) / 3.74, abs=0.07)
+    # braking alone would have stopped it: 3.74^2 / (2 * 8) = 0.87 m of 27.275 m
+    assert row["stop_gap_m"] == pytest.approx(40 - 0.3 - (10 + 2.425), abs=1e-9)
+    assert row["stop_possible"] is True
 
 
 def test_seed_at_25_mps_detects_too_late_and_hits_the_stopped_car(lesson_plain):
@@ -47,6 +50,8 @@ def test_seed_at_25_mps_detects_too_late_and_hits_the_stopped_car(lesson_plain):
     row = run_episode(ScenarioSpec.from_plain(lesson_plain)).row
     assert row["maneuver_started"] is True
     assert row["collision_with"] == "obstacle"
+    assert row["stop_gap_m"] == pytest.approx(250 - 2.25 - (10 + 2.425))
+    assert row["stop_possible"] is True  # 25^2 / 16 = 39 m of braking
 
 
 def test_trace_file_holds_every_step_and_what_is_needed_to_draw_it(lesson, tmp_path):

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import matplotlib.image
 import pandas as pd
+import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
@@ -27,8 +28,10 @@ from sdc.cli import main
 pytestmark = pytest.mark.slow
 
 ARTIFACTS = Path(__file__).resolve().parent.parent / ".artifacts"
-# 3 speeds x 2 offsets x 2 controllers; the -3 m offset puts the barrel off the road,
-# so those 6 runs are error rows
+# 4 speeds x 2 offsets x 2 controllers; the -3 m offset puts the barrel off the road,
+# so those 8 runs are error rows. The barrel is 27.275 m ahead of the front bumper:
+# braking at 8 m/s^2 stops in time up to 20.89 m/s (20.8 m/s: 27.04 m), not at 21 m/s
+# (27.56 m)
 SMALL = f"""[sweep]
 name = "small"
 base = "{CATALOG_DIR / 'seed-lesson.toml'}"
@@ -36,7 +39,7 @@ sampler = "grid"
 controllers = ["seed", "lane-keep"]
 
 [sweep.params]
-"ego.speed_mps" = {{ choice = [3.0, 3.74, 9.0] }}
+"ego.speed_mps" = {{ choice = [3.74, 9.0, 20.8, 21.0] }}
 "obstacles[0].lateral_offset_m" = {{ choice = [0.0, -3.0] }}
 "scenario.duration_s" = {{ choice = [15.0] }}
 """
@@ -65,13 +68,13 @@ def test_report_files_count_errors_apart(small_sweep, tmp_path):
         numbers = summary["by_controller"][controller]
         rows = results[results.controller == controller]
         ok = rows[rows.status == "ok"]
-        assert numbers["n_ok"] == len(ok) == 3 and numbers["n_error"] == 3
+        assert numbers["n_ok"] == len(ok) == 4 and numbers["n_error"] == 4
         assert numbers["collisions"] == int(ok.collision.sum())
         assert numbers["collision_rate"] == pytest.approx(ok.collision.mean())
         assert 0 <= numbers["wilson_low"] <= numbers["collision_rate"] <= numbers["wilson_high"]
-    assert summary["by_controller"]["lane-keep"]["collisions"] == 3
+    assert summary["by_controller"]["lane-keep"]["collisions"] == 4
     assert set(summary["by"]) == {"p.ego.speed_mps", "p.obstacles[0].lateral_offset_m"}
-    assert summary["paired"][0]["pairs"] == 3
+    assert summary["paired"][0]["pairs"] == 4
 
     page = report.html_path.read_text()
     assert not re.search(r"""(src|href)=["']?(https?:)?//""", page)  # nothing external
@@ -87,9 +90,60 @@ def test_report_files_count_errors_apart(small_sweep, tmp_path):
 
     suite = ElementTree.parse(tmp_path / "runs.xml").getroot()
     cases = suite.findall("testcase")
-    assert len(cases) == len(results) == 12
-    assert int(suite.get("errors")) == 6 == len(suite.findall("testcase/error"))
+    assert len(cases) == len(results) == 16
+    assert int(suite.get("errors")) == 8 == len(suite.findall("testcase/error"))
     assert int(suite.get("failures")) == int(results.collision.fillna(False).sum())
+
+
+def test_report_rates_where_a_stop_was_possible(small_sweep, tmp_path):
+    results = pd.read_parquet(small_sweep / "results.parquet")
+    ok = results[results.status == "ok"]
+    assert ok.stop_gap_m.tolist() == pytest.approx([27.275] * 8)
+    assert ok.stop_possible.tolist() == list(ok["p.ego.speed_mps"] < 21.0)
+    assert results[results.status == "error"].stop_possible.isna().all()
+
+    report = write_report(small_sweep, html_path=tmp_path / "r.html")
+    stop = json.loads((small_sweep / "summary.json").read_text())["stop_possible"]
+    assert stop["recorded"] is True
+    assert (stop["samples"], stop["samples_stop_possible"]) == (4, 3)
+    possible = ok[ok.stop_possible]
+    for controller in ("seed", "lane-keep"):
+        numbers = stop["by_controller"][controller]
+        rows = possible[possible.controller == controller]
+        assert numbers["n_ok"] == len(rows) == 3
+        assert numbers["collisions"] == int(rows.collision.sum())
+        assert numbers["wilson_low"] <= numbers["collision_rate"] <= numbers["wilson_high"]
+    assert stop["by_controller"]["lane-keep"]["collisions"] == 3  # it never brakes
+    assert stop["paired"][0]["pairs"] == 3
+
+    title = "where braking alone could stop in time (v^2 / 2a <= gap), 3 of 4 samples run:"
+    assert report.terminal[0].split()[:3] == ["controller", "ok", "runs"]
+    at = report.terminal.index(title)
+    assert [line.split()[:2] for line in report.terminal[at + 1:at + 3]] == \
+        [["seed", "3"], ["lane-keep", "3"]]
+    assert any(", where a stop was possible, on 3 shared" in line for line in report.terminal)
+    markdown = (small_sweep / "report.md").read_text()
+    assert f"Collision rates {title}" in markdown and "| lane-keep | 3 | 3 | 100.0% |" in markdown
+    page = report.html_path.read_text()
+    assert "<td>lane-keep</td><td>3</td><td>3</td><td>100.0%</td>" in page
+    assert ", where a stop was possible, on 3 shared" in page
+
+
+def test_results_from_before_the_stop_columns_still_report(small_sweep, tmp_path):
+    old = tmp_path / "old"
+    shutil.copytree(small_sweep, old)
+    table = pq.read_table(old / "results.parquet").drop_columns(["stop_gap_m", "stop_possible"])
+    pq.write_table(table, old / "results.parquet")
+    report = write_report(old)
+    summary = json.loads((old / "summary.json").read_text())
+    assert summary["stop_possible"] == {"recorded": False}
+    assert summary["by_controller"]["lane-keep"]["collisions"] == 4
+    not_recorded = ("where braking alone could stop in time: not recorded "
+                    "(results from before the stop_possible column)")
+    assert not_recorded in report.terminal
+    assert not any("where a stop was possible" in line for line in report.terminal)
+    assert not_recorded in (old / "report.md").read_text()
+    assert not_recorded in report.html_path.read_text()
 
 
 def test_report_page_renders_in_headless_chromium(small_sweep, tmp_path):
@@ -117,6 +171,11 @@ def test_cli_report_and_its_bad_inputs(small_sweep, tmp_path):
     assert f"report: {small_sweep / 'report.html'}" in result.output
     summary = json.loads((small_sweep / "summary.json").read_text())
     assert list(summary["by"]) == ["p.ego.speed_mps"] and summary["interval"] == "clopper-pearson"
+    seed = summary["stop_possible"]["by_controller"]["seed"]
+    low, high = f"{100 * seed['cp_low']:.1f}%", f"{100 * seed['cp_high']:.1f}%"
+    assert seed["cp_low"] != seed["wilson_low"]
+    assert sum(line.startswith("seed") and f"{low} - {high}" in line
+               for line in result.output.splitlines()) == 1
 
     bad_by = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "p.ego.nope"])
     assert bad_by.exit_code == 2 and "--by: no column 'p.ego.nope'" in bad_by.output

@@ -16,6 +16,8 @@ from analysis.stats import (
     mcnemar,
     rates_by,
     safe_envelope,
+    sample_stop_possible,
+    stop_possible_summary,
     wilson_interval,
 )
 
@@ -88,3 +90,38 @@ def test_mcnemar_counts_discordant_pairs_and_matches_the_exact_binomial():
     assert result["p_value"] == pytest.approx(2 * 0.5**9)  # exact two-sided, b = 0, c = 9
     same = mcnemar(pd.concat([a, a.assign(controller="lane-keep")]), "seed", "lane-keep")
     assert same["p_value"] == 1.0 and not math.isnan(same["p_value"])
+
+
+def test_the_rates_where_a_stop_was_possible_are_per_sample():
+    # 6 samples; a stop was possible in samples 0-2, not in 3-4, and sample 5 has no
+    # obstacle in the path; lane-keep's run of sample 2 errored (no value there)
+    possible = [True, True, True, False, False, None]
+    a = rows("seed", [False, False, True, True, True, False], stop_possible=possible)
+    b = rows("lane-keep", [True, True, None, True, True, True],
+             statuses=["ok", "ok", "error", "ok", "ok", "ok"],
+             stop_possible=[True, True, None, False, False, None])
+    results = pd.concat([a, b], ignore_index=True)
+    flags = sample_stop_possible(results)
+    assert flags.to_dict() == {0: True, 1: True, 2: True, 3: False, 4: False}
+    stop = stop_possible_summary(results, ["seed", "lane-keep"])
+    assert (stop["samples"], stop["samples_obstacle_in_path"], stop["samples_stop_possible"]) \
+        == (6, 5, 3)
+    seed, lane_keep = stop["by_controller"]["seed"], stop["by_controller"]["lane-keep"]
+    assert (seed["n_ok"], seed["collisions"]) == (3, 1)
+    assert (lane_keep["n_ok"], lane_keep["n_error"], lane_keep["collisions"]) == (2, 1, 2)
+    [pair] = stop["paired"]
+    assert (pair["pairs"], pair["only_a"], pair["only_b"], pair["both"]) == (2, 0, 2, 0)
+    assert by_controller(results)["seed"]["collisions"] == 3  # overall: every sample
+
+
+def test_results_without_the_column_do_not_record_it():
+    results = pd.concat([rows("seed", [True, False]), rows("lane-keep", [True, True])])
+    assert sample_stop_possible(results) is None
+    assert stop_possible_summary(results, ["seed", "lane-keep"]) == {"recorded": False}
+
+
+def test_mcnemar_without_an_ok_run_of_one_controller_has_no_pairs():
+    results = pd.concat([rows("seed", [True, False]),
+                         rows("lane-keep", [None, None], statuses=["error", "error"])])
+    assert mcnemar(results, "seed", "lane-keep")["pairs"] == 0
+    assert mcnemar(results.iloc[:0], "seed", "lane-keep")["p_value"] == 1.0

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.metrics import trace_metrics
-from analysis.safety import road_edge_gaps_m
+from analysis.safety import road_edge_gaps_m, stop_gap_m, stop_possible
 from analysis.trace_file import Trace
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
@@ -179,6 +179,7 @@ class Simulation:
             trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
             road)
         hit = self.hit
+        gap_m = stop_gap_m(spec, road, model)
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
                                   spec.controller.detect_beams),
@@ -191,6 +192,8 @@ class Simulation:
             collision_with=hit or "none",
             collision_time_s=t_end if hit else None,
             min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
+            stop_gap_m=gap_m,
+            stop_possible=stop_possible(spec.ego.speed_mps, model.max_decel_mps2, gap_m),
             sim_time_s=t_end,
             steps=len(trace),
             wall_time_s=time.perf_counter() - self.wall_start,

@@ -59,6 +59,13 @@ COLUMNS: tuple[Column, ...] = (
            "smallest constant-velocity time to reach anything in the ego's path [s]"),
     Column("min_road_edge_gap_m", pa.float64(), OUTCOME,
            "closest approach of a body corner to a road edge, negative beyond it [m]"),
+    Column("stop_gap_m", pa.float64(), OUTCOME,
+           "at the start, from the front bumper to the rear of the nearest obstacle ahead "
+           "whose box reaches into the band the body covers along its lane, along the "
+           "lane; None: no obstacle in that path [m]"),
+    Column("stop_possible", pa.bool_(), OUTCOME,
+           "braking alone could stop the car before it: start speed^2 / (2 * the vehicle "
+           "model's max_decel_mps2) <= stop_gap_m; None: no obstacle in the path"),
     Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
     Column("detection_range_m", pa.float64(), METRIC,
            "shortest central lidar range as the maneuver started [m]"),
