@@ -240,8 +240,10 @@ class AvoidParams(Spec):
     preview_time_s: float = num(0.8, gt=0, le=10)
     #: the steering's lateral acceleration cap (the path's curvature x speed^2)
     max_lateral_accel_mps2: float = num(5.0, gt=0, le=20)
-    #: braking for an obstacle asks this times the deceleration a stop needs
+    #: braking for an obstacle asks this times the deceleration a stop needs ...
     brake_gain: float = num(1.5, ge=1, le=10)
+    #: ... and stops outright from under this speed
+    creep_speed_mps: float = num(0.5, ge=0, le=10)
     #: the cruise speed's feedback gain: acceleration per m/s of speed error
     speed_gain_1ps: float = num(0.5, gt=0, le=10)
 

@@ -247,10 +247,11 @@ class AvoidController:
             elif self.phase == BRAKE:
                 self.phase = CRUISE
         if self.phase in (AVOID_LEFT, AVOID_RIGHT):
-            # the obstacle: anything from the own lane's far edge to the car's side,
-            # from beside the car onward
+            # the obstacle: anything in the own lane, or out of it up to the car's
+            # side, from beside the car onward
             near_m = offset - self.side * (v.width_m / 2 + 0.05)
-            lo, hi = sorted((-self.side * half_lane, near_m))
+            far_m = self.side * max(half_lane, self.side * near_m)
+            lo, hi = sorted((-self.side * half_lane, far_m))
             if frame.within(lo, hi, -front_m, math.inf).any():
                 self.seen_at_m = self.odometer_m
             passed_m = self.odometer_m - self.seen_at_m
@@ -285,6 +286,8 @@ class AvoidController:
         if wait_room_m > 0 and speed**2 / (2 * wait_room_m) <= v.max_decel_mps2 / p.brake_gain:
             room_m = wait_room_m
         need = speed**2 / (2 * room_m) if room_m > 0 else math.inf
+        if speed < p.creep_speed_mps:  # the last of it: stop (rather than creep ever slower)
+            need = max(need, speed / obs.step_s)
         return -min(v.max_decel_mps2, p.brake_gain * need)
 
     def _speed_accel(self, gap_m: float, obs: Observation) -> float:
