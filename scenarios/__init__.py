@@ -4,6 +4,7 @@ from pathlib import Path
 
 from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import (
+    AvoidParams,
     ControllerSpec,
     EgoSpec,
     LaneKeepParams,
@@ -23,6 +24,7 @@ CATALOG_DIR = Path(__file__).resolve().parent / "catalog"
 
 __all__ = [
     "CATALOG_DIR",
+    "AvoidParams",
     "ControllerSpec",
     "EgoSpec",
     "LaneKeepParams",

@@ -21,7 +21,7 @@ from typing import Literal
 from scenarios.errors import SpecError
 
 ENTRY_POINT_GROUP = "sdc.controllers"
-BUILTIN_CONTROLLERS = ("seed", "lane-keep")
+BUILTIN_CONTROLLERS = ("seed", "lane-keep", "avoid")
 
 Kind = Literal["builtin", "file", "module", "entry_point"]
 _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"

@@ -186,10 +186,73 @@ class SeedParams(LaneKeepParams):
     right_periods: int = num(10, ge=0)
 
 
-#: each built-in controller's parameters (its classes are in ``sdc.car.controllers``)
-CONTROLLER_PARAMS: dict[str, type[LaneKeepParams]] = {
+@spec_class
+class AvoidParams(Spec):
+    """The closed-loop avoid-then-return maneuver (``sdc.car.avoid``).
+
+    Lateral offsets are from the centre of the car's own lane, distances along it.
+    """
+
+    #: where the lane reading's preview offset is taken, ahead of the body centre
+    #: (the controller reads the lane's curvature from it)
+    look_ahead_m: float = num(5.0, gt=0, le=100)
+    #: the speed kept when nothing is in the way; none: the speed at the first step
+    cruise_speed_mps: float | None = num(None, ge=0, le=70)
+    #: an obstacle in the own lane starts the maneuver when its gap over the speed
+    #: (time to collision) falls under this
+    detect_ttc_s: float = num(4.0, gt=0, le=60)
+    #: the gap to keep to an obstacle when stopping behind it ...
+    stop_margin_m: float = num(1.5, ge=0, le=50)
+    #: ... or this gap when there is room to brake for it, enough to steer round
+    #: the obstacle from a standstill later
+    wait_gap_m: float = num(7.0, ge=0, le=100)
+    #: the free space wanted on each side of the body when passing
+    lateral_clearance_m: float = num(0.5, ge=0, le=5)
+    #: returns this close inside the own lane's edges do not count as in the lane
+    #: (the road edge's own returns)
+    edge_tolerance_m: float = num(0.1, ge=0, le=1)
+    #: a side's corridor is checked from this far behind the car's rear bumper
+    rear_margin_m: float = num(2.0, ge=0, le=50)
+    #: ... to beyond the obstacle by the distance the car covers in this time
+    free_time_s: float = num(2.0, ge=0, le=30)
+    #: returns this far beyond the nearest one in the lane belong to the same
+    #: obstacle (its width sets the lateral target)
+    obstacle_depth_m: float = num(15.0, gt=0, le=100)
+    #: a neighbouring lane is entered only after it was seen empty beside the car
+    #: for this long, from the first step on (traffic from behind is out of the
+    #: lidar's view) ...
+    lane_watch_s: float = num(3.0, ge=0, le=600)
+    #: ... or for this long once anything was seen in it beside the car (a lane
+    #: whose traffic overtakes the car is not entered while stopping is possible) ...
+    traffic_memory_s: float = num(60.0, ge=0, le=36_000)
+    #: ... and the own lane, to return to it, for this long
+    return_watch_s: float = num(1.5, ge=0, le=600)
+    #: the swerve's estimated duration (bang-bang lateral acceleration plus the
+    #: steering's lag) times this must fit in the gap, or the car brakes
+    swerve_time_factor: float = num(1.3, ge=1, le=10)
+    #: the car returns when its rear bumper is this far past the obstacle
+    return_gap_m: float = num(2.0, ge=0, le=50)
+    #: the return ends (cruise) once the offset is within this of the lane centre
+    settled_offset_m: float = num(0.3, gt=0, le=2)
+    #: the steering aims at a point this far ahead at least ...
+    min_preview_m: float = num(4.0, gt=0, le=100)
+    #: ... or as far as the car covers in this time
+    preview_time_s: float = num(0.8, gt=0, le=10)
+    #: the steering's lateral acceleration cap (the path's curvature x speed^2)
+    max_lateral_accel_mps2: float = num(5.0, gt=0, le=20)
+    #: braking for an obstacle asks this times the deceleration a stop needs ...
+    brake_gain: float = num(1.5, ge=1, le=10)
+    #: ... and stops outright from under this speed
+    creep_speed_mps: float = num(0.5, ge=0, le=10)
+    #: the cruise speed's feedback gain: acceleration per m/s of speed error
+    speed_gain_1ps: float = num(0.5, gt=0, le=10)
+
+
+#: each built-in controller's parameters (its classes are in ``sdc.car.controller_plugins``)
+CONTROLLER_PARAMS: dict[str, type[Spec]] = {
     "seed": SeedParams,
     "lane-keep": LaneKeepParams,
+    "avoid": AvoidParams,
 }
 assert tuple(CONTROLLER_PARAMS) == BUILTIN_CONTROLLERS
 #: the preview distance of the lane reading for a controller that names none
@@ -219,7 +282,7 @@ class ControllerSpec:
     a plug-in's are kept as the plain TOML values, for its constructor to judge."""
 
     name: str
-    params: LaneKeepParams | dict
+    params: LaneKeepParams | AvoidParams | dict
 
     @classmethod
     def from_plain(cls, data: Any, path: str = "controller") -> ControllerSpec:

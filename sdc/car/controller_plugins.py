@@ -20,12 +20,14 @@ from typing import Any
 from scenarios.controller_ref import ENTRY_POINT_GROUP, controller_kind
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import ControllerSpec
+from sdc.car.avoid import AvoidController
 from sdc.car.controllers import LaneKeepController, SeedController
 
 #: the built-in controllers by name (their parameters: scenario_spec.CONTROLLER_PARAMS)
 BUILTIN_CLASSES: dict[str, type] = {
     "seed": SeedController,
     "lane-keep": LaneKeepController,
+    "avoid": AvoidController,
 }
 
 
