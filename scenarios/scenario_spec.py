@@ -328,6 +328,21 @@ class ControllerSpec:
         value = getattr(self.params, "detect_beams", None)
         return value if isinstance(value, int) else SeedParams().detect_beams
 
+    def takes(self, name: str, field: str) -> bool:
+        """Does the controller ``name``, in a sweep of this base controller, take the
+        parameter ``field``? A built-in when its params class has the field, a
+        plug-in when it is this one."""
+        if name in CONTROLLER_PARAMS:
+            return field in {f.name for f in dataclasses.fields(CONTROLLER_PARAMS[name])}
+        return name == self.name
+
+    def swept(self, name: str, values: dict[str, Any]) -> ControllerSpec:
+        """The controller ``name`` in a sweep of this base controller: :meth:`renamed`,
+        then given the swept parameter ``values`` (field -> value) it takes."""
+        target = self.renamed(name)
+        taken = {k: v for k, v in values.items() if self.takes(name, k)}
+        return ControllerSpec.from_plain({**target.to_plain(), **taken}) if taken else target
+
     def renamed(self, name: str) -> ControllerSpec:
         """The controller ``name``, with the parameters it shares with this one: a
         built-in takes the fields its params class has, a plug-in takes all of these

@@ -266,6 +266,11 @@ class SweepSpec:
                 check_path(base, path)
             except ValueError as e:
                 raise SpecError(field, f"unknown parameter path: {e}") from None
+            name = path.removeprefix("controller.")
+            if path.startswith("controller.") and name != "name" and not any(
+                    base.controller.takes(c, name) for c in controllers):
+                raise SpecError(field, f"none of the sweep's controllers takes {name!r} "
+                                f"(a plug-in takes parameters when the base scenario names it)")
             parsed.append(_parse_param(path, dist, field))
 
         if meta.sampler == "grid":
@@ -379,21 +384,32 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
     for i, (values, seed) in enumerate(zip(samples, seeds, strict=True)):
         plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
+        controller_values = {}  # each controller takes those it has (ControllerSpec.swept)
         for path, value in values.items():
-            set_path(plain, path, value)
+            if path.startswith("controller.") and path != "controller.name":
+                controller_values[path.removeprefix("controller.")] = value
+            else:
+                set_path(plain, path, value)
+        shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
         spec, error = None, None
         try:
             spec = ScenarioSpec.from_plain(plain)
         except SpecError as e:
-            shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
             error = f"invalid scenario from sample {i} ({shown}): {e}"
         for controller in sweep.controllers:
             label = controller_label(controller)
+            run_spec, run_error = None, error
+            if spec is not None:
+                try:
+                    run_spec = dataclasses.replace(
+                        spec, controller=spec.controller.swept(controller, controller_values))
+                except SpecError as e:
+                    run_error = f"invalid scenario from sample {i} ({shown}): {e}"
             plan.append(PlannedRun(
                 index=len(plan), run_id=f"{i:0{width}d}-{label}", sample=i,
                 controller=label, seed=int(plain["scenario"]["seed"]),
                 backend=str(plain["scenario"].get("backend", "sumo")), params=values,
-                spec=spec.with_controller(controller) if spec else None, error=error,
+                spec=run_spec, error=run_error,
             ))
     return plan
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
+from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, load_spec
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.scenario_spec import AvoidParams, ControllerSpec, beam_angles_rad
 from sdc.car.avoid import (
@@ -224,26 +224,11 @@ def test_closed_loop_round_a_barrel_and_back():
 
 
 def test_params_are_validated_and_named():
-    with pytest.raises(Exception, match="controller.detect_ttc_s"):
+    with pytest.raises(SpecError, match="controller.detect_ttc_s"):
         AvoidController({"detect_ttc_s": -1.0})
-    with pytest.raises(Exception, match="controller.bogus"):
+    with pytest.raises(SpecError, match="controller.bogus"):
         AvoidController({"bogus": 1})
     assert isinstance(make_controller(ControllerSpec("avoid", AvoidParams())), AvoidController)
-
-
-def test_the_step_cost_is_small():
-    road = FakeRoad([barrel(20.0), car_at(40.0, LANE_W)])
-    obs = road.observe(at_speed(8.0))
-    controller = AvoidController({})
-    controller.step(obs)
-    import time
-
-    n = 2000
-    t0 = time.perf_counter()
-    for _ in range(n):
-        controller.step(obs)
-    per_step_us = (time.perf_counter() - t0) / n * 1e6
-    assert per_step_us < 1000  # behaviour test: a generous bound, the figure is ~tens of us
 
 
 # ---- whole runs in libsumo -------------------------------------------------------

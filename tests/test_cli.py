@@ -124,6 +124,7 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
         if len(line.split()) > 1 and line.split()[1].isdigit():
             rows.setdefault(line.split()[0], line.split())
     assert rows["seed"][1] == "3" and rows["lane-keep"][1:4] == ["3", "3", "100.0%"]
+    assert rows["avoid"][1] == "3"  # the three controllers of the catalog's seed-envelope
     assert "where braking alone could stop in time" in result.output
     assert (out / "report.html").exists() and (out / "summary.json").exists()
     rerun = CliRunner().invoke(main, args)  # a finished demo is reported again, not rerun
@@ -131,4 +132,4 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
     other = CliRunner().invoke(main, [*args[:4], "2", *args[5:]])  # another plan: anew
     assert other.exit_code == 0, other.output
     assert "starting anew" in other.stderr
-    assert len(pd.read_parquet(out / "results.parquet")) == 2 * 2
+    assert len(pd.read_parquet(out / "results.parquet")) == 2 * 3

@@ -30,7 +30,7 @@ def make(**table) -> SweepSpec:
 def test_catalog_sweeps_expand_to_valid_deterministic_plans(name):
     path = CATALOG_DIR / "sweeps" / f"{name}.toml"
     plan = expand(load_sweep(path))
-    assert len(plan) == 2 * load_sweep(path).samples
+    assert len(plan) == len(load_sweep(path).controllers) * load_sweep(path).samples
     assert all(run.spec is not None for run in plan), [r.error for r in plan if r.error][:3]
     assert plan_sha256(plan) == plan_sha256(expand(load_sweep(path)))
     assert len({run.run_id for run in plan}) == len(plan)
@@ -232,3 +232,38 @@ def test_a_plugin_controller_takes_its_own_swept_parameters(tmp_path, lesson_pla
     assert 2.0 <= mine.params["gain"] <= 3.0 and mine.params["look_ahead_m"] == 8.0
     assert mine.label == "Mine" and mine.look_ahead_m == 8.0
     assert lane_keep.params.look_ahead_m == 8.0 and not hasattr(lane_keep.params, "gain")
+
+
+def test_each_controller_takes_the_swept_parameters_it_has(tmp_path):
+    """On the seed's base scenario, avoid's and the seed's own parameters sweep side
+    by side: each controller gets those its parameters have."""
+    path = write_sweep(tmp_path, 'samples = 4\ncontrollers = ["seed", "lane-keep", "avoid"]\n'
+                       '[sweep.params]\n"controller.detect_ttc_s" = { uniform = [2.0, 6.0] }\n'
+                       '"controller.detect_range_m" = { uniform = [4.0, 8.0] }\n'
+                       '"controller.look_ahead_m" = { uniform = [3.0, 9.0] }\n')
+    plan = expand(load_sweep(path))
+    assert all(run.spec is not None for run in plan)
+    seed, lane_keep, avoid = (run.spec.controller.params for run in plan[:3])
+    values = plan[0].params
+    assert avoid.detect_ttc_s == values["controller.detect_ttc_s"]
+    assert seed.detect_range_m == values["controller.detect_range_m"]
+    assert seed.look_ahead_m == lane_keep.look_ahead_m == avoid.look_ahead_m \
+        == values["controller.look_ahead_m"]
+    assert not hasattr(seed, "detect_ttc_s") and not hasattr(avoid, "detect_range_m")
+
+
+def test_a_swept_controller_parameter_no_controller_takes_is_refused(tmp_path):
+    path = write_sweep(tmp_path, 'samples = 4\ncontrollers = ["seed", "lane-keep"]\n'
+                       '[sweep.params]\n"controller.detect_ttc_s" = { uniform = [2.0, 6.0] }\n')
+    with pytest.raises(SpecError) as caught:
+        load_sweep(path)
+    assert caught.value.field == 'sweep.params."controller.detect_ttc_s"'
+
+
+def test_a_sample_invalid_for_one_controller_leaves_the_others_running(tmp_path):
+    path = write_sweep(tmp_path, 'samples = 4\ncontrollers = ["seed", "avoid"]\n'
+                       '[sweep.params]\n"controller.detect_ttc_s" = { uniform = [-2.0, -1.0] }\n')
+    plan = expand(load_sweep(path))
+    assert all(run.spec is not None for run in plan if run.controller == "seed")
+    invalid = [run for run in plan if run.controller == "avoid"]
+    assert all(run.spec is None and "controller.detect_ttc_s" in run.error for run in invalid)
