@@ -148,7 +148,7 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
               help="Sweep directory; an existing demo there is resumed, not rerun.")
 @click.option("--samples", type=click.IntRange(min=1), metavar="N",
               help="Samples of the seed-envelope sweep, each run under seed, lane-keep and avoid  "
-                   "[default: the catalog's 500, about 70 s on 2 cores].")
+                   "[default: the catalog's 500, about 25 s on 2 cores].")
 @click.option("--workers", type=click.IntRange(1, 1024), default=os.cpu_count() or 1,
               show_default="all cores", help="Worker processes.")
 def demo(out_dir: Path, samples: int | None, workers: int) -> None:
