@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 
 import numpy as np
@@ -193,3 +194,15 @@ def test_the_readme_lists_the_defined_columns():
     [extra] = _readme_names("- `results.parquet`:")
     assert sorted(json_names + extra) == sorted(c.name for c in COLUMNS)
     assert f"one `{result_row.PARAM_PREFIX}<path>` column per swept" in README.read_text()
+
+
+def test_the_store_writes_a_lone_row_without_waiting_for_the_next(tmp_path):
+    """A sweep whose last runs hang must still have its finished rows on disk: the
+    store flushes ``flush_s`` after a row arrives, not when the next one does."""
+    store = ResultStore(tmp_path, result_schema(PARAM_TYPES), flush_s=0.2)
+    store.add(sweep_row(_rows()["ok"], SWEEP))
+    deadline = time.monotonic() + 30
+    while not list(tmp_path.glob("parts/part-*.parquet")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert [r["run_id"] for r in store.read().to_pylist()] == [IDENTITY["run_id"]]
+    assert len(store.consolidate()) == 1 and not (tmp_path / "parts").exists()

@@ -253,8 +253,7 @@ def _hold_in_flight(proc: subprocess.Popen, out: Path) -> None:
 
     A worker that has taken a run is stopped (SIGSTOP): it holds a run that will never
     end, so the sweep cannot finish. The other is stopped too for longer than the
-    result store's flush interval, so the next row after it resumes is flushed into
-    a part."""
+    result store's flush interval, and once it resumes, its rows reach a part."""
     held = _wait_for(lambda: [p for p in _workers(proc.pid) if _in_a_run(p)], 120)[0]
     others = [pid for pid in _workers(proc.pid) if pid != held]
     for pid in [held, *others]:

@@ -9,7 +9,7 @@ name and renamed, so a kill leaves whole files only; reading deduplicates by
 from __future__ import annotations
 
 import re
-import time
+import threading
 from pathlib import Path
 
 import pyarrow as pa
@@ -26,7 +26,9 @@ def _write_atomic(table: pa.Table, path: Path) -> None:
 
 
 class ResultStore:
-    """Buffers rows and writes a part every ``flush_s`` seconds or ``flush_rows`` rows.
+    """Buffers rows and writes a part within ``flush_s`` seconds of a row's arrival
+    (a timer thread: no later row is needed) or at ``flush_rows`` rows, so a kill
+    loses at most the runs in flight and those finished in the last ``flush_s``.
 
     ``schema`` is :func:`sdc.run.result_row.result_schema`'s; a row whose keys are
     not exactly its columns raises :class:`sdc.run.result_row.RowKeyError`.
@@ -40,7 +42,8 @@ class ResultStore:
         self.schema = schema
         self.flush_s, self.flush_rows = flush_s, flush_rows
         self._buffer: list[dict] = []
-        self._last_flush = time.monotonic()
+        self._lock = threading.Lock()  # the buffer and the part numbers: timer vs caller
+        self._timer: threading.Timer | None = None
         self._next_part = 1 + max((int(m[1]) for p in self._part_files()
                                    if (m := re.fullmatch(r"part-(\d+)", p.stem))), default=-1)
 
@@ -49,20 +52,29 @@ class ResultStore:
 
     def add(self, row: dict) -> None:
         check_keys(row, self.schema.names, f"result row {row.get('run_id')!r}")
-        self._buffer.append(row)
-        if (len(self._buffer) >= self.flush_rows
-                or time.monotonic() - self._last_flush >= self.flush_s):
+        with self._lock:
+            self._buffer.append(row)
+            full = len(self._buffer) >= self.flush_rows
+            if not full and self._timer is None:
+                self._timer = threading.Timer(self.flush_s, self.flush)
+                self._timer.daemon = True
+                self._timer.start()
+        if full:
             self.flush()
 
     def flush(self) -> None:
-        self._last_flush = time.monotonic()
-        if not self._buffer:
-            return
-        table = pa.Table.from_pylist(self._buffer, schema=self.schema)
-        self.parts_dir.mkdir(exist_ok=True)
-        _write_atomic(table, self.parts_dir / f"part-{self._next_part:06d}.parquet")
-        self._next_part += 1
-        self._buffer.clear()
+        """Write the buffered rows as one part (now; any pending timer is spent)."""
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            if not self._buffer:
+                return
+            table = pa.Table.from_pylist(self._buffer, schema=self.schema)
+            self.parts_dir.mkdir(exist_ok=True)
+            _write_atomic(table, self.parts_dir / f"part-{self._next_part:06d}.parquet")
+            self._next_part += 1
+            self._buffer.clear()
 
     def read(self) -> pa.Table:
         """Every stored row (flushed ones), one per ``run_id``, in plan order."""
