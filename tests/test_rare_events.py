@@ -1,0 +1,179 @@
+"""The rare-event estimator on synthetic problems whose failure probability is known exactly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from analysis.rare_events import (
+    CrossEntropyIS,
+    GaussianProposal,
+    estimate,
+    estimate_from_rows,
+    nominal_log_density,
+    unit_points,
+    weights_from_log_densities,
+)
+
+REPEATS = 120
+
+
+def linear_problem(dims: int, p_failure: float):
+    """Fail when z_1 + ... + z_d > c: exactly p = 1 - Phi(c / sqrt(d))."""
+    threshold = math.sqrt(dims) * stats.norm.isf(p_failure)
+    return (lambda z: threshold - z.sum(axis=1)), threshold
+
+
+def discrete_problem():
+    """A 3-way choice (a step function of u_3) matters: only choice 2 fails easily.
+
+    score = c - z1 - z2 + 3 * (choice != 2), choice = floor(3 u_3).
+    """
+    threshold = 4.5
+
+    def score(z):
+        choice = np.minimum((unit_points(z[:, 2]) * 3).astype(int), 2)
+        return threshold - z[:, 0] - z[:, 1] + 3.0 * (choice != 2)
+
+    root2 = math.sqrt(2.0)
+    truth = (stats.norm.sf(threshold / root2) / 3
+             + 2 * stats.norm.sf((threshold + 3.0) / root2) / 3)
+    return score, truth
+
+
+def repeated(score_fn, dims, target_rhw=0.3, max_runs=5000, batch_size=100, repeats=REPEATS):
+    return [estimate(score_fn, dims, target_rhw, max_runs, np.random.default_rng(seed),
+                     batch_size)[0] for seed in range(repeats)]
+
+
+def coverage(results, truth):
+    return np.mean([r.ci_low <= truth <= r.ci_high for r in results])
+
+
+def standard_errors_off(results, truth):
+    ps = np.array([r.p_collision for r in results])
+    return abs(ps.mean() - truth) / (ps.std(ddof=1) / math.sqrt(ps.size))
+
+
+CASES = {
+    "d2_p1e-4": (2, 1e-4),
+    "d2_p1e-3": (2, 1e-3),
+    "d4_p1e-4": (4, 1e-4),
+}
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_interval_covers_and_estimate_is_unbiased(case):
+    dims, truth = CASES[case]
+    score_fn, _ = linear_problem(dims, truth)
+    results = repeated(score_fn, dims)
+    assert coverage(results, truth) >= 0.90
+    assert standard_errors_off(results, truth) < 3.0
+    assert all(r.stopped == "target_rhw" for r in results)
+
+
+def test_a_discrete_coordinate_is_found_and_estimated():
+    score_fn, truth = discrete_problem()
+    results = repeated(score_fn, 3)
+    assert coverage(results, truth) >= 0.90
+    assert standard_errors_off(results, truth) < 3.0
+
+
+def test_importance_sampling_beats_monte_carlo_twentyfold_at_1e_minus_4():
+    score_fn, _ = linear_problem(2, 1e-4)
+    results = repeated(score_fn, 2, repeats=30)
+    assert all(r.rhw <= 0.3 and r.stopped == "target_rhw" for r in results)
+    speedups = [r.mc_equivalent_runs / r.runs for r in results]
+    assert np.median(speedups) >= 20
+
+
+def test_history_ends_at_the_estimate():
+    score_fn, _ = linear_problem(2, 1e-3)
+    result, history = estimate(score_fn, 2, 0.3, 5000, np.random.default_rng(0), 100)
+    assert history[-1].runs == result.runs
+    assert history[-1].p_collision == result.p_collision
+    assert [h.runs for h in history] == sorted(h.runs for h in history)
+    assert result.runs > result.estimation_runs  # adaptation runs count, but not in p
+
+
+def test_weights_are_the_nominal_over_the_mixture_proposal():
+    rng = np.random.default_rng(1)
+    mean, cov, alpha = np.array([2.0, -1.0]), np.array([[0.5, 0.2], [0.2, 0.8]]), 0.1
+    proposal = GaussianProposal(mean, cov, defensive_fraction=alpha)
+    z = proposal.sample(500, rng)
+    nominal = stats.multivariate_normal(np.zeros(2), np.eye(2)).pdf(z)
+    mixture = alpha * nominal + (1 - alpha) * stats.multivariate_normal(mean, cov).pdf(z)
+    weights = weights_from_log_densities(nominal_log_density(z), proposal.log_density(z))
+    np.testing.assert_allclose(weights, nominal / mixture, rtol=1e-10)
+    np.testing.assert_allclose(np.exp(proposal.log_weights(z)), nominal / mixture, rtol=1e-10)
+    assert weights.max() <= proposal.max_weight == pytest.approx(1 / alpha)
+
+
+def test_proposal_equal_to_nominal_is_plain_monte_carlo():
+    rng = np.random.default_rng(2)
+    z = GaussianProposal(np.zeros(3), np.eye(3)).sample(4000, rng)
+    failed = z[:, 0] > 1.5
+    weights = weights_from_log_densities(nominal_log_density(z),
+                                         GaussianProposal(np.zeros(3), np.eye(3)).log_density(z))
+    np.testing.assert_allclose(weights, 1.0)
+    result = estimate_from_rows(weights, failed, max_weight=1.0)
+    p = failed.mean()
+    half_width = 1.959963984540054 * math.sqrt(p * (1 - p) / (failed.size - 1))
+    assert result.p_collision == pytest.approx(p)
+    assert result.ci_high - result.p_collision == pytest.approx(half_width, rel=1e-9)
+    assert result.ess == pytest.approx(failed.size)
+    assert result.mc_equivalent_runs == pytest.approx(failed.size - 1, rel=1e-9)
+
+
+def test_estimate_from_rows_recomputes_the_samplers_estimate():
+    score_fn, _ = linear_problem(2, 1e-3)
+    sampler = CrossEntropyIS(2, np.random.default_rng(3), 100)
+    for _ in range(15):
+        z = sampler.ask()
+        sampler.tell(z, score_fn(z))
+    assert not sampler.adapting
+    rows = estimate_from_rows(sampler.estimation_weights(), sampler.estimation_failed,
+                              runs=sampler.runs, max_weight=10.0)
+    assert rows == sampler.estimate()
+
+
+def test_no_failure_seen_gives_zero_with_a_rule_of_three_bound():
+    result, history = estimate(lambda z: np.ones(len(z)), 2, 0.3, 1000,
+                               np.random.default_rng(4), 100)
+    assert result.no_failure_seen and result.p_collision == 0.0
+    assert result.rhw == math.inf and math.isnan(result.mc_equivalent_runs)
+    assert result.stopped == "budget" and result.runs == 1000
+    assert result.ci_low == 0.0
+    assert result.ci_high == pytest.approx(-math.log(0.05) * 10 / result.estimation_runs)
+
+
+def test_unit_points_stay_in_the_half_open_cube():
+    u = unit_points(np.array([[-40.0, 0.0, 9.0, 40.0]]))
+    assert u[0, 0] == 0.0 and u[0, 1] == 0.5 and np.all(u < 1.0)
+
+
+@pytest.mark.parametrize("kwargs, argument", [
+    ({"dims": 0}, "dims"),
+    ({"target_rhw": 0.0}, "target_rhw"),
+    ({"target_rhw": -0.1}, "target_rhw"),
+    ({"max_runs": 150}, "max_runs"),
+])
+def test_wrong_use_names_the_argument(kwargs, argument):
+    call = {"score_fn": lambda z: np.ones(len(z)), "dims": 2, "target_rhw": 0.3,
+            "max_runs": 1000, "rng": np.random.default_rng(0), "batch_size": 100} | kwargs
+    with pytest.raises(ValueError, match=argument):
+        estimate(**call)
+
+
+def test_tell_rejects_a_batch_of_the_wrong_shape_or_with_nan_scores():
+    sampler = CrossEntropyIS(2, np.random.default_rng(0), 10)
+    z = sampler.ask()
+    with pytest.raises(ValueError, match="scores"):
+        sampler.tell(z, np.ones(9))
+    with pytest.raises(ValueError, match="scores"):
+        sampler.tell(z, np.full(10, np.nan))
+    with pytest.raises(ValueError, match="z"):
+        sampler.tell(z[:, :1], np.ones(10))
