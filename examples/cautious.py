@@ -41,7 +41,7 @@ class Cautious:
         ahead_m = obs.lidar_ahead_m + ranges_m * np.cos(angles_rad)  # from the rear axle
         side_m = ranges_m * np.sin(angles_rad)
         half_width_m = obs.vehicle.width_m / 2 + self.path_margin_m
-        front_m = obs.vehicle.length_m - obs.vehicle.rear_overhang_m
+        front_m = obs.vehicle.front_ahead_of_rear_axle_m
         in_path = (np.abs(side_m) < half_width_m) & (ahead_m > front_m)
         return float(ahead_m[in_path].min() - front_m) if in_path.any() else np.inf
 

@@ -336,25 +336,14 @@ class ControllerSpec:
             return field in {f.name for f in dataclasses.fields(CONTROLLER_PARAMS[name])}
         return name == self.name
 
-    def swept(self, name: str, values: dict[str, Any]) -> ControllerSpec:
-        """The controller ``name`` in a sweep of this base controller: :meth:`renamed`,
-        then given the swept parameter ``values`` (field -> value) it takes."""
-        target = self.renamed(name)
-        taken = {k: v for k, v in values.items() if self.takes(name, k)}
-        return ControllerSpec.from_plain({**target.to_plain(), **taken}) if taken else target
-
-    def renamed(self, name: str) -> ControllerSpec:
-        """The controller ``name``, with the parameters it shares with this one: a
-        built-in takes the fields its params class has, a plug-in takes all of these
-        parameters when it is this same plug-in and none otherwise."""
-        if name == self.name:
+    def renamed(self, name: str, values: dict[str, Any] | None = None) -> ControllerSpec:
+        """The controller ``name`` with those of this one's parameters it takes (see
+        :meth:`takes`), then the swept ``values`` (field -> value) it takes."""
+        if name == self.name and not values:
             return self
-        if name not in CONTROLLER_PARAMS:
-            return ControllerSpec.from_plain({"name": name})
-        shared = {f.name for f in dataclasses.fields(CONTROLLER_PARAMS[name])}
-        plain = self.plain_params()
+        merged = {**self.plain_params(), **(values or {})}
         return ControllerSpec.from_plain(
-            {"name": name, **{k: v for k, v in plain.items() if k in shared}})
+            {"name": name, **{k: v for k, v in merged.items() if self.takes(name, k)}})
 
 
 @dataclasses.dataclass(frozen=True)

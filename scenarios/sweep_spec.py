@@ -384,7 +384,7 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
     for i, (values, seed) in enumerate(zip(samples, seeds, strict=True)):
         plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
-        controller_values = {}  # each controller takes those it has (ControllerSpec.swept)
+        controller_values = {}  # each controller takes those it has (ControllerSpec.renamed)
         for path, value in values.items():
             if path.startswith("controller.") and path != "controller.name":
                 controller_values[path.removeprefix("controller.")] = value
@@ -402,7 +402,7 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
             if spec is not None:
                 try:
                     run_spec = dataclasses.replace(
-                        spec, controller=spec.controller.swept(controller, controller_values))
+                        spec, controller=spec.controller.renamed(controller, controller_values))
                 except SpecError as e:
                     run_error = f"invalid scenario from sample {i} ({shown}): {e}"
             plan.append(PlannedRun(

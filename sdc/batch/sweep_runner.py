@@ -100,9 +100,10 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest['sweep']['sweep']['name']!r}, another plan); "
                            "resume it with the sweep file that started it")
-        for line in controller_changes(manifest):
-            raise SdcError(f"--resume: {line}; the sweep would mix two versions of it "
-                           "(restore it, or start a new sweep)")
+        changes = controller_changes(manifest)
+        if changes:
+            raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
+                           "it (restore it, or start a new sweep)")
         return manifest
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
         raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")

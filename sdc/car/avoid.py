@@ -38,7 +38,7 @@ class LaneFrame:
         v = obs.vehicle
         hit = np.isfinite(obs.ranges_m)
         r = obs.ranges_m[hit]
-        center_ahead_m = v.length_m / 2 - v.rear_overhang_m
+        center_ahead_m = v.center_ahead_of_rear_axle_m
         x = (obs.lidar_ahead_m - center_ahead_m) + r * cos_sin[0, hit]  # from the body centre
         y = r * cos_sin[1, hit]
         lane = obs.lane
@@ -79,7 +79,7 @@ def pursuit_steer_rad(target_m: float, offset_m: float, heading_rad: float,
     """Pure pursuit toward the point ``preview_m`` ahead along the lane at lateral
     offset ``target_m``: the steering angle whose arc from the rear axle passes
     through it, its curvature capped by the lateral acceleration."""
-    center_ahead_m = vehicle.length_m / 2 - vehicle.rear_overhang_m
+    center_ahead_m = vehicle.center_ahead_of_rear_axle_m
     lateral_m = target_m - offset_m + 0.5 * curvature_1pm * preview_m**2
     c, s = math.cos(heading_rad), math.sin(heading_rad)
     ahead_m = preview_m * c + lateral_m * s + center_ahead_m  # in the car's frame

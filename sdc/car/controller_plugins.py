@@ -124,10 +124,11 @@ def controller_source(name: str) -> dict:
     source: dict[str, Any] = {"name": name, "kind": kind}
     if kind == "builtin":
         return source
-    cls = controller_class(name)
-    module = sys.modules.get(cls.__module__)
-    path = Path(name.rpartition(":")[0]) if kind == "file" else Path(
-        getattr(module, "__file__", "") or "")
+    if kind == "file":  # its path is in the name: no need to load it
+        path = Path(name.rpartition(":")[0])
+    else:
+        module = sys.modules.get(controller_class(name).__module__)
+        path = Path(getattr(module, "__file__", "") or "")
     if path.is_file():
         source["file"] = str(path)
         source["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
