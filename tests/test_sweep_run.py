@@ -174,15 +174,17 @@ def test_a_killed_worker_costs_one_run_and_the_sweep_goes_on(tmp_path):
 
 
 def _hangs(task: RunTask) -> dict:
-    """HUNG_RUN sleeps for HANG_S (its process id in a file beside its trace); the
-    others run."""
+    """HUNG_RUN sleeps for HANG_S (its process id in ``$SDC_TEST_PID_DIR/<run_id>.pid``:
+    a worker writes its trace in a folder of its own); the others run."""
     if task.run_id == HUNG_RUN:
-        task.trace_path.with_suffix(".pid").write_text(str(os.getpid()))
+        (Path(os.environ["SDC_TEST_PID_DIR"]) / f"{task.run_id}.pid").write_text(
+            str(os.getpid()))
         time.sleep(HANG_S)
     return execute(task)
 
 
-def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path):
+def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path, monkeypatch):
+    monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     out = tmp_path / "out"
     executor = LocalExecutor(1, run_timeout_s=RUN_TIMEOUT_S, task_fn=_hangs)
     outcome = run_sweep(load_sweep(write(tmp_path, "hangs", HANGS)), out, executor,
@@ -193,11 +195,12 @@ def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path):
                                         "00002-lane-keep": "ok"}  # on a new worker
     assert f"run timeout of {RUN_TIMEOUT_S:g} s" in results.error[HUNG_RUN]
     assert results.wall_time_s[HUNG_RUN] >= RUN_TIMEOUT_S
-    assert _gone(int((out / "traces" / f"{HUNG_RUN}.pid").read_text()))  # its worker
+    assert _gone(int((tmp_path / f"{HUNG_RUN}.pid").read_text()))  # its worker
 
 
 def test_ray_stops_a_hung_run(tmp_path, monkeypatch):
     # Ray's workers find _hangs by importing this module
+    monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
         [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]))
     sweep = load_sweep(write(tmp_path, "hangs", HANGS))

@@ -11,6 +11,7 @@ import hashlib
 import os
 import subprocess
 import tempfile
+from importlib import metadata
 from pathlib import Path
 
 from scenarios.cache_dir import network_cache_dir
@@ -61,20 +62,36 @@ def _xml_sources(road: RoadSpec, geometry: RoadGeometry) -> tuple[str, str]:
     return nodes, edges
 
 
+def _netconvert_version() -> str:
+    """What makes netconvert's output differ between installations: its package's
+    version (not its path, so nodes installed elsewhere name a network alike)."""
+    try:
+        return f"eclipse-sumo {metadata.version('eclipse-sumo')}"
+    except metadata.PackageNotFoundError:
+        return sumo_binary("netconvert")
+
+
+def network_file_name(road: RoadSpec) -> str:
+    """The cache's name for the network of ``road``: a hash of netconvert's inputs."""
+    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
+    digest = hashlib.sha256(f"{_netconvert_version()}\n{nodes}\n{edges}".encode())
+    return f"{digest.hexdigest()[:20]}.net.xml"
+
+
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
     """Path of the ``.net.xml`` for ``road``, built on first use and cached (in
-    ``cache_dir``, by default :func:`~scenarios.cache_dir.network_cache_dir`).
+    ``cache_dir``, by default :func:`~scenarios.cache_dir.network_cache_dir`,
+    as :func:`network_file_name`).
 
     Concurrent builders of the same network are safe: each writes a temporary
     file and renames it into place.
     """
     cache_dir = Path(cache_dir) if cache_dir is not None else network_cache_dir()
-    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
-    tool = sumo_binary("netconvert")
-    digest = hashlib.sha256(f"{tool}\n{nodes}\n{edges}".encode()).hexdigest()[:20]
-    target = cache_dir / f"{digest}.net.xml"
+    target = cache_dir / network_file_name(road)
     if target.exists():
         return target
+    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
+    tool = sumo_binary("netconvert")
     cache_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:
         tmp = Path(tmp)

@@ -156,11 +156,16 @@ class NetworkRoad(RoadGeometry):
         }
 
 
+def edges_cache_path(net_sha256: str, cache_dir: Path | None = None) -> Path:
+    """Where the road edges of the network file with this sha256 are cached."""
+    name = f"{net_sha256[:20]}.edges-v{EDGE_SEARCH_VERSION}.npy"
+    return Path(cache_dir or network_cache_dir()) / name
+
+
 def network_area(net: NetFile, cache_dir: Path | None = None) -> DrivableArea:
     """The network's drivable area; its road edges are cached by the file's hash."""
     lanes = list(net.lanes.values())
-    name = f"{net.sha256[:20]}.edges-v{EDGE_SEARCH_VERSION}.npy"
-    cached = Path(cache_dir or network_cache_dir()) / name
+    cached = edges_cache_path(net.sha256, cache_dir)
     edges = np.load(cached) if cached.exists() else None
     area = DrivableArea([lane.shape_xy for lane in lanes], [lane.width_m for lane in lanes],
                         [i for i, lane in enumerate(lanes) if not lane.internal],

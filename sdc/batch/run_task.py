@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Literal
 
 from scenarios.scenario_spec import ScenarioSpec
+from sdc.batch.job_files import JobFile
 from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row
 
 TraceMode = Literal["none", "failures", "all"]
@@ -19,13 +20,23 @@ TraceMode = Literal["none", "failures", "all"]
 
 @dataclasses.dataclass(frozen=True)
 class RunTask:
-    """What a worker needs for one run. ``sweep``: the run's sweep columns, for its row."""
+    """What a worker needs for one run. ``sweep``: the run's sweep columns, for its row.
+
+    An executor fills ``files`` on the driver (what the run reads besides its
+    spec, :mod:`sdc.batch.job_files`); a worker runs a copy whose ``spec`` names
+    its own copies of them, ``cache_dir`` holding the cached ones, and whose
+    ``recorded_spec`` is the driver's spec, for the trace's metadata
+    (:mod:`sdc.batch.worker_files`).
+    """
 
     run_id: str
     spec: ScenarioSpec
     sweep: SweepColumns | None = None
     trace_path: Path | None = None
     traces: TraceMode = "all"  # with a trace_path: write it always, or on a collision only
+    files: tuple[JobFile, ...] = ()
+    cache_dir: Path | None = None  # where the run finds built networks and road edges
+    recorded_spec: ScenarioSpec | None = None  # the spec a trace records (default: spec)
 
 
 def _identity(task: RunTask) -> dict:
@@ -49,15 +60,23 @@ def task_timeout_row(task: RunTask, error: str, wall_time_s: float) -> dict:
     return task_row(task, timeout_row(**_identity(task), error=error, wall_time_s=wall_time_s))
 
 
+def _record_driver_paths(metadata: dict, spec: ScenarioSpec) -> None:
+    metadata["spec"] = spec.to_plain()
+    if "net_file" in metadata["road"]:
+        metadata["road"]["net_file"] = spec.road.net_file
+
+
 def execute(task: RunTask) -> dict:
     """Run ``task`` and return its result row; write its trace when asked to."""
     from sdc.run.episode import run_episode  # keeps importers that never run fast
 
     try:
-        episode = run_episode(task.spec, run_id=task.run_id)
+        episode = run_episode(task.spec, run_id=task.run_id, cache_dir=task.cache_dir)
     except Exception as e:  # the run's own failure is an outcome row, not a crash
         return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
     wanted = task.traces == "all" or (task.traces == "failures" and episode.row["collision"])
     if task.trace_path is not None and wanted:
+        if task.recorded_spec is not None:  # the driver's paths, not a worker's copies
+            _record_driver_paths(episode.metadata, task.recorded_spec)
         episode.write_trace(task.trace_path)
     return task_row(task, episode.row)

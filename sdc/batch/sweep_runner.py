@@ -10,6 +10,7 @@ it was interrupted.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
 import json
 import time
@@ -23,6 +24,7 @@ import pyarrow.parquet as pq
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.world_backends import prepare_network
+from sdc.batch.job_files import FileCatalog
 from sdc.batch.manifest import (
     controller_changes,
     controller_sources,
@@ -121,6 +123,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         "samples": len({r.sample for r in plan}),
         "versions": package_versions(),
         "controllers": controller_sources(sweep.controllers),
+        "files": {},  # what travels with the job: driver path -> field, sha256
         "git": git_state(),
         "started_at": now_iso(),
         "ended_at": None,
@@ -136,6 +139,17 @@ def _build_networks(tasks: list[RunTask], workers: int) -> None:
     roads = list({task.spec.road: None for task in tasks if task.spec.scenario.backend == "sumo"})
     with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
         list(pool.map(prepare_network, roads))
+
+
+def _job_files(tasks: list[RunTask]) -> dict[str, dict]:
+    """The files the runs read besides their specs, by the driver's path, with
+    their sha256 (what travels with the job); one the driver cannot read is left
+    out here and makes its runs error rows."""
+    catalog = FileCatalog()
+    for task in tasks:
+        with contextlib.suppress(SdcError):
+            catalog.files(task.spec)
+    return catalog.manifest_entries()
 
 
 def _tally(table: pa.Table) -> tuple[Counter, int]:
@@ -185,6 +199,9 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                 reporter.advance(row)
         if tasks:
             _build_networks(tasks, executor.workers)
+            session["files"] = _job_files(tasks)
+            manifest["files"] = {**manifest.get("files", {}), **session["files"]}
+            write_manifest(out_dir, manifest)
             with executor:
                 for row in executor.map(tasks):
                     store.add(row)

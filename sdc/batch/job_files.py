@@ -1,0 +1,118 @@
+"""Files that travel with a job: what a run reads besides its spec, read and
+hashed once on the driver, so every worker, on any node, runs on exactly the
+driver's bytes.
+
+A run of a ``sumo_net`` road reads ``road.net_file`` and that network's road
+edges (cached beside the built networks); a SUMO run of a built-in road reads
+the network netconvert built for it on the driver; a ``file.py:Class``
+controller reads its file. Each is a :class:`JobFile`: the field that names
+it, the driver's path (for messages and the manifest; no worker opens it), its
+sha256 and the file name its copy takes. :class:`FileCatalog` is the driver's
+side; :mod:`sdc.batch.worker_files` is the worker's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from pathlib import Path
+
+from scenarios.cache_dir import network_cache_dir
+from scenarios.controller_ref import controller_kind
+from scenarios.errors import SdcError
+from scenarios.file_read import read_bytes
+from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.route_road import edges_cache_path
+from scenarios.world_backends import prepare_network
+
+#: JobFile.field of the files a run finds in its cache directory, by name
+CACHED_FIELDS = ("network", "road edges")
+
+
+@dataclasses.dataclass(frozen=True)
+class JobFile:
+    """One file a run reads besides its spec, identified by its content."""
+
+    field: str  # what names it: road.net_file, controller.name, or one of CACHED_FIELDS
+    driver_path: str  # where the driver read it; never opened by a worker
+    sha256: str
+    name: str  # the copy's file name (a cached file's: the name the run looks it up by)
+
+    @property
+    def cached(self) -> bool:
+        return self.field in CACHED_FIELDS
+
+    def describe(self) -> str:
+        """How a message names the file: its field, the driver's path, its hash."""
+        return f"{self.field}: {self.driver_path} (sha256 {self.sha256[:12]}...)"
+
+
+def sha256_hex(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+class FileCatalog:
+    """The driver's side: the files of runs, each read and hashed once for the
+    catalog's lifetime (an executor's ``with`` block), and their bytes by sha256.
+
+    A file that cannot be read is an :class:`~scenarios.errors.SdcError` naming it.
+    """
+
+    def __init__(self, cache_dir: Path | None = None):
+        self.cache_dir = cache_dir  # the driver's network cache (default: network_cache_dir())
+        self._by_path: dict[str, JobFile] = {}
+        self._payloads: dict[str, bytes] = {}
+        self._by_road: dict[RoadSpec, tuple[JobFile, ...]] = {}
+
+    def payload(self, sha256: str) -> bytes:
+        """The bytes of a file this catalog read."""
+        return self._payloads[sha256]
+
+    def _read(self, field: str, path: Path, what: str, name: str | None = None) -> JobFile:
+        key = str(path)
+        if key not in self._by_path:
+            data = read_bytes(path, what)
+            digest = sha256_hex(data)
+            self._payloads[digest] = data
+            self._by_path[key] = JobFile(field, key, digest, name or path.name)
+        return self._by_path[key]
+
+    def _road_files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
+        road = spec.road
+        if road.kind == "sumo_net":
+            if road not in self._by_road:
+                prepare_network(road, self.cache_dir)  # caches its road edges
+                net = self._read("road.net_file", Path(road.net_file), "the SUMO network")
+                edges = edges_cache_path(net.sha256, self.cache_dir)
+                self._by_road[road] = (net,) + ((self._read("road edges", edges, "road edges"),)
+                                                if edges.is_file() else ())
+            return self._by_road[road]
+        if spec.scenario.backend != "sumo":
+            return ()
+        if road not in self._by_road:
+            built = build_network(road, self.cache_dir or network_cache_dir())
+            self._by_road[road] = (self._read("network", built, "the built SUMO network"),)
+        return self._by_road[road]
+
+    def files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
+        """What a run of ``spec`` reads besides the spec."""
+        files = self._road_files(spec)
+        if controller_kind(spec.controller.name) == "file":
+            path = Path(spec.controller.name.rpartition(":")[0])
+            files += (self._read("controller.name", path, "the controller file"),)
+        return files
+
+    def manifest_entries(self) -> dict[str, dict]:
+        """Every file read so far, by the driver's path: its field and sha256."""
+        return {f.driver_path: {"field": f.field, "sha256": f.sha256}
+                for f in self._by_path.values()}
+
+
+def with_files(task, catalog: FileCatalog):
+    """``task`` (a :class:`~sdc.batch.run_task.RunTask`) with its files, or the
+    :class:`SdcError` that says which one the driver cannot read."""
+    try:
+        return dataclasses.replace(task, files=catalog.files(task.spec))
+    except SdcError as e:
+        return e

@@ -1,0 +1,189 @@
+"""Runs on a Ray cluster, several to a Ray task, each still its own row.
+
+A task carries a batch of runs (:mod:`sdc.batch.batch_size`: from the run times
+measured so far, or ``batch_runs``) and is a Ray generator: it yields each run's
+row as the run ends, so rows, progress and the run timeout stay per run. No more
+tasks are in flight than the cluster has CPUs, so a task starts when it is
+submitted; a run's clock starts at its task's submission (the first) or at the
+row before it.
+
+- A run past ``run_timeout_s``: its task is cancelled (Ray ends its worker), its
+  row says timeout, and the runs of its batch that had not started go back to the
+  queue, to run in other tasks.
+- A worker that dies: the rows it yielded may not all have reached the driver,
+  so every run of its batch without a row runs again, each alone in a task; a
+  run whose lone task dies gets the error row. A run that kills its worker thus
+  runs twice, and no other run pays for it.
+- Files (:mod:`sdc.batch.job_files`): each file's bytes are put in Ray's object
+  store once per ``with`` block; batches carry the references, and a worker
+  fetches the bytes only when its machine has no good copy yet
+  (:mod:`sdc.batch.worker_files`). A trace comes back with its row and is written
+  by the driver.
+
+The cluster is joined (``address``) or started locally with ``workers`` CPUs
+for the ``with`` block; ``map`` may be called any number of times in it.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import importlib
+import os
+import time
+from collections.abc import Iterable, Iterator
+
+from scenarios.errors import SdcError
+from sdc.batch.batch_size import BatchSizer
+from sdc.batch.job_files import FileCatalog, with_files
+from sdc.batch.local_executor import WARM_MODULES
+from sdc.batch.run_task import RunTask, execute, task_error_row
+from sdc.batch.timeouts import next_deadline_s, timeout_row
+from sdc.batch.worker_files import WorkerFiles
+from sdc.batch.worker_run import TaskFn, deliver, run_in_worker
+
+
+def _warm_up() -> int:
+    for module in WARM_MODULES:
+        importlib.import_module(module)
+    return os.getpid()
+
+
+def _run_batch(tasks: list[RunTask], refs: dict, task_fn: TaskFn):
+    """In a Ray worker: run ``tasks`` one after the other, yielding each outcome
+    (row, trace bytes). ``refs``: the object references of the files' bytes."""
+    import ray
+
+    files = WorkerFiles()
+
+    def fetch(file):
+        return ray.get(refs[file.sha256]) if file.sha256 in refs else None
+
+    for task in tasks:
+        yield run_in_worker(task, task_fn, files, fetch)
+
+
+@dataclasses.dataclass
+class _Batch:
+    tasks: list[RunTask]
+    alone: bool  # a rerun of a run whose batch lost its worker
+    clock_s: float  # when the current run started (monotonic)
+    done: int = 0  # runs whose rows arrived
+
+    @property
+    def current(self) -> RunTask:
+        return self.tasks[self.done]
+
+
+class RayExecutor:
+    """Tasks on a Ray cluster: ``address`` joins a running one, else a local one is
+    started with ``workers`` CPUs and stopped at the end. ``batch_runs``: runs per
+    task (default: chosen from measured run times)."""
+
+    name = "ray"
+
+    def __init__(self, workers: int, run_timeout_s: float | None = None,
+                 address: str | None = None, task_fn: TaskFn = execute,
+                 batch_runs: int | None = None):
+        self.workers, self.run_timeout_s, self.address = workers, run_timeout_s, address
+        self.task_fn, self.batch_runs = task_fn, batch_runs
+        self.files = FileCatalog()
+
+    def __enter__(self) -> RayExecutor:
+        try:
+            import ray
+        except ImportError:
+            raise SdcError("--executor ray: ray is not installed "
+                           "(pip install 'sdc[ray]')") from None
+        self._ray = ray
+        options = {"address": self.address} if self.address else {"num_cpus": self.workers}
+        try:
+            ray.init(**options, include_dashboard=False, log_to_driver=False,
+                     logging_level="ERROR")
+        except ConnectionError as e:
+            raise SdcError(f"--ray-address: cannot join {self.address}: {e}") from None
+        self._remote = ray.remote(num_cpus=1, max_retries=0)(_run_batch)
+        self.slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        warm_up = ray.remote(num_cpus=1)(_warm_up)
+        ray.get([warm_up.remote() for _ in range(self.slots)])
+        self.files, self._refs = FileCatalog(), {}
+        self.sizer = BatchSizer(self.batch_runs)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._refs = {}
+        self._ray.shutdown()
+
+    def _submit(self, tasks: list[RunTask], alone: bool):
+        shas = {f.sha256 for task in tasks for f in task.files}
+        for sha in shas - self._refs.keys():
+            self._refs[sha] = self._ray.put(self.files.payload(sha))
+        refs = {sha: self._refs[sha] for sha in shas}
+        generator = self._remote.remote(tasks, refs, self.task_fn)
+        return generator, _Batch(tasks, alone, time.monotonic())
+
+    def _next_batch(self, pending: collections.deque) -> tuple[list[RunTask], bool]:
+        task, alone = pending.popleft()
+        if alone:
+            return [task], True
+        size = self.sizer.size(len(pending) + 1, self.slots)
+        tasks = [task]
+        while len(tasks) < size and pending and not pending[0][1]:
+            tasks.append(pending.popleft()[0])
+        return tasks, False
+
+    def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
+        ray = self._ray
+        pending: collections.deque[tuple[RunTask, bool]] = collections.deque()
+        for task in tasks:
+            ready = with_files(task, self.files)
+            if isinstance(ready, SdcError):  # a file the driver cannot read
+                yield task_error_row(task, str(ready))
+            else:
+                pending.append((ready, False))
+        running: dict = {}  # ObjectRefGenerator -> _Batch
+        while pending or running:
+            while pending and len(running) < self.slots:
+                generator, batch = self._submit(*self._next_batch(pending))
+                running[generator] = batch
+            timeout = next_deadline_s((b.clock_s for b in running.values()),
+                                      self.run_timeout_s)
+            ready, _ = ray.wait(list(running), num_returns=1, timeout=timeout)
+            for generator in ready:
+                yield from self._take(generator, running, pending)
+            yield from self._stop_late_runs(running, pending)
+
+    def _take(self, generator, running: dict, pending: collections.deque) -> Iterator[dict]:
+        """The next row of a batch whose generator has one (or has ended)."""
+        ray, batch = self._ray, running[generator]
+        try:
+            outcome = ray.get(next(generator))
+        except StopIteration:  # every run of it has its row (else: run the rest elsewhere)
+            del running[generator]
+            pending.extendleft((task, batch.alone) for task in reversed(batch.tasks[batch.done:]))
+            return
+        except ray.exceptions.RayError as e:  # its worker died, or Ray failed it
+            del running[generator]
+            if batch.alone:
+                cause = str(e).strip().splitlines()[0] if str(e).strip() else ""
+                yield task_error_row(batch.current, f"{type(e).__name__}: {cause}")
+            else:  # which run killed it is unsure: each runs again, alone
+                pending.extendleft((task, True) for task in reversed(batch.tasks[batch.done:]))
+            return
+        now = time.monotonic()
+        self.sizer.observe(now - batch.clock_s)
+        task = batch.current
+        batch.done, batch.clock_s = batch.done + 1, now
+        yield deliver(task, outcome)
+
+    def _stop_late_runs(self, running: dict, pending: collections.deque) -> Iterator[dict]:
+        if self.run_timeout_s is None:
+            return
+        for generator, batch in list(running.items()):
+            elapsed = time.monotonic() - batch.clock_s
+            if elapsed >= self.run_timeout_s:
+                self._ray.cancel(generator, force=True)
+                del running[generator]
+                pending.extendleft((task, batch.alone)
+                                   for task in reversed(batch.tasks[batch.done + 1:]))
+                yield timeout_row(batch.current, elapsed, self.run_timeout_s)
