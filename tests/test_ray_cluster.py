@@ -1,0 +1,232 @@
+"""A sweep on a Ray cluster of several nodes that cannot see the driver's files.
+
+The cluster: a head node without CPUs (so every run goes to a worker node) and two
+worker nodes of one CPU each, started with ``ray start`` as processes of this
+test. Each worker node runs in a mount namespace of its own (``unshare -m``) where
+an empty tmpfs lies over the driver's scenario directory and over the driver's
+network cache: the very paths the driver reads exist there but are empty, so a
+worker that opened a driver path would fail (or, were a file of that name there,
+read other bytes), whatever its code does. A second file system view is what a
+real cluster's nodes have; renaming the directory on the driver while the runs
+go would hide it from the driver too, and the driver must read the files once.
+The worker nodes also start in another working directory, with an environment
+that names neither directory (their own ``SDC_CACHE_DIR``). The sweep runs on a
+SUMO network file with a plug-in controller from a file, both in the scenario
+directory; its rows must equal the local executor's, bit for bit, and each node
+must hold its own copies of the files, named by their sha256.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from scenarios import CATALOG_DIR
+from scenarios.sweep_spec import load_sweep
+from sdc.batch.executors import LocalExecutor, RayExecutor
+from sdc.batch.progress import QuietReporter
+from sdc.batch.sweep_runner import run_sweep
+
+pytestmark = pytest.mark.slow
+
+REPO = Path(__file__).resolve().parent.parent
+RAY = Path(sys.executable).parent / "ray"
+EXAMPLE_CONTROLLER = REPO / "examples" / "cautious.py"
+NODE_START_S = 120.0
+
+SCENARIO = """[scenario]
+name = "town"
+duration_s = 6.0
+step_s = 0.064
+seed = 1
+
+[road]
+kind = "sumo_net"
+net_file = "net/town.net.xml"
+length_m = 200.0
+
+[traffic]
+vehicles = 20
+
+[[obstacles]]
+kind = "car"
+lane = 0
+position_m = 40.0
+
+[ego]
+lane = 0
+start_m = 5.0
+speed_mps = 6.0
+
+[controller]
+name = "seed"
+"""
+SWEEP = """[sweep]
+name = "town"
+base = "town.toml"
+samples = 6
+sampler = "random"
+seed = 3
+controllers = ["seed", "plugins/cautious.py:Cautious"]
+
+[sweep.params]
+"ego.speed_mps" = { uniform = [3.0, 9.0] }
+"obstacles[0].position_m" = { uniform = [30.0, 60.0] }
+"""
+
+
+def _unshare_works() -> bool:
+    probe = subprocess.run(["unshare", "-m", "sh", "-c", "mount -t tmpfs none /mnt"],
+                           capture_output=True, check=False)
+    return probe.returncode == 0
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("", 0))
+        return s.getsockname()[1]
+
+
+def _scenario_dir(root: Path) -> Path:
+    """The sweep, its base scenario, a network and a plug-in controller in ``root``."""
+    (root / "net").mkdir(parents=True)
+    (root / "plugins").mkdir()
+    shutil.copy(CATALOG_DIR / "networks" / "grid-10x10.net.xml", root / "net" / "town.net.xml")
+    shutil.copy(EXAMPLE_CONTROLLER, root / "plugins" / "cautious.py")
+    (root / "town.toml").write_text(SCENARIO)
+    (root / "town-sweep.toml").write_text(SWEEP)
+    return root / "town-sweep.toml"
+
+
+def _node_env(cache_dir: Path) -> dict[str, str]:
+    """A worker node's environment: sdc's source, its own cache and home, nothing of
+    the driver's (the nodes have homes of their own, like the head's: no ~/.ray)."""
+    return {"PATH": os.environ["PATH"], "HOME": str(cache_dir.parent),
+            "PYTHONPATH": str(REPO), "SDC_CACHE_DIR": str(cache_dir), "LANG": "C.UTF-8",
+            "RAY_USAGE_STATS_ENABLED": "0"}
+
+
+#: ports a node takes a fixed default for: two nodes on one machine each need their own
+_NODE_PORTS = ("dashboard-agent-listen-port", "dashboard-agent-grpc-port",
+               "metrics-export-port", "runtime-env-agent-port")
+
+
+class Cluster:
+    """``ray start`` processes, each in a process group of its own, ended by group."""
+
+    def __init__(self, temp_dir: Path):
+        self.temp_dir, self.port = temp_dir, _free_port()
+        self.address = f"{socket.gethostbyname(socket.gethostname())}:{self.port}"
+        self.nodes: list[subprocess.Popen] = []
+
+    def _start(self, command: list[str], cwd: Path, env: dict[str, str]) -> None:
+        log = open(cwd / f"node-{len(self.nodes)}.log", "w")  # noqa: SIM115 - lives with it
+        self.nodes.append(subprocess.Popen(command, cwd=cwd, env=env, stdout=log,
+                                           stderr=subprocess.STDOUT, start_new_session=True))
+
+    def start_head(self, cwd: Path) -> None:
+        self._start([str(RAY), "start", "--head", f"--port={self.port}", "--num-cpus=0",
+                     "--include-dashboard=false", "--disable-usage-stats",
+                     f"--temp-dir={self.temp_dir}", "--object-store-memory=100000000",
+                     "--block"], cwd, {**os.environ, "HOME": str(cwd),
+                                       "RAY_USAGE_STATS_ENABLED": "0"})
+
+    def start_hidden_worker(self, cwd: Path, env: dict[str, str], hidden: list[Path]) -> None:
+        """A worker node of one CPU that sees an empty tmpfs at each of ``hidden``."""
+        mounts = " && ".join(f"mount -t tmpfs none '{path}'" for path in hidden)
+        ports = " ".join(f"--{name}={_free_port()}" for name in _NODE_PORTS)
+        command = (f"{mounts} && exec '{RAY}' start --address={self.address} --num-cpus=1 "
+                   f"--disable-usage-stats --temp-dir={self.temp_dir} {ports} "
+                   "--object-store-memory=100000000 --block")
+        self._start(["unshare", "-m", "sh", "-c", command], cwd, env)
+
+    def wait_for_cpus(self, cpus: int) -> None:
+        """Until the cluster shows ``cpus`` CPUs (asked from a process of its own)."""
+        code = (f"import ray; ray.init(address={self.address!r}, logging_level='ERROR'); "
+                "print(int(ray.cluster_resources().get('CPU', 0)))")
+        deadline = time.monotonic() + NODE_START_S
+        while time.monotonic() < deadline:
+            probe = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                   text=True, check=False, timeout=NODE_START_S)
+            lines = probe.stdout.split()
+            if probe.returncode == 0 and lines and int(lines[-1]) >= cpus:
+                return
+            assert all(node.poll() is None for node in self.nodes), "a Ray node exited"
+            time.sleep(1.0)
+        raise AssertionError(f"the cluster did not show {cpus} CPUs in {NODE_START_S:g} s")
+
+    def stop(self) -> None:
+        for node in reversed(self.nodes):
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(node.pid, signal.SIGTERM)
+        for node in reversed(self.nodes):
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                node.wait(timeout=30)
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(node.pid, signal.SIGKILL)  # what is left of its group
+            node.wait()
+
+
+@pytest.mark.skipif(not _unshare_works(), reason="needs mount namespaces (unshare -m)")
+def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(tmp_path):
+    sweep_file = _scenario_dir(tmp_path / "scenarios")
+    sweep = load_sweep(sweep_file)
+    driver_cache = Path(os.environ["SDC_CACHE_DIR"])
+    local = run_sweep(sweep, tmp_path / "local", LocalExecutor(2), QuietReporter(),
+                      traces="all")
+    assert local.counts == {"ok": 12, "error": 0, "timeout": 0, "missing": 0}
+
+    temp_dir = Path(tempfile.mkdtemp(prefix="r", dir="/tmp"))  # short: Ray's socket paths
+    cluster = Cluster(temp_dir)
+    nodes = [tmp_path / f"node{i}" for i in range(2)]
+    try:
+        head_dir = tmp_path / "head"
+        head_dir.mkdir()
+        cluster.start_head(head_dir)
+        for cpus, node in enumerate(nodes, start=1):
+            (node / "cwd").mkdir(parents=True)
+            cluster.start_hidden_worker(node / "cwd", _node_env(node / "cache"),
+                                        hidden=[tmp_path / "scenarios", driver_cache])
+            cluster.wait_for_cpus(cpus)
+        remote = run_sweep(sweep, tmp_path / "ray", RayExecutor(1, address=cluster.address),
+                           QuietReporter(), traces="all")
+    finally:
+        cluster.stop()
+        shutil.rmtree(temp_dir, ignore_errors=True)
+
+    assert remote.counts == local.counts
+    rows = {name: pd.read_parquet(tmp_path / name / "results.parquet").drop(
+        columns=["wall_time_s"]) for name in ("local", "ray")}
+    pd.testing.assert_frame_equal(rows["ray"], rows["local"])
+    assert rows["local"].trace_sha256.nunique() == 12
+    assert set(rows["local"].controller) == {"seed", "Cautious"}
+    traces = {name: sorted((tmp_path / name / "traces").glob("*.parquet"))
+              for name in ("local", "ray")}
+    assert [p.name for p in traces["ray"]] == [p.name for p in traces["local"]]
+    assert all(a.read_bytes() == b.read_bytes()  # metadata too: the driver's paths
+               for a, b in zip(traces["ray"], traces["local"], strict=True))
+
+    # the manifest names the files by the driver's paths and their hashes, and every
+    # node ran on copies of its own with those hashes
+    net, plugin = (tmp_path / "scenarios" / "net" / "town.net.xml",
+                   tmp_path / "scenarios" / "plugins" / "cautious.py")
+    recorded = json.loads((tmp_path / "ray" / "manifest.json").read_text())["files"]
+    for path, field in ((net, "road.net_file"), (plugin, "controller.name")):
+        sha = hashlib.sha256(path.read_bytes()).hexdigest()
+        assert recorded[str(path)] == {"field": field, "sha256": sha}
+        for node in nodes:
+            copy = node / "cache" / "job-files" / sha / path.name
+            assert copy.read_bytes() == path.read_bytes(), copy
