@@ -140,3 +140,16 @@ def _gone(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
     except FileNotFoundError:
         return True
+
+
+def test_batch_is_refused_without_ray(tmp_path):
+    import subprocess
+    import sys
+
+    sweep = CATALOG_DIR / "sweeps" / "seed-envelope.toml"
+    result = subprocess.run([sys.executable, "-m", "sdc", "sweep", str(sweep), "--out",
+                             str(tmp_path / "out"), "--batch", "4"], capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 2 and "--batch: only applies with --executor ray" in \
+        result.stderr
+    assert not (tmp_path / "out").exists()

@@ -174,6 +174,8 @@ class RayExecutor:
         self.sizer.observe(now - batch.clock_s)
         task = batch.current
         batch.done, batch.clock_s = batch.done + 1, now
+        if batch.done == len(batch.tasks):  # its slot takes the next batch at once
+            del running[generator]
         yield deliver(task, outcome)
 
     def _stop_late_runs(self, running: dict, pending: collections.deque) -> Iterator[dict]:
