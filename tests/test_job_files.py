@@ -137,3 +137,47 @@ def test_a_file_the_driver_cannot_read_is_an_error_row_naming_it(tmp_path):
         (row,) = executor.map([RunTask("r", lesson(f"{gone}:Cautious"))])
     assert row["status"] == "error" and str(gone) in row["error"]
     assert os.path.basename(str(gone)) in row["error"]
+
+
+TOWN_SWEEP = """[sweep]
+name = "town"
+base = "town.toml"
+samples = 2
+sampler = "random"
+controllers = ["seed"]
+
+[sweep.params]
+"ego.speed_mps" = { uniform = [3.0, 6.0] }
+"""
+
+
+@pytest.mark.slow
+def test_the_manifest_records_the_network_file_and_resume_refuses_a_changed_one(tmp_path):
+    import json
+    import shutil
+
+    from scenarios.errors import SdcError
+    from scenarios.sweep_spec import load_sweep
+    from sdc.batch.progress import QuietReporter
+    from sdc.batch.sweep_runner import run_sweep
+
+    net = tmp_path / "town.net.xml"
+    shutil.copy(CATALOG_DIR / "networks" / "grid-10x10.net.xml", net)
+    town = (CATALOG_DIR / "grid-town.toml").read_text()
+    town = town.replace('"networks/grid-10x10.net.xml"', '"town.net.xml"')
+    town = town.replace("vehicles = 2000", "vehicles = 10").replace("warm_up_s = 10.0",
+                                                                     "warm_up_s = 0.0")
+    (tmp_path / "town.toml").write_text(town.replace("duration_s = 30.0", "duration_s = 3.0"))
+    (tmp_path / "sweep.toml").write_text(TOWN_SWEEP)
+    out = tmp_path / "out"
+    outcome = run_sweep(load_sweep(tmp_path / "sweep.toml"), out, LocalExecutor(1),
+                        QuietReporter(), traces="none")
+    assert outcome.counts["ok"] == 2
+    files = json.loads((out / "manifest.json").read_text())["files"]
+    assert files[str(net)] == {"field": "road.net_file", "sha256": sha256(net)}
+    assert {entry["field"] for entry in files.values()} == {"road.net_file", "road edges"}
+
+    net.write_text(net.read_text().replace("</net>", "<!-- edited -->\n</net>"))
+    with pytest.raises(SdcError, match=f"--resume: the network file {net} changed since"):
+        run_sweep(load_sweep(tmp_path / "sweep.toml"), out, LocalExecutor(1),
+                  QuietReporter(), resume=True)

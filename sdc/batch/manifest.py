@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import hashlib
 import json
 import platform
 import subprocess
@@ -69,6 +70,24 @@ def controller_changes(manifest: dict) -> list[str]:
             lines.append(f"the controller {label} changed since the sweep ran: "
                          f"{recorded.get('file')} had sha256 {recorded['sha256'][:12]}..., "
                          f"now {str(now.get('sha256'))[:12]}...")
+    return lines
+
+
+def network_file_changes(manifest: dict) -> list[str]:
+    """One line per network file (``road.net_file``) of the sweep that is gone or
+    differs from the bytes its runs ran on (manifests without files: none)."""
+    lines = []
+    for path, recorded in (manifest.get("files") or {}).items():
+        if not isinstance(recorded, dict) or recorded.get("field") != "road.net_file":
+            continue
+        try:
+            now = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        except OSError as e:
+            lines.append(f"the network file {path} cannot be read now ({e.strerror or e})")
+            continue
+        if now != recorded.get("sha256"):
+            lines.append(f"the network file {path} changed since the sweep ran: it had "
+                         f"sha256 {str(recorded.get('sha256'))[:12]}..., now {now[:12]}...")
     return lines
 
 

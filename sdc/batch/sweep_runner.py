@@ -29,6 +29,7 @@ from sdc.batch.manifest import (
     controller_changes,
     controller_sources,
     git_state,
+    network_file_changes,
     now_iso,
     package_versions,
     read_manifest,
@@ -102,7 +103,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest['sweep']['sweep']['name']!r}, another plan); "
                            "resume it with the sweep file that started it")
-        changes = controller_changes(manifest)
+        changes = controller_changes(manifest) + network_file_changes(manifest)
         if changes:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
                            "it (restore it, or start a new sweep)")
