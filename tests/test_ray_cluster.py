@@ -33,6 +33,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+import ray.util
 
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
@@ -45,7 +46,7 @@ pytestmark = pytest.mark.slow
 REPO = Path(__file__).resolve().parent.parent
 RAY = Path(sys.executable).parent / "ray"
 EXAMPLE_CONTROLLER = REPO / "examples" / "cautious.py"
-NODE_START_S = 120.0
+NODE_START_S = 180.0
 
 SCENARIO = """[scenario]
 name = "town"
@@ -119,9 +120,15 @@ def _node_env(cache_dir: Path) -> dict[str, str]:
             "RAY_USAGE_STATS_ENABLED": "0"}
 
 
-#: ports a node takes a fixed default for: two nodes on one machine each need their own
+#: ports a node takes a fixed default for: two nodes on one machine (or another Ray of
+#: a test running beside this one) each need their own
 _NODE_PORTS = ("dashboard-agent-listen-port", "dashboard-agent-grpc-port",
                "metrics-export-port", "runtime-env-agent-port")
+PROBE_S = 30.0  # one look at the cluster
+
+
+def _ports() -> list[str]:
+    return [f"--{name}={_free_port()}" for name in _NODE_PORTS]
 
 
 class Cluster:
@@ -129,17 +136,20 @@ class Cluster:
 
     def __init__(self, temp_dir: Path):
         self.temp_dir, self.port = temp_dir, _free_port()
-        self.address = f"{socket.gethostbyname(socket.gethostname())}:{self.port}"
+        self.address = f"{ray.util.get_node_ip_address()}:{self.port}"  # as Ray sees it
         self.nodes: list[subprocess.Popen] = []
+        self.log_files: list[Path] = []
 
     def _start(self, command: list[str], cwd: Path, env: dict[str, str]) -> None:
-        log = open(cwd / f"node-{len(self.nodes)}.log", "w")  # noqa: SIM115 - lives with it
+        self.log_files.append(cwd / f"node-{len(self.nodes)}.log")
+        log = open(self.log_files[-1], "w")  # noqa: SIM115 - lives with the node
         self.nodes.append(subprocess.Popen(command, cwd=cwd, env=env, stdout=log,
                                            stderr=subprocess.STDOUT, start_new_session=True))
 
     def start_head(self, cwd: Path) -> None:
         self._start([str(RAY), "start", "--head", f"--port={self.port}", "--num-cpus=0",
                      "--include-dashboard=false", "--disable-usage-stats",
+                     *_ports(),
                      f"--temp-dir={self.temp_dir}", "--object-store-memory=100000000",
                      "--block"], cwd, {**os.environ, "HOME": str(cwd),
                                        "RAY_USAGE_STATS_ENABLED": "0"})
@@ -147,9 +157,8 @@ class Cluster:
     def start_hidden_worker(self, cwd: Path, env: dict[str, str], hidden: list[Path]) -> None:
         """A worker node of one CPU that sees an empty tmpfs at each of ``hidden``."""
         mounts = " && ".join(f"mount -t tmpfs none '{path}'" for path in hidden)
-        ports = " ".join(f"--{name}={_free_port()}" for name in _NODE_PORTS)
         command = (f"{mounts} && exec '{RAY}' start --address={self.address} --num-cpus=1 "
-                   f"--disable-usage-stats --temp-dir={self.temp_dir} {ports} "
+                   f"--disable-usage-stats --temp-dir={self.temp_dir} {' '.join(_ports())} "
                    "--object-store-memory=100000000 --block")
         self._start(["unshare", "-m", "sh", "-c", command], cwd, env)
 
@@ -159,14 +168,22 @@ class Cluster:
                 "print(int(ray.cluster_resources().get('CPU', 0)))")
         deadline = time.monotonic() + NODE_START_S
         while time.monotonic() < deadline:
-            probe = subprocess.run([sys.executable, "-c", code], capture_output=True,
-                                   text=True, check=False, timeout=NODE_START_S)
-            lines = probe.stdout.split()
-            if probe.returncode == 0 and lines and int(lines[-1]) >= cpus:
-                return
-            assert all(node.poll() is None for node in self.nodes), "a Ray node exited"
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                probe = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                       text=True, check=False, timeout=PROBE_S)
+                lines = probe.stdout.split()
+                if probe.returncode == 0 and lines and int(lines[-1]) >= cpus:
+                    return
+            assert all(node.poll() is None for node in self.nodes), \
+                f"a Ray node exited:\n{self.logs()}"
             time.sleep(1.0)
-        raise AssertionError(f"the cluster did not show {cpus} CPUs in {NODE_START_S:g} s")
+        raise AssertionError(f"the cluster did not show {cpus} CPUs in {NODE_START_S:g} s:"
+                             f"\n{self.logs()}")
+
+    def logs(self) -> str:
+        """The end of each node's output."""
+        return "\n".join(f"--- {log}\n" + "\n".join(log.read_text().splitlines()[-15:])
+                         for log in self.log_files)
 
     def stop(self) -> None:
         for node in reversed(self.nodes):
@@ -196,6 +213,7 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
         head_dir = tmp_path / "head"
         head_dir.mkdir()
         cluster.start_head(head_dir)
+        cluster.wait_for_cpus(0)  # its GCS answers
         for cpus, node in enumerate(nodes, start=1):
             (node / "cwd").mkdir(parents=True)
             cluster.start_hidden_worker(node / "cwd", _node_env(node / "cache"),

@@ -146,6 +146,16 @@ class LocalExecutor:
         return task_error_row(task, f"worker process died while running this run ({cause})")
 
     def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
+        """One row per task, in completion order. A map left before its end (its
+        iterator closed) stops the runs it had started, so the next map starts clean."""
+        try:
+            yield from self._map(tasks)
+        finally:
+            for i, worker in enumerate(self._pool):
+                if worker.task is not None:
+                    self._replace(i)
+
+    def _map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
         pending: collections.deque[RunTask] = collections.deque()
         for task in tasks:
             ready = with_files(task, self.files)

@@ -133,6 +133,17 @@ class RayExecutor:
         return tasks, False
 
     def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
+        """One row per task, in completion order. A map left before its end (its
+        iterator closed) cancels the tasks it had in flight."""
+        running: dict = {}  # ObjectRefGenerator -> _Batch
+        try:
+            yield from self._map(tasks, running)
+        finally:
+            if running and self._ray.is_initialized():
+                for generator in running:
+                    self._ray.cancel(generator, force=True)
+
+    def _map(self, tasks: Iterable[RunTask], running: dict) -> Iterator[dict]:
         ray = self._ray
         pending: collections.deque[tuple[RunTask, bool]] = collections.deque()
         for task in tasks:
@@ -141,7 +152,6 @@ class RayExecutor:
                 yield task_error_row(task, str(ready))
             else:
                 pending.append((ready, False))
-        running: dict = {}  # ObjectRefGenerator -> _Batch
         while pending or running:
             while pending and len(running) < self.slots:
                 generator, batch = self._submit(*self._next_batch(pending))
