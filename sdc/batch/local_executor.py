@@ -103,6 +103,7 @@ class LocalExecutor:
         self.workers, self.run_timeout_s, self.task_fn = workers, run_timeout_s, task_fn
         self._context = multiprocessing.get_context("spawn")
         self._pool: list[_Worker] = []
+        self._stopped: set[int] = set()  # workers to start anew before the next map
         self.files = FileCatalog()
 
     def __enter__(self) -> LocalExecutor:
@@ -111,9 +112,10 @@ class LocalExecutor:
         return self
 
     def __exit__(self, *exc) -> None:
-        for worker in self._pool:
-            worker.stop(kill=worker.task is not None)
-        self._pool = []
+        for i, worker in enumerate(self._pool):
+            if i not in self._stopped:
+                worker.stop(kill=worker.task is not None)
+        self._pool, self._stopped = [], set()
 
     def _replace(self, i: int) -> None:
         self._pool[i].stop(kill=True)
@@ -148,12 +150,17 @@ class LocalExecutor:
     def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
         """One row per task, in completion order. A map left before its end (its
         iterator closed) stops the runs it had started, so the next map starts clean."""
+        for i in sorted(self._stopped):  # left busy by a map that was left early
+            self._pool[i] = _Worker(self._context, self.task_fn)
+        self._stopped.clear()
         try:
             yield from self._map(tasks)
         finally:
             for i, worker in enumerate(self._pool):
                 if worker.task is not None:
-                    self._replace(i)
+                    worker.stop(kill=True)
+                    worker.task = None
+                    self._stopped.add(i)
 
     def _map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
         pending: collections.deque[RunTask] = collections.deque()

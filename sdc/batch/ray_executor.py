@@ -108,6 +108,7 @@ class RayExecutor:
         ray.get([warm_up.remote() for _ in range(self.slots)])
         self.files, self._refs = FileCatalog(), {}
         self.sizer = BatchSizer(self.batch_runs)
+        self.submitted_tasks = self.submitted_runs = 0
         return self
 
     def __exit__(self, *exc) -> None:
@@ -120,7 +121,14 @@ class RayExecutor:
             self._refs[sha] = self._ray.put(self.files.payload(sha))
         refs = {sha: self._refs[sha] for sha in shas}
         generator = self._remote.remote(tasks, refs, self.task_fn)
+        self.submitted_tasks, self.submitted_runs = (self.submitted_tasks + 1,
+                                                     self.submitted_runs + len(tasks))
         return generator, _Batch(tasks, alone, time.monotonic())
+
+    @property
+    def runs_per_task(self) -> float:
+        """The mean batch size so far (in this ``with`` block)."""
+        return self.submitted_runs / max(self.submitted_tasks, 1)
 
     def _next_batch(self, pending: collections.deque) -> tuple[list[RunTask], bool]:
         task, alone = pending.popleft()
