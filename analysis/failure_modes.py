@@ -56,11 +56,11 @@ def _outcome(row: pd.Series) -> str:
 
 
 def failure_modes(results: pd.DataFrame, params: Sequence[Param],
-                  link_distance: float = 0.1) -> list[FailureMode]:
+                  link_distance: float = 0.2) -> list[FailureMode]:
     """The failure modes among ``results`` (result rows with their ``p.<path>`` columns),
     the largest first."""
     failed = failed_runs(results).head(MAX_GROUPED)
-    discrete = [p for p in params if not p.continuous]
+    discrete = [p for p in params if not p.continuous and p.grid_size(2) > 1]  # not constants
     continuous = [p for p in params if p.continuous]
     modes = []
     keys = failed.apply(lambda r: (_outcome(r), *(r[PARAM_PREFIX + p.path] for p in discrete)),

@@ -173,7 +173,7 @@ def _number(value: Any) -> bool:
     return -(2**63) <= value < 2**63 if isinstance(value, int) else math.isfinite(value)
 
 
-def _parse_param(path: str, table: Any, field: str) -> Param:
+def parse_param(path: str, table: Any, field: str) -> Param:
     if not isinstance(table, dict) or len(table) != 1:
         raise SpecError(field, "must be a table with one distribution, like { uniform = [lo, hi] }")
     ((kind, args),) = table.items()
@@ -289,7 +289,7 @@ class SweepSpec:
                     base.controller.takes(c, name) for c in controllers):
                 raise SpecError(field, f"none of the sweep's controllers takes {name!r} "
                                 f"(a plug-in takes parameters when the base scenario names it)")
-            parsed.append(_parse_param(path, dist, field))
+            parsed.append(parse_param(path, dist, field))
 
         if meta.sampler == "grid":
             if meta.samples is not None:

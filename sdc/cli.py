@@ -420,8 +420,11 @@ def search(sweep_file: Path, budget: int, batch_size: int, **options) -> None:
     first = summary.get("first_failure_run")
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
                + (f"; the first at run {first}" if first else ""))
-    for mode in summary.get("failure_modes", []):
+    modes = summary.get("failure_modes", [])
+    for mode in modes[:8]:
         click.echo(f"  {_mode_line(mode)}")
+    if len(modes) > 8:
+        click.echo(f"  ... {len(modes) - 8} more modes: sdc report {options['out_dir']}")
     _adaptive_exit(outcome, "search", sweep_file, options["out_dir"], f"--budget {budget}")
 
 
