@@ -470,27 +470,36 @@ class SearchLoop:
     (mixed with the nominal) and the rest of the budget draws from it, finding
     more failures of the same and neighbouring modes. A search estimates
     nothing: how often it fails says how well it aimed, not how likely failure is.
-    The last batch is cut to what is left of the budget.
+    The last batch is cut to what is left of the budget. With ``stop_after``, the
+    search also ends after the batch in which that many failures have been found.
     """
 
     def __init__(self, dims: int, max_runs: int, rng: np.random.Generator,
-                 batch_size: int = 40, **sampler_options) -> None:
+                 batch_size: int = 40, *, stop_after: int | None = None,
+                 **sampler_options) -> None:
         if batch_size < 2:
             raise ValueError(f"batch_size must be at least 2, got {batch_size!r}")
         if max_runs < 2 * batch_size:
             raise ValueError(f"max_runs={max_runs} is too small to adapt: at least 2 batches "
                              f"({2 * batch_size} runs)")
-        self.max_runs = max_runs
+        if stop_after is not None and stop_after < 1:
+            raise ValueError(f"stop_after must be at least 1, got {stop_after!r}")
+        self.max_runs, self.stop_after = max_runs, stop_after
         self.sampler = CrossEntropyIS(dims, rng, batch_size, **sampler_options)
         self.first_failure_run: int | None = None  # 1-based, in the order the runs were drawn
+        self.failures = 0
 
     @property
     def adapting(self) -> bool:
         return self.sampler.adapting
 
+    @property
+    def found_enough(self) -> bool:
+        return self.stop_after is not None and self.failures >= self.stop_after
+
     def ask(self) -> np.ndarray | None:
         left = self.max_runs - self.sampler.runs
-        return None if left <= 0 else self.sampler.ask()[:left]
+        return None if left <= 0 or self.found_enough else self.sampler.ask()[:left]
 
     def log_weights(self, z: np.ndarray) -> np.ndarray:
         return self.sampler.proposal.log_weights(z)
@@ -499,6 +508,7 @@ class SearchLoop:
         before = self.sampler.runs
         self.sampler.tell(z, scores)
         failed = np.flatnonzero(np.asarray(scores, dtype=float) <= 0)
+        self.failures += failed.size
         if self.first_failure_run is None and failed.size:
             self.first_failure_run = before + int(failed[0]) + 1
 

@@ -351,7 +351,7 @@ def _executor_options(command):
 
 
 def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_size: int,
-              target_rhw: float | None = None):
+              target_rhw: float | None = None, stop_after: int | None = None):
     """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
     from scenarios.sweep_spec import load_sweep
     from scenarios.world_backends import check_inputs
@@ -374,7 +374,8 @@ def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_s
             controller = spec.controllers[0]
         settings = AdaptiveSettings(mode, resolve_file(controller, Path.cwd(), "--controller")
                                     if controller not in spec.controllers else controller,
-                                    max_runs, batch_size, target_rhw, options["score"])
+                                    max_runs, batch_size, target_rhw, options["score"],
+                                    stop_after=stop_after)
         workers, timeout = options["workers"], options["run_timeout"]
         pool = (RayExecutor(workers, timeout, options["ray_address"])
                 if options["executor"] == "ray" else LocalExecutor(workers, timeout))
@@ -385,15 +386,14 @@ def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_s
         _bad_input(str(e))
 
 
-def _adaptive_exit(outcome, mode: str, sweep_file: Path, out_dir: Path, again: str) -> None:
+def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
     counts = outcome.counts
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout; {outcome.collisions} collisions "
                f"({outcome.wall_time_s:.1f} s)")
     click.echo(f"{mode}: {out_dir / (mode + '.json')}  report: sdc report {out_dir}")
     if outcome.interrupted:
-        click.echo(f"interrupted; to finish: sdc {mode} {sweep_file} --out {out_dir} {again} "
-                   "--resume", err=True)
+        click.echo("interrupted; to finish, run the same command with --resume", err=True)
         sys.exit(EXIT_INTERRUPTED)
     sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
 
@@ -404,8 +404,12 @@ def _adaptive_exit(outcome, mode: str, sweep_file: Path, out_dir: Path, again: s
               help="Runs to spend.")
 @click.option("--batch-size", type=click.IntRange(min=2), default=20, show_default=True,
               metavar="N", help="Runs per batch; each batch is drawn from the last ones' scores.")
+@click.option("--stop-after", type=click.IntRange(min=1), metavar="K",
+              help="End after the batch in which K collisions (or runs without an outcome) "
+                   "have been found  [default: spend the budget].")
 @_executor_options
-def search(sweep_file: Path, budget: int, batch_size: int, **options) -> None:
+def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | None,
+           **options) -> None:
     """Search a sweep's parameter space for collisions with few runs.
 
     The sweep's [sweep.params] distributions are where it starts; a cross-entropy
@@ -415,7 +419,8 @@ def search(sweep_file: Path, budget: int, batch_size: int, **options) -> None:
     failures found, grouped into modes by what was hit and parameter region.
     A search finds failures; how often it fails is not a probability (sdc estimate).
     """
-    outcome = _adaptive("search", sweep_file, options, budget, batch_size)
+    outcome = _adaptive("search", sweep_file, options, budget, batch_size,
+                        stop_after=stop_after)
     summary = outcome.summary
     first = summary.get("first_failure_run")
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
@@ -425,7 +430,7 @@ def search(sweep_file: Path, budget: int, batch_size: int, **options) -> None:
         click.echo(f"  {_mode_line(mode)}")
     if len(modes) > 8:
         click.echo(f"  ... {len(modes) - 8} more modes: sdc report {options['out_dir']}")
-    _adaptive_exit(outcome, "search", sweep_file, options["out_dir"], f"--budget {budget}")
+    _adaptive_exit(outcome, "search", options["out_dir"])
 
 
 def _mode_line(mode: dict) -> str:
@@ -460,8 +465,7 @@ def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int
         _bad_input(f"--target-rhw: must be > 0, got {target_rhw:g}")
     outcome = _adaptive("estimate", sweep_file, options, max_runs, batch_size, target_rhw)
     click.echo(_estimate_line(outcome.summary))
-    _adaptive_exit(outcome, "estimate", sweep_file, options["out_dir"],
-                   f"--target-rhw {target_rhw:g} --max-runs {max_runs}")
+    _adaptive_exit(outcome, "estimate", options["out_dir"])
 
 
 def _estimate_line(summary: dict) -> str:

@@ -68,6 +68,7 @@ class AdaptiveSettings:
     target_rhw: float | None = None  # estimate only
     score: ScoreKind = "gap"
     elite_fraction: float = 0.1
+    stop_after: int | None = None  # search only: failures after which it ends
 
     def to_plain(self) -> dict:
         return dataclasses.asdict(self)
@@ -116,7 +117,7 @@ def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | Sear
     dims = len(sweep.params)
     if settings.mode == "search":
         return SearchLoop(dims, settings.max_runs, rng, settings.batch_size,
-                          elite_fraction=settings.elite_fraction)
+                          stop_after=settings.stop_after, elite_fraction=settings.elite_fraction)
     return EstimationLoop(dims, settings.target_rhw, settings.max_runs, rng,
                           settings.batch_size, elite_fraction=settings.elite_fraction)
 
@@ -278,7 +279,8 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
     }
     if isinstance(loop, SearchLoop):
         failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
-        summary.update(stopped="budget" if state == "finished" else None,
+        stopped = "failures found" if loop.found_enough else "budget"
+        summary.update(stopped=stopped if state == "finished" else None,
                        failures=len(failed), first_failure_run=loop.first_failure_run,
                        failure_run_ids=failed)
     else:
