@@ -131,6 +131,21 @@ def check_shift(rows: pd.DataFrame, k: float) -> dict:
     }
 
 
+def boundary_examples(swing_m: pd.Series, k: float, widths_m=(3.25, 3.5, 3.75),
+                      margin_m: float = 0.01) -> list[dict]:
+    """Per lane width, the first scan speed whose run must hit the left edge (predicted
+    gap below -margin) and the last one before it that must pass (gap above margin)."""
+    examples = []
+    for width_m in widths_m:
+        gap_m = k * width_m - swing_m.to_numpy()
+        first_hit = int(np.argmax(gap_m < -margin_m))
+        last_pass = int(np.flatnonzero(gap_m[:first_hit] > margin_m)[-1])
+        for i, collision in ((last_pass, False), (first_hit, True)):
+            examples.append({"lane_width_m": width_m, "speed_mps": float(swing_m.index[i]),
+                             "collision": collision, "predicted_gap_m": float(gap_m[i])})
+    return examples
+
+
 def grid_estimate(rows: pd.DataFrame, normals: dict) -> dict:
     speeds = np.sort(rows[f"p.{SPEED}"].unique())
     widths = np.sort(rows[f"p.{WIDTH}"].unique())
@@ -174,6 +189,7 @@ def truth(scan_dir: Path, check_dir: Path) -> dict:
                                                                   float(speeds[-1]), len(speeds)],
                        "outside_mass": result.outside_mass,
                        "speed_cells_with_bound": result.boundary_cells},
+        "boundary_examples": boundary_examples(swing_m, k),
         "likeliest_failure": {"speed_mps": float(speeds[likeliest]),
                               "lane_width_below_m": float(swing_m.iloc[likeliest] / k)},
         "check": {**sweep_record(check_dir, check_rows, check_manifest),
