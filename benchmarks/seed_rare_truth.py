@@ -188,6 +188,9 @@ def truth(scan_dir: Path, check_dir: Path) -> dict:
                        "reference_width_m": w_ref, "speed_grid": [float(speeds[0]),
                                                                   float(speeds[-1]), len(speeds)],
                        "outside_mass": result.outside_mass,
+                       # C(v) at the grid's speeds (np.linspace of speed_grid), to recompute
+                       # the integral without SUMO; rounded to the micrometre
+                       "swing_m": [round(float(c), 6) for c in swing_m.to_numpy()],
                        "speed_cells_with_bound": result.boundary_cells},
         "boundary_examples": boundary_examples(swing_m, k),
         "likeliest_failure": {"speed_mps": float(speeds[likeliest]),

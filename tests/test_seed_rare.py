@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
+from analysis.grid_probability import threshold_probability
 from scenarios import CATALOG_DIR
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sweep_spec import expand, load_sweep, set_path
@@ -36,6 +38,18 @@ def test_the_recorded_truth_is_rare_and_tight():
     assert TRUTH["bound"] == pytest.approx(max(p - TRUTH["p_low"], TRUTH["p_high"] - p))
     assert TRUTH["bound"] < 0.1 * p
     assert TRUTH["truth_scan"]["outside_mass"] < 1e-3 * p
+
+
+def test_the_truth_recomputes_from_the_recorded_swing():
+    """The integral of benchmarks/seed_rare_truth.py over the stored C(v), without SUMO."""
+    scan = TRUTH["truth_scan"]
+    speeds = np.linspace(*scan["speed_grid"])
+    normals = {name: tuple(table["normal"]) for name, table in TRUTH["nominal"].items()}
+    again = threshold_probability(speeds, np.array(scan["swing_m"]) / 2.5,
+                                  normals["ego.speed_mps"], normals["road.lane_width_m"])
+    assert again.p == pytest.approx(TRUTH["p_true"], rel=1e-4)
+    assert again.low == pytest.approx(TRUTH["p_low"], rel=1e-4)
+    assert again.high == pytest.approx(TRUTH["p_high"], rel=1e-4)
 
 
 def test_the_check_grid_agreed_run_by_run():
