@@ -3,6 +3,7 @@ report, wrong use."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -224,3 +225,40 @@ def test_wrong_use_of_estimate_is_a_clear_error(tmp_path, args, message):
     done = sdc("estimate", sweep, "--out", tmp_path / "out", *args)
     assert done.returncode == 2 and message in done.stderr, done.stderr
 
+
+
+# ---------------------------------------------------------------- the catalog's seed-rare
+
+RARE = CATALOG_DIR / "sweeps" / "seed-rare.toml"
+
+
+def _truth() -> dict:
+    return json.loads((CATALOG_DIR / "sweeps" / "seed-rare.truth.json").read_text())
+
+
+@pytest.mark.slow
+def test_the_estimate_on_seed_rare_covers_its_truth_with_20x_fewer_runs(tmp_path):
+    """About 1600 runs, 2 minutes on 2 cores: each lane width is its own network."""
+    truth = _truth()
+    outcome = run_adaptive(load_sweep(RARE), tmp_path / "estimate", LocalExecutor(2),
+                           QuietReporter(), AdaptiveSettings("estimate", "seed", 6000, 200,
+                                                             target_rhw=0.3))
+    e = outcome.summary
+    assert e["stopped"] == "target_rhw" and e["rhw"] <= 0.3
+    assert e["ci_low"] <= truth["p_true"] <= e["ci_high"]
+    assert e["runs"] * 20 <= e["mc_equivalent_runs"]
+    assert {m["outcome"] for m in e["failure_modes"]} == {"road_edge"}
+
+
+@pytest.mark.slow
+def test_search_finds_a_collision_on_seed_rare_10x_sooner_than_uniform_sampling(tmp_path):
+    """Median over 5 seeds of the runs to a first collision, against 1 / p (about 2060)."""
+    sweep = load_sweep(RARE)
+    settings = AdaptiveSettings("search", "seed", 600, 20, stop_after=1)
+    firsts = []
+    for seed in range(1, 6):
+        summary = run_adaptive(dataclasses.replace(sweep, seed=seed), tmp_path / str(seed),
+                               LocalExecutor(2), QuietReporter(), settings).summary
+        assert summary["stopped"] == "failures found"
+        firsts.append(summary["first_failure_run"])
+    assert sorted(firsts)[2] * 10 <= 1 / _truth()["p_true"], firsts
