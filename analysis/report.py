@@ -19,6 +19,7 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
+from analysis.plain_json import json_plain
 from analysis.stats import (
     Method,
     by_controller,
@@ -79,17 +80,6 @@ def varying_parameters(results: pd.DataFrame) -> list[str]:
 
 def _finite(value):
     return None if isinstance(value, float) and not math.isfinite(value) else value
-
-
-def _json_plain(value):
-    """Plain JSON values: numpy scalars unwrapped, NaN and infinities as null."""
-    if isinstance(value, dict):
-        return {str(k): _json_plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_plain(v) for v in value]
-    if hasattr(value, "item"):
-        value = value.item()
-    return _finite(value)
 
 
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
@@ -355,7 +345,7 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(html_page(summary, results, sweep_dir, figures(results, by, method)))
     summary_path = sweep_dir / "summary.json"
-    summary_path.write_text(json.dumps(_json_plain(summary), indent=2) + "\n")
+    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text(markdown(summary, results, sweep_dir))
     if junit_path is not None:
@@ -397,7 +387,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
                          f"<title>sdc {html.escape(title)}</title><style>{_CSS}</style></head>"
                          f"<body>{''.join(parts)}</body></html>\n")
     summary_path = sweep_dir / "summary.json"
-    summary_path.write_text(json.dumps(_json_plain(summary), indent=2) + "\n")
+    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text("\n".join(md) + "\n")
     if junit_path is not None:

@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from analysis.failure_modes import failure_modes
+from analysis.plain_json import json_plain
 from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
@@ -286,7 +287,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
     else:
         summary.update(_estimate_fields(loop, state))
     path = summary_path(out_dir, settings.mode)
-    text = json.dumps(json_safe(summary), indent=2) + "\n"
+    text = json.dumps(json_plain(summary), indent=2) + "\n"
     write_atomic(path, lambda tmp: Path(tmp).write_text(text))
     return summary
 
@@ -303,16 +304,3 @@ def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
     values.pop("stopped")
     acceleration = estimate.mc_equivalent_runs / estimate.runs
     return {**fields, **values, "acceleration": acceleration}
-
-
-def json_safe(value):
-    """JSON-ready: None for NaN and infinities, plain lists for tuples and arrays."""
-    if isinstance(value, dict):
-        return {k: json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple | np.ndarray):
-        return [json_safe(v) for v in value]
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
