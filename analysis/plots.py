@@ -106,3 +106,43 @@ def collision_breakdown(results: pd.DataFrame) -> bytes:
     ax.set(ylabel="runs", title="Collisions by what was hit (and failed runs)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)
+
+
+def convergence(history: pd.DataFrame, target_rhw: float | None) -> bytes:
+    """An estimate's path against the runs spent: P(collision) with its 95% interval,
+    and the relative half-width against its target."""
+    fig = Figure(figsize=(10, 3.8))
+    left, right = fig.subplots(1, 2)
+    runs = history.runs.to_numpy()
+    left.plot(runs, history.p_collision, marker="o", label="estimate")
+    left.fill_between(runs, history.ci_low, history.ci_high, alpha=0.25, label="95% interval")
+    left.set(xlabel="runs (adaptation included)", ylabel="P(collision)",
+             title="Estimate against runs")
+    if (history.p_collision > 0).any():
+        left.set_yscale("log")
+    left.legend()
+    right.plot(runs, history.rhw, marker="o")
+    if target_rhw is not None:
+        right.axhline(target_rhw, color="k", linestyle="--", label=f"target {target_rhw:g}")
+        right.legend()
+    right.set(xlabel="runs (adaptation included)", ylabel="relative half-width",
+              title="Relative half-width (95%)", ylim=(0, None))
+    for ax in (left, right):
+        ax.grid(alpha=0.3)
+    return _png(fig)
+
+
+def sampling_path(results: pd.DataFrame, x: str, y: str) -> bytes:
+    """Where the batches went over two parameters: each run coloured by its batch,
+    failures ringed in red."""
+    fig = Figure(figsize=(7, 5))
+    ax = fig.subplots()
+    points = ax.scatter(results[x], results[y], c=results.batch, cmap="viridis", s=12)
+    failed = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
+    ax.scatter(failed[x], failed[y], facecolors="none", edgecolors="red", s=40,
+               label="collision or no outcome")
+    fig.colorbar(points, ax=ax, label="batch")
+    ax.set(xlabel=_label(x), ylabel=_label(y), title="Runs drawn, batch by batch")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best")
+    return _png(fig)

@@ -377,17 +377,12 @@ class HistoryPoint:
     rhw: float
 
 
-ScoreFn = Callable[[np.ndarray], np.ndarray]
+class EstimationLoop:
+    """Cross-entropy IS with its stopping rule, ask/tell: ``ask()`` gives the next batch
+    (None once finished), ``tell(z, scores)`` takes its scores back.
 
-
-def estimate(score_fn: ScoreFn, dims: int, target_rhw: float, max_runs: int,
-             rng: np.random.Generator, batch_size: int = 200, *,
-             min_estimation_runs: int | None = None, min_failures: int = 30,
-             max_adaptation_share: float = 0.5,
-             **sampler_options) -> tuple[Estimate, list[HistoryPoint]]:
-    """Run ask/tell until the estimate's RHW is at most ``target_rhw`` or ``max_runs`` is spent.
-
-    ``score_fn`` maps a batch ``z`` (n, dims) to its n scores (<= 0: failure).
+    It stops when the estimate's RHW is at most ``target_rhw`` or when the next
+    batch would take the runs past ``max_runs`` (:attr:`stopped` says which).
     The RHW is judged after each estimation batch, and only once there are at
     least ``min_estimation_runs`` estimation runs (default: two batches and at
     least :data:`MIN_ESTIMATION_RUNS`) and ``min_failures`` failures among
@@ -397,44 +392,140 @@ def estimate(score_fn: ScoreFn, dims: int, target_rhw: float, max_runs: int,
     minimum, 95 % with 1000).
     The adaptation is frozen early if it would take more than
     ``max_adaptation_share`` of the budget. ``sampler_options`` go to
-    :class:`CrossEntropyIS`. Returns the estimate and one
-    :class:`HistoryPoint` per estimation batch.
+    :class:`CrossEntropyIS`. :attr:`history` has one :class:`HistoryPoint`
+    per estimation batch.
+
+    The batches depend only on ``rng`` and the scores told, so replaying the
+    same scores gives the same batches (how a killed estimate resumes).
     """
-    if not isinstance(dims, int | np.integer) or dims < 1:
-        raise ValueError(f"dims must be a positive integer, got {dims!r}")
-    if not target_rhw > 0:
-        raise ValueError(f"target_rhw must be > 0, got {target_rhw!r}")
-    if batch_size < 2:
-        raise ValueError(f"batch_size must be at least 2, got {batch_size!r}")
-    if max_runs < 2 * batch_size:
-        raise ValueError(f"max_runs={max_runs} is too small to adapt and estimate: "
-                         f"at least 2 batches ({2 * batch_size} runs)")
-    if not 0 < max_adaptation_share < 1:
-        raise ValueError(f"max_adaptation_share must be in (0, 1), got {max_adaptation_share!r}")
-    if min_estimation_runs is None:
-        min_estimation_runs = max(2 * batch_size, MIN_ESTIMATION_RUNS)
-    sampler = CrossEntropyIS(dims, rng, batch_size, **sampler_options)
-    adaptation_budget = max(batch_size, int(max_adaptation_share * max_runs))
 
-    while sampler.adapting:
-        if sampler.runs + batch_size > adaptation_budget:
+    def __init__(self, dims: int, target_rhw: float, max_runs: int, rng: np.random.Generator,
+                 batch_size: int = 200, *, min_estimation_runs: int | None = None,
+                 min_failures: int = 30, max_adaptation_share: float = 0.5,
+                 **sampler_options) -> None:
+        if not isinstance(dims, int | np.integer) or dims < 1:
+            raise ValueError(f"dims must be a positive integer, got {dims!r}")
+        if not target_rhw > 0:
+            raise ValueError(f"target_rhw must be > 0, got {target_rhw!r}")
+        if batch_size < 2:
+            raise ValueError(f"batch_size must be at least 2, got {batch_size!r}")
+        if max_runs < 2 * batch_size:
+            raise ValueError(f"max_runs={max_runs} is too small to adapt and estimate: "
+                             f"at least 2 batches ({2 * batch_size} runs)")
+        if not 0 < max_adaptation_share < 1:
+            raise ValueError(f"max_adaptation_share must be in (0, 1), "
+                             f"got {max_adaptation_share!r}")
+        self.target_rhw, self.max_runs, self.min_failures = target_rhw, max_runs, min_failures
+        self.min_estimation_runs = (max(2 * batch_size, MIN_ESTIMATION_RUNS)
+                                    if min_estimation_runs is None else min_estimation_runs)
+        self.sampler = CrossEntropyIS(dims, rng, batch_size, **sampler_options)
+        self.adaptation_budget = max(batch_size, int(max_adaptation_share * max_runs))
+        self.history: list[HistoryPoint] = []
+        self.stopped: Stopped | None = None
+
+    @property
+    def adapting(self) -> bool:
+        return self.sampler.adapting
+
+    def ask(self) -> np.ndarray | None:
+        """The next batch in normal space, or None when the estimate is finished."""
+        sampler = self.sampler
+        if self.stopped is not None:
+            return None
+        if sampler.adapting and sampler.runs + sampler.batch_size > self.adaptation_budget:
             sampler.freeze()
-            break
-        z = sampler.ask()
-        sampler.tell(z, _scores(score_fn, z))
+        if sampler.runs + sampler.batch_size > self.max_runs:
+            self.stopped = "budget"
+            return None
+        return sampler.ask()
 
-    history: list[HistoryPoint] = []
-    while sampler.runs + batch_size <= max_runs:
-        z = sampler.ask()
-        sampler.tell(z, _scores(score_fn, z))
-        current = sampler.estimate()
-        history.append(HistoryPoint(current.runs, current.p_collision, current.rhw))
-        if (current.estimation_runs >= min_estimation_runs
-                and current.failures >= min_failures and current.rhw <= target_rhw):
-            return dataclasses.replace(current, stopped="target_rhw"), history
-    if not history:  # the budget ended with the adaptation (cannot happen with 2 batches)
-        raise ValueError(f"max_runs={max_runs} left no estimation batch")
-    return sampler.estimate(stopped="budget"), history
+    def log_weights(self, z: np.ndarray) -> np.ndarray:
+        """``log(nominal / proposal)`` of a batch from :meth:`ask`, before it is told."""
+        return self.sampler.proposal.log_weights(z)
+
+    def tell(self, z: np.ndarray, scores: np.ndarray) -> None:
+        adapting = self.sampler.adapting
+        self.sampler.tell(z, scores)
+        if adapting:
+            return
+        current = self.sampler.estimate()
+        self.history.append(HistoryPoint(current.runs, current.p_collision, current.rhw))
+        if (current.estimation_runs >= self.min_estimation_runs
+                and current.failures >= self.min_failures and current.rhw <= self.target_rhw):
+            self.stopped = "target_rhw"
+
+    def result(self) -> Estimate:
+        """The estimate so far; ``stopped`` is ``"budget"`` until the target was reached."""
+        if self.sampler.estimation_log_weights.size == 0:
+            raise ValueError(f"max_runs={self.max_runs} left no estimation batch")
+        return self.sampler.estimate(stopped=self.stopped or "budget")
+
+
+class SearchLoop:
+    """Cross-entropy search for failures, ask/tell, until ``max_runs`` runs.
+
+    The proposal moves toward low scores batch by batch (the multilevel
+    adaptation of :class:`CrossEntropyIS`), so near misses lead it to the
+    failures before any is seen; once it is fitted on failures it is frozen
+    (mixed with the nominal) and the rest of the budget draws from it, finding
+    more failures of the same and neighbouring modes. A search estimates
+    nothing: how often it fails says how well it aimed, not how likely failure is.
+    The last batch is cut to what is left of the budget. With ``stop_after``, the
+    search also ends after the batch in which that many failures have been found.
+    """
+
+    def __init__(self, dims: int, max_runs: int, rng: np.random.Generator,
+                 batch_size: int = 40, *, stop_after: int | None = None,
+                 **sampler_options) -> None:
+        if batch_size < 2:
+            raise ValueError(f"batch_size must be at least 2, got {batch_size!r}")
+        if max_runs < 2 * batch_size:
+            raise ValueError(f"max_runs={max_runs} is too small to adapt: at least 2 batches "
+                             f"({2 * batch_size} runs)")
+        if stop_after is not None and stop_after < 1:
+            raise ValueError(f"stop_after must be at least 1, got {stop_after!r}")
+        self.max_runs, self.stop_after = max_runs, stop_after
+        self.sampler = CrossEntropyIS(dims, rng, batch_size, **sampler_options)
+        self.first_failure_run: int | None = None  # 1-based, in the order the runs were drawn
+        self.failures = 0
+
+    @property
+    def adapting(self) -> bool:
+        return self.sampler.adapting
+
+    @property
+    def found_enough(self) -> bool:
+        return self.stop_after is not None and self.failures >= self.stop_after
+
+    def ask(self) -> np.ndarray | None:
+        left = self.max_runs - self.sampler.runs
+        return None if left <= 0 or self.found_enough else self.sampler.ask()[:left]
+
+    def log_weights(self, z: np.ndarray) -> np.ndarray:
+        return self.sampler.proposal.log_weights(z)
+
+    def tell(self, z: np.ndarray, scores: np.ndarray) -> None:
+        before = self.sampler.runs
+        self.sampler.tell(z, scores)
+        failed = np.flatnonzero(np.asarray(scores, dtype=float) <= 0)
+        self.failures += failed.size
+        if self.first_failure_run is None and failed.size:
+            self.first_failure_run = before + int(failed[0]) + 1
+
+
+ScoreFn = Callable[[np.ndarray], np.ndarray]
+
+
+def estimate(score_fn: ScoreFn, dims: int, target_rhw: float, max_runs: int,
+             rng: np.random.Generator, batch_size: int = 200,
+             **options) -> tuple[Estimate, list[HistoryPoint]]:
+    """Run an :class:`EstimationLoop` (``options`` go to it) with ``score_fn``, which maps
+    a batch ``z`` (n, dims) to its n scores (<= 0: failure). Returns the estimate and
+    one :class:`HistoryPoint` per estimation batch."""
+    loop = EstimationLoop(dims, target_rhw, max_runs, rng, batch_size, **options)
+    while (z := loop.ask()) is not None:
+        loop.tell(z, _scores(score_fn, z))
+    return loop.result(), loop.history
 
 
 def _scores(score_fn: ScoreFn, z: np.ndarray) -> np.ndarray:

@@ -19,6 +19,7 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
+from analysis.plain_json import json_plain
 from analysis.stats import (
     Method,
     by_controller,
@@ -33,6 +34,7 @@ from scenarios.file_read import read_json, read_parquet, require_keys
 
 SPEED = "p.ego.speed_mps"
 MAX_LISTED_FAILURES = 500
+MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
                   "collision", "collision_with", "collision_time_s", "min_gap_obstacle_m",
@@ -78,17 +80,6 @@ def varying_parameters(results: pd.DataFrame) -> list[str]:
 
 def _finite(value):
     return None if isinstance(value, float) and not math.isfinite(value) else value
-
-
-def _json_plain(value):
-    """Plain JSON values: numpy scalars unwrapped, NaN and infinities as null."""
-    if isinstance(value, dict):
-        return {str(k): _json_plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_plain(v) for v in value]
-    if hasattr(value, "item"):
-        value = value.item()
-    return _finite(value)
 
 
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
@@ -275,6 +266,12 @@ def _table_html(rows: list[list[str]]) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
+def _figure_html(title: str, png: bytes) -> str:
+    data = base64.b64encode(png).decode()
+    return (f'<figure><img alt="{html.escape(title)}" src="data:image/png;base64,{data}">'
+            f"<figcaption>{html.escape(title)}</figcaption></figure>")
+
+
 def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
               images: list[tuple[str, bytes]]) -> str:
     parts = [f"<h1>Collision report: {html.escape(summary['sweep'])}</h1>",
@@ -287,11 +284,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
               if summary["stop_possible"]["recorded"] else ""),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
-    for title, png in images:
-        data = base64.b64encode(png).decode()
-        parts.append(f'<figure><img alt="{html.escape(title)}" '
-                     f'src="data:image/png;base64,{data}"><figcaption>{html.escape(title)}'
-                     "</figcaption></figure>")
+    parts += [_figure_html(title, png) for title, png in images]
     for column, rows in summary["by"].items():
         table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
                   "failed"]]
@@ -338,6 +331,11 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
         if path is not None and not Path(path).parent.is_dir():
             raise ReportError(option, f"directory {Path(path).parent} does not exist")
     results, manifest = load_results(sweep_dir)
+    if "adaptive" in manifest:
+        if by:
+            raise ReportError("--by", "a search or estimate has no rates by parameter (its "
+                              "runs were drawn toward failure); see its failure modes")
+        return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
     for column in by:
         if column not in results.columns:
             known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
@@ -347,10 +345,56 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(html_page(summary, results, sweep_dir, figures(results, by, method)))
     summary_path = sweep_dir / "summary.json"
-    summary_path.write_text(json.dumps(_json_plain(summary), indent=2) + "\n")
+    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text(markdown(summary, results, sweep_dir))
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
     terminal = terminal_table(summary) + findings(summary)
+    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)
+
+
+def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
+                    html_path: Path | None, junit_path: Path | None) -> Report:
+    """The report of a search or estimate directory (:mod:`analysis.rare_report`)."""
+    from analysis import rare_report
+
+    summary = rare_report.adaptive_summary(results, manifest, sweep_dir)
+    lines = rare_report.headline(summary)
+    modes = rare_report.mode_rows(summary)
+    max_weight = math.inf
+    if summary["mode"] == "estimate" and (sweep_dir / "estimate.json").exists():
+        max_weight = read_json(sweep_dir / "estimate.json", "the estimate").get(
+            "max_weight") or math.inf
+    images = rare_report.adaptive_figures(results, summary, max_weight)
+    title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
+    bad = failures(results)
+    listed = bad.head(MAX_LISTED_FAILURES).itertuples()
+    md = [f"# {title}", "", *lines, "", "## Failure modes", "", *_markdown_table(modes), "",
+          "## Runs to look at", ""]
+    md += [f"- `{row.run_id}` (batch {row.batch}): {_outcome(row)} — "
+           f"`{replay_command(sweep_dir, row.run_id)}`" for row in listed]
+    parts = [f"<h1>{html.escape(title)}</h1>",
+             "".join(f"<p>{html.escape(line)}</p>" for line in lines),
+             "<h2>Failure modes</h2>", _table_html(modes)]
+    parts += [_figure_html(t, png) for t, png in images]
+    table = [["run", "batch", "outcome", "replay"]]
+    table += [[row.run_id, str(row.batch), _outcome(row), replay_command(sweep_dir, row.run_id)]
+              for row in bad.head(MAX_LISTED_FAILURES).itertuples()]
+    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", _table_html(table)]
+    html_path = Path(html_path) if html_path else sweep_dir / "report.html"
+    html_path.write_text(f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+                         f"<title>sdc {html.escape(title)}</title><style>{_CSS}</style></head>"
+                         f"<body>{''.join(parts)}</body></html>\n")
+    summary_path = sweep_dir / "summary.json"
+    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
+    markdown_path = sweep_dir / "report.md"
+    markdown_path.write_text("\n".join(md) + "\n")
+    if junit_path is not None:
+        Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
+    terminal = lines + [f"  {r[0]}. {r[1]}: {r[2]} runs, e.g. {r[3]}; {r[4]}"
+                        for r in modes[1:MAX_TERMINAL_MODES + 1]]
+    if len(modes) > MAX_TERMINAL_MODES + 1:
+        more = len(modes) - 1 - MAX_TERMINAL_MODES
+        terminal.append(f"  ... {more} more modes in {markdown_path}")
     return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)

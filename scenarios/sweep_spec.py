@@ -121,6 +121,24 @@ class Param:
             return a[0] + min(int(u * count), count - 1)
         return a[min(int(u * len(a)), len(a) - 1)]
 
+    def quantile_of(self, value: Any) -> float:
+        """The quantile in [0, 1] where :meth:`at` gives ``value`` (a discrete value: the
+        middle of its share), to place values of different units on one scale."""
+        a = self.args
+        if self.kind == "uniform":
+            return (value - a[0]) / (a[1] - a[0])
+        if self.kind == "loguniform":
+            return math.log(value / a[0]) / math.log(a[1] / a[0])
+        if self.kind == "normal":
+            return NormalDist(a[0], a[1]).cdf(value)
+        if self.kind == "int_range":
+            return (value - a[0] + 0.5) / (a[1] - a[0] + 1)
+        return (a.index(value) + 0.5) / len(a)
+
+    @property
+    def continuous(self) -> bool:
+        return self.kind in ("uniform", "loguniform", "normal")
+
     def grid_size(self, levels: int) -> int:
         """How many values :meth:`grid` takes (without making them)."""
         if self.kind == "int_range":
@@ -155,7 +173,7 @@ def _number(value: Any) -> bool:
     return -(2**63) <= value < 2**63 if isinstance(value, int) else math.isfinite(value)
 
 
-def _parse_param(path: str, table: Any, field: str) -> Param:
+def parse_param(path: str, table: Any, field: str) -> Param:
     if not isinstance(table, dict) or len(table) != 1:
         raise SpecError(field, "must be a table with one distribution, like { uniform = [lo, hi] }")
     ((kind, args),) = table.items()
@@ -271,7 +289,7 @@ class SweepSpec:
                     base.controller.takes(c, name) for c in controllers):
                 raise SpecError(field, f"none of the sweep's controllers takes {name!r} "
                                 f"(a plug-in takes parameters when the base scenario names it)")
-            parsed.append(_parse_param(path, dist, field))
+            parsed.append(parse_param(path, dist, field))
 
         if meta.sampler == "grid":
             if meta.samples is not None:
@@ -378,10 +396,21 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
     samples = sample_values(sweep)
     seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(2)[1])
     seeds = seed_rng.integers(0, 2**31 - 1, size=len(samples))
-    width = max(5, len(str(len(samples) - 1)))
+    return plan_samples(sweep, samples, [int(s) for s in seeds])
+
+
+def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[int], *,
+                 first_sample: int = 0, index_width: int | None = None,
+                 controllers: tuple[str, ...] | None = None) -> list[PlannedRun]:
+    """The runs of ``samples`` (parameter values, one dict each) under ``controllers``
+    (default: the sweep's), sample ``i`` numbered ``first_sample + i`` and seeded
+    ``seeds[i]``. Run IDs are ``<sample, zero-padded to index_width>-<controller>``."""
+    controllers = sweep.controllers if controllers is None else controllers
+    last = first_sample + len(samples) - 1
+    width = index_width or max(5, len(str(last)))
     base_plain = sweep.base.to_plain()
     plan = []
-    for i, (values, seed) in enumerate(zip(samples, seeds, strict=True)):
+    for i, (values, seed) in enumerate(zip(samples, seeds, strict=True), start=first_sample):
         plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
         controller_values = {}  # each controller takes those it has (ControllerSpec.renamed)
@@ -396,7 +425,7 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
             spec = ScenarioSpec.from_plain(plain)
         except SpecError as e:
             error = f"invalid scenario from sample {i} ({shown}): {e}"
-        for controller in sweep.controllers:
+        for controller in controllers:
             label = controller_label(controller)
             run_spec, run_error = None, error
             if spec is not None:
@@ -406,8 +435,9 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
                 except SpecError as e:
                     run_error = f"invalid scenario from sample {i} ({shown}): {e}"
             plan.append(PlannedRun(
-                index=len(plan), run_id=f"{i:0{width}d}-{label}", sample=i,
-                controller=label, seed=int(plain["scenario"]["seed"]),
+                index=first_sample * len(controllers) + len(plan),
+                run_id=f"{i:0{width}d}-{label}", sample=i, controller=label,
+                seed=int(plain["scenario"]["seed"]),
                 backend=str(plain["scenario"].get("backend", "sumo")), params=values,
                 spec=run_spec, error=run_error,
             ))

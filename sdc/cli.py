@@ -328,6 +328,172 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
     sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
 
 
+def _executor_options(command):
+    """The options a command that runs batches of runs shares with ``sdc sweep``."""
+    options = [
+        click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+                     metavar="DIR", required=True, help="Its directory (a sweep directory)."),
+        click.option("--workers", type=click.IntRange(1, 1024), default=os.cpu_count() or 1,
+                     show_default="all cores",
+                     help="Worker processes (local) or CPUs of a local Ray."),
+        click.option("--executor", type=click.Choice(["local", "ray"]), default="local",
+                     show_default=True, help="Local process pool, or Ray."),
+        click.option("--ray-address", metavar="ADDR",
+                     help="Join this Ray cluster (default: start and stop a local one)."),
+        click.option("--resume", is_flag=True,
+                     help="Continue the one in DIR (same file and options): it draws the "
+                          "same batches again and runs only the runs without a row."),
+        click.option("--run-timeout", type=click.FloatRange(min=0, min_open=True), metavar="S",
+                     help="Stop a run after S wall seconds; it becomes a timeout row."),
+        click.option("--traces", type=click.Choice(["none", "failures", "all"]),
+                     default="failures", show_default=True,
+                     help="Write DIR/traces/<run_id>.parquet for no run, runs that collided, "
+                          "or all."),
+        click.option("--controller", metavar="NAME",
+                     help="The controller judged, one of the sweep's  [default: its only "
+                          "one]."),
+        click.option("--score", type=click.Choice(["gap", "ttc"]), default="gap",
+                     show_default=True,
+                     help="What guides the sampling: the closest approach to an obstacle or "
+                          "road edge [m], or the smallest time to collision [s]."),
+        click.option("--quiet", is_flag=True, help="No progress bar; only the final summary."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_size: int,
+              target_rhw: float | None = None, stop_after: int | None = None):
+    """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
+    from scenarios.sweep_spec import load_sweep
+    from scenarios.world_backends import check_inputs
+    from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
+    from sdc.batch.executors import LocalExecutor, RayExecutor
+    from sdc.batch.progress import QuietReporter, RichReporter
+
+    if options["ray_address"] and options["executor"] != "ray":
+        _bad_input("--ray-address: only applies with --executor ray")
+    try:
+        spec = load_sweep(sweep_file)
+        check_inputs(spec.base)
+        _check_controllers(spec, sweep_file)
+        controller = options["controller"]
+        if controller is None:
+            if len(spec.controllers) > 1:
+                raise SpecError("--controller", f"the sweep lists {len(spec.controllers)} "
+                                f"controllers ({', '.join(spec.controllers)}); {mode} judges "
+                                "one: name it")
+            controller = spec.controllers[0]
+        settings = AdaptiveSettings(mode, resolve_file(controller, Path.cwd(), "--controller")
+                                    if controller not in spec.controllers else controller,
+                                    max_runs, batch_size, target_rhw, options["score"],
+                                    stop_after=stop_after)
+        workers, timeout = options["workers"], options["run_timeout"]
+        pool = (RayExecutor(workers, timeout, options["ray_address"])
+                if options["executor"] == "ray" else LocalExecutor(workers, timeout))
+        reporter = QuietReporter() if options["quiet"] else RichReporter(label=mode)
+        return run_adaptive(spec, options["out_dir"], pool, reporter, settings,
+                            traces=options["traces"], resume=options["resume"])
+    except SdcError as e:
+        _bad_input(str(e))
+
+
+def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
+    counts = outcome.counts
+    click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
+               f"{counts['timeout']} timeout; {outcome.collisions} collisions "
+               f"({outcome.wall_time_s:.1f} s)")
+    click.echo(f"{mode}: {out_dir / (mode + '.json')}  report: sdc report {out_dir}")
+    if outcome.interrupted:
+        click.echo("interrupted; to finish, run the same command with --resume", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
+
+
+@main.command()
+@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.option("--budget", type=click.IntRange(min=1), required=True, metavar="N",
+              help="Runs to spend.")
+@click.option("--batch-size", type=click.IntRange(min=2), default=20, show_default=True,
+              metavar="N", help="Runs per batch; each batch is drawn from the last ones' scores.")
+@click.option("--stop-after", type=click.IntRange(min=1), metavar="K",
+              help="End after the batch in which K collisions (or runs without an outcome) "
+                   "have been found  [default: spend the budget].")
+@_executor_options
+def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | None,
+           **options) -> None:
+    """Search a sweep's parameter space for collisions with few runs.
+
+    The sweep's [sweep.params] distributions are where it starts; a cross-entropy
+    search then draws each batch closer to the runs with the lowest score (closest
+    approach), so near misses lead it to collisions. Every run is a row of DIR
+    (with its batch), replayable with sdc replay. DIR/search.json names the
+    failures found, grouped into modes by what was hit and parameter region.
+    A search finds failures; how often it fails is not a probability (sdc estimate).
+    """
+    outcome = _adaptive("search", sweep_file, options, budget, batch_size,
+                        stop_after=stop_after)
+    summary = outcome.summary
+    first = summary.get("first_failure_run")
+    click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
+               + (f"; the first at run {first}" if first else ""))
+    modes = summary.get("failure_modes", [])
+    for mode in modes[:8]:
+        click.echo(f"  {_mode_line(mode)}")
+    if len(modes) > 8:
+        click.echo(f"  ... {len(modes) - 8} more modes: sdc report {options['out_dir']}")
+    _adaptive_exit(outcome, "search", options["out_dir"])
+
+
+def _mode_line(mode: dict) -> str:
+    parts = [f"{k}={v!r}" for k, v in mode["discrete"].items()]
+    parts += [f"{k} {lo:.4g}..{hi:.4g}" for k, (lo, hi) in mode["ranges"].items()]
+    return (f"{mode['outcome']}: {mode['runs']} run(s), e.g. {mode['run_ids'][0]}; "
+            + ", ".join(parts))
+
+
+@main.command()
+@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.option("--target-rhw", type=float, default=0.3, show_default=True, metavar="R",
+              help="Stop when the 95% interval's relative half-width is at most R.")
+@click.option("--max-runs", type=click.IntRange(min=1), default=20_000, show_default=True,
+              metavar="N", help="Stop after N runs at most, target reached or not.")
+@click.option("--batch-size", type=click.IntRange(min=2), default=200, show_default=True,
+              metavar="N", help="Runs per batch.")
+@_executor_options
+def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int,
+             **options) -> None:
+    """Estimate P(collision) under a sweep's parameter distributions, by importance sampling.
+
+    The [sweep.params] distributions are the nominal distribution. A cross-entropy
+    adaptation moves a sampling distribution toward the collisions; then runs are
+    drawn from it and each weighted by nominal / sampling density (the weight is in
+    its row). DIR/estimate.json holds p_collision with its 95% interval, rhw, ess,
+    the runs and mc_equivalent_runs (the plain Monte Carlo runs that would reach
+    the same RHW), and says whether the target RHW or the budget stopped it.
+    A run with no outcome (error, timeout) counts as a collision.
+    """
+    if not target_rhw > 0:
+        _bad_input(f"--target-rhw: must be > 0, got {target_rhw:g}")
+    outcome = _adaptive("estimate", sweep_file, options, max_runs, batch_size, target_rhw)
+    click.echo(_estimate_line(outcome.summary))
+    _adaptive_exit(outcome, "estimate", options["out_dir"])
+
+
+def _estimate_line(summary: dict) -> str:
+    if summary.get("p_collision") is None:
+        return "no estimate: the budget ended before the estimation phase"
+    stopped = {"target_rhw": "target RHW reached", "budget": "budget spent, target RHW not "
+               "reached"}.get(summary.get("stopped"), "interrupted")
+    if not summary["failures"]:
+        return (f"P(collision) <= {summary['ci_high']:.3g} (95%): no collision in "
+                f"{summary['estimation_runs']} weighted runs; {stopped}")
+    return (f"P(collision) = {summary['p_collision']:.3g}  95% [{summary['ci_low']:.3g}, "
+            f"{summary['ci_high']:.3g}]  rhw {summary['rhw']:.2f}  ({summary['runs']} runs; "
+            f"plain Monte Carlo: {summary['mc_equivalent_runs']:,.0f}); {stopped}")
+
+
 def _check_controllers(sweep, sweep_file: Path) -> None:
     """Build each of the sweep's controllers once on its base scenario: one that
     cannot be found or built is bad input, before any run."""

@@ -9,7 +9,7 @@ from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, dumps_spec, load_spe
 from scenarios.scenario_spec import LaneKeepParams, SeedParams
 
 
-@pytest.mark.parametrize("name", ["seed-lesson", "highway-obstacle"])
+@pytest.mark.parametrize("name", ["seed-lesson", "highway-obstacle", "seed-rare"])
 def test_catalog_round_trips_through_toml(name):
     spec = load_spec(CATALOG_DIR / f"{name}.toml")
     again = ScenarioSpec.from_plain(tomllib.loads(dumps_spec(spec)))

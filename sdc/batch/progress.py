@@ -18,13 +18,13 @@ from rich.progress import (
 class RichReporter:
     """A rich progress bar; runs/s counts only the runs of this session."""
 
-    def __init__(self, console: Console | None = None):
-        self.console = console or Console(stderr=True)
+    def __init__(self, console: Console | None = None, label: str = "sweep"):
+        self.console, self.label = console or Console(stderr=True), label
         self._progress: Progress | None = None
 
     def start(self, total: int, done: int, collisions: int, failed: int) -> None:
         self._progress = Progress(
-            TextColumn("sweep"), BarColumn(), MofNCompleteColumn(),
+            TextColumn(self.label), BarColumn(), MofNCompleteColumn(),
             TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TextColumn("ETA"),
             TimeRemainingColumn(),
             TextColumn("collisions {task.fields[collisions]}  failed {task.fields[failed]}"),

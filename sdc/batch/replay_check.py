@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.compute as pc
 
 from analysis.trace_file import FLOAT_COLUMNS, Trace
@@ -52,10 +53,14 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
     sweep_dir = Path(sweep_dir)
     manifest = read_manifest(sweep_dir) if sweep_dir.is_dir() else None
     plan_path = sweep_dir / "plan.parquet"
-    if manifest is None or not plan_path.exists():
+    # a search or estimate that is running (or was killed) holds its plan in parts
+    plan_files = [plan_path] if plan_path.exists() else []
+    plan_files += sorted((sweep_dir / "plan-parts").glob("part-*.parquet"))
+    if manifest is None or not plan_files:
         raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no manifest.json)")
-    plan = read_parquet(plan_path, "the plan file", required=_PLAN_COLUMNS).select(
-        list(_PLAN_COLUMNS)).to_pandas()
+    plan = pa.concat_tables(
+        read_parquet(f, "the plan file", required=_PLAN_COLUMNS).select(list(_PLAN_COLUMNS))
+        for f in plan_files).to_pandas()
     match = plan[plan.run_id == run_id]
     if match.empty:
         shown = ", ".join(map(str, plan.run_id.head(4)))

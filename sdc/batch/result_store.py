@@ -32,13 +32,16 @@ class ResultStore:
 
     ``schema`` is :func:`sdc.run.result_row.result_schema`'s; a row whose keys are
     not exactly its columns raises :class:`sdc.run.result_row.RowKeyError`.
+    ``table`` and ``parts`` name the files (``DIR/<table>.parquet``, ``DIR/<parts>/``):
+    an adaptive sweep's plan grows the same way (``plan``, ``plan-parts``).
     """
 
     def __init__(self, out_dir: Path, schema: pa.Schema, *, flush_s: float = 1.0,
-                 flush_rows: int = 500):
+                 flush_rows: int = 500, table: str = "results", parts: str = "parts"):
         self.out_dir = Path(out_dir)
-        self.parts_dir = self.out_dir / "parts"
-        self.results_path = self.out_dir / "results.parquet"
+        self.parts_dir = self.out_dir / parts
+        self.results_path = self.out_dir / f"{table}.parquet"
+        self.what = f"the {table} file"
         self.schema = schema
         self.flush_s, self.flush_rows = flush_s, flush_rows
         self._buffer: list[dict] = []
@@ -81,7 +84,7 @@ class ResultStore:
         if self.parts_dir.exists() and not self.parts_dir.is_dir():
             raise FileError(self.parts_dir, "is not a directory (the sweep's result parts)")
         files = ([self.results_path] if self.results_path.exists() else []) + self._part_files()
-        tables = [read_parquet(f, "the results file", schema=self.schema) for f in files]
+        tables = [read_parquet(f, self.what, schema=self.schema) for f in files]
         table = pa.concat_tables(tables) if tables else self.schema.empty_table()
         first = pa.array(_first_of_each(table.column("run_id").to_pylist()), pa.int64())
         return table.take(first).sort_by("run_index")

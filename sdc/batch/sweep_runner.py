@@ -73,12 +73,12 @@ def sweep_columns(run: PlannedRun) -> SweepColumns:
     return SweepColumns(run_index=run.index, sample=run.sample, params=run.params)
 
 
-def _invalid_row(run: PlannedRun) -> dict:
+def invalid_row(run: PlannedRun) -> dict:
     return invalid_sample_row(sweep_columns(run), run_id=run.run_id, seed=run.seed,
                               controller=run.controller, backend=run.backend, error=run.error)
 
 
-def _plan_table(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
+def plan_table_of(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     params = result_schema(sweep.param_types)
     rows = [{"run_id": r.run_id, "controller": r.controller, "seed": r.seed, "error": r.error,
              "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
@@ -90,10 +90,10 @@ def _plan_table(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     return pa.Table.from_pylist(rows, schema=pa.schema(fields))
 
 
-def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume: bool) -> dict:
-    """Check ``out_dir`` and return its manifest (a new one for a fresh sweep)."""
+def open_dir(out_dir: Path, digest: str, resume: bool) -> dict | None:
+    """The manifest of the sweep ``out_dir`` holds, checked to be ``digest``'s and resumable;
+    None when ``out_dir`` is free for a new sweep (missing or empty)."""
     out_dir = Path(out_dir)
-    digest = plan_sha256(plan)
     manifest = read_manifest(out_dir) if out_dir.is_dir() else None
     if manifest is not None:
         if not resume:
@@ -102,7 +102,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         if manifest.get("plan_sha256") != digest:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest['sweep']['sweep']['name']!r}, another plan); "
-                           "resume it with the sweep file that started it")
+                           "resume it with the sweep file and options that started it")
         changes = controller_changes(manifest) + network_file_changes(manifest)
         if changes:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
@@ -110,18 +110,24 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         return manifest
     if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
         raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")
-    plan_table = _plan_table(plan, sweep)  # before the directory: nothing half-made
+    return None
+
+
+def make_dir(out_dir: Path) -> None:
     try:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise SdcError(f"--out: cannot create {out_dir}: {e.strerror or e}") from None
-    pq.write_table(plan_table, out_dir / "plan.parquet")
+
+
+def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int) -> dict:
+    """The manifest of a sweep that has not run yet."""
     return {
         "sweep": sweep.to_plain(),
         "base_scenario": sweep.base.to_plain(),
         "plan_sha256": digest,
-        "runs": len(plan),
-        "samples": len({r.sample for r in plan}),
+        "runs": runs,
+        "samples": samples,
         "versions": package_versions(),
         "controllers": controller_sources(sweep.controllers),
         "files": {},  # what travels with the job: driver path -> field, sha256
@@ -135,22 +141,38 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
     }
 
 
-def _build_networks(tasks: list[RunTask], workers: int) -> None:
+def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume: bool) -> dict:
+    """Check ``out_dir`` and return its manifest (a new one for a fresh sweep)."""
+    digest = plan_sha256(plan)
+    manifest = open_dir(out_dir, digest, resume)
+    if manifest is not None:
+        return manifest
+    plan_table = plan_table_of(plan, sweep)  # before the directory: nothing half-made
+    make_dir(out_dir)
+    pq.write_table(plan_table, Path(out_dir) / "plan.parquet")
+    return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}))
+
+
+def build_networks(tasks: list[RunTask], workers: int) -> None:
     """Build each distinct SUMO road network once, before any worker needs it."""
     roads = list({task.spec.road: None for task in tasks if task.spec.scenario.backend == "sumo"})
     with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
         list(pool.map(prepare_network, roads))
 
 
-def _job_files(tasks: list[RunTask]) -> dict[str, dict]:
-    """The files the runs read besides their specs, by the driver's path, with
-    their sha256 (what travels with the job); one the driver cannot read is left
-    out here and makes its runs error rows."""
+def record_job_files(out_dir: Path, manifest: dict, session: dict,
+                     tasks: list[RunTask]) -> None:
+    """Record in the manifest (and the session) the files the runs read besides
+    their specs, by the driver's path, with their sha256: what travels with the
+    job. One the driver cannot read is left out here and makes its runs error rows."""
     catalog = FileCatalog()
     for task in tasks:
         with contextlib.suppress(SdcError):
             catalog.files(task.spec)
-    return catalog.manifest_entries()
+    entries = catalog.manifest_entries()
+    session["files"] = {**session.get("files", {}), **entries}
+    manifest["files"] = {**manifest.get("files", {}), **entries}
+    write_manifest(out_dir, manifest)
 
 
 def _tally(table: pa.Table) -> tuple[Counter, int]:
@@ -182,11 +204,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                      traces=traces)
              for run in todo if run.spec is not None]
 
-    session = {"started_at": now_iso(), "ended_at": None, "executor": executor.name,
-               "workers": executor.workers, "traces": traces, "runs_to_do": len(todo)}
-    manifest["sessions"].append(session)
-    manifest["status"] = "running"
-    write_manifest(out_dir, manifest)
+    session = start_session(out_dir, manifest, executor, traces, len(todo))
 
     statuses, collisions = _tally(stored)
     reporter.start(total=len(plan), done=len(done), collisions=collisions,
@@ -195,14 +213,12 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     try:
         for run in todo:
             if run.spec is None:
-                row = _invalid_row(run)
+                row = invalid_row(run)
                 store.add(row)
                 reporter.advance(row)
         if tasks:
-            _build_networks(tasks, executor.workers)
-            session["files"] = _job_files(tasks)
-            manifest["files"] = {**manifest.get("files", {}), **session["files"]}
-            write_manifest(out_dir, manifest)
+            build_networks(tasks, executor.workers)
+            record_job_files(out_dir, manifest, session, tasks)
             with executor:
                 for row in executor.map(tasks):
                     store.add(row)
@@ -211,13 +227,34 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
         interrupted = True
     finally:
         reporter.stop()
-        table = store.consolidate()
-        counts, collisions = _tally(table)
-        summary = {s: counts.get(s, 0) for s in STATUSES}
-        summary["missing"] = len(plan) - table.num_rows
-        session["ended_at"] = now_iso()
-        manifest.update(ended_at=session["ended_at"], counts=summary, collisions=collisions,
-                        status="interrupted" if summary["missing"] else "complete")
-        write_manifest(out_dir, manifest)
+        summary, collisions = end_session(out_dir, manifest, session, store.consolidate(),
+                                          len(plan))
     return SweepOutcome(out_dir, len(plan), summary, collisions, interrupted,
                         time.perf_counter() - wall_start)
+
+
+def start_session(out_dir: Path, manifest: dict, executor: Executor, traces: TraceMode,
+                  runs_to_do: int) -> dict:
+    """Record in the manifest that a session (this command) starts running ``out_dir``."""
+    session = {"started_at": now_iso(), "ended_at": None, "executor": executor.name,
+               "workers": executor.workers, "traces": traces, "runs_to_do": runs_to_do}
+    manifest["sessions"].append(session)
+    manifest["status"] = "running"
+    write_manifest(out_dir, manifest)
+    return session
+
+
+def end_session(out_dir: Path, manifest: dict, session: dict, table: pa.Table,
+                planned: int, finished: bool | None = None) -> tuple[dict[str, int], int]:
+    """Record the session's end and the rows' counts (``missing``: planned runs without
+    a row); the sweep is complete when ``finished`` (default: nothing missing).
+    Returns the counts and the collisions."""
+    counts, collisions = _tally(table)
+    summary = {s: counts.get(s, 0) for s in STATUSES}
+    summary["missing"] = planned - table.num_rows
+    finished = not summary["missing"] if finished is None else finished
+    session["ended_at"] = now_iso()
+    manifest.update(ended_at=session["ended_at"], counts=summary, collisions=collisions,
+                    status="complete" if finished else "interrupted")
+    write_manifest(out_dir, manifest)
+    return summary, collisions

@@ -9,6 +9,9 @@ columns come in parts, each filled by one party:
 - ``metric``: the outcome columns that :func:`analysis.metrics.trace_metrics` computes
 - ``sweep``: where the run sits in its sweep, with one ``p.<path>`` column per
   swept parameter; only in a sweep's ``results.parquet``
+- ``adaptive``: the batch, phase, importance weight and score of a run drawn by
+  ``sdc search`` or ``sdc estimate`` (:data:`ADAPTIVE_COLUMNS`); only in their
+  directories' ``results.parquet``
 
 A run's own row (``Episode.row``, ``sdc run --json``) holds every column but the
 sweep's; :func:`sweep_row` adds those. Each constructor returns a complete row,
@@ -26,6 +29,7 @@ from typing import Any
 import pyarrow as pa
 
 IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
+ADAPTIVE = "adaptive"
 PARAM_PREFIX = "p."  # a swept parameter's column: p.<path>, e.g. p.ego.speed_mps
 
 
@@ -33,7 +37,7 @@ PARAM_PREFIX = "p."  # a swept parameter's column: p.<path>, e.g. p.ego.speed_mp
 class Column:
     name: str
     arrow_type: pa.DataType
-    part: str  # IDENTITY, STATUS, OUTCOME, METRIC or SWEEP (see the module's docstring)
+    part: str  # IDENTITY, STATUS, OUTCOME, METRIC, SWEEP or ADAPTIVE (the module's docstring)
     meaning: str
 
 
@@ -86,6 +90,19 @@ COLUMNS: tuple[Column, ...] = (
     Column("traceback", pa.string(), STATUS, "the Python traceback of a run that raised"),
 )
 
+
+#: the columns a run drawn by ``sdc search`` or ``sdc estimate`` adds, after the ``p.<path>``
+ADAPTIVE_COLUMNS: tuple[Column, ...] = (
+    Column("batch", pa.int64(), ADAPTIVE, "the batch (iteration) of the search or estimate "
+           "that drew the run's sample, from 0"),
+    Column("phase", pa.string(), ADAPTIVE, "adapt: the batch moved the sampling distribution "
+           "| estimate: drawn from the frozen one, counted in the estimate"),
+    Column("weight", pa.float64(), ADAPTIVE, "importance weight of the run's sample: nominal "
+           "density / the density it was drawn from"),
+    Column("score", pa.float64(), ADAPTIVE, "the run's distance from collision that guides "
+           "the sampling; <= 0: it collided, or has no outcome (error, timeout); None: its "
+           "sample made no valid scenario"),
+)
 
 def _names(*parts: str) -> tuple[str, ...]:
     return tuple(c.name for c in COLUMNS if c.part in parts)
@@ -189,8 +206,17 @@ def invalid_sample_row(sweep: SweepColumns, **values: Any) -> dict:
     return sweep_row(row, sweep)
 
 
-def result_schema(param_types: Mapping[str, type]) -> pa.Schema:
+def adaptive_row(row: Mapping[str, Any], *, batch: int, phase: str, weight: float,
+                 score: float | None) -> dict:
+    """A sweep row (:func:`sweep_row`) with the :data:`ADAPTIVE_COLUMNS` of its run."""
+    values = {"batch": batch, "phase": phase, "weight": weight, "score": score}
+    return {**row, **{k: _plain(v) for k, v in values.items()}}
+
+
+def result_schema(param_types: Mapping[str, type], adaptive: bool = False) -> pa.Schema:
     """The columns of a sweep's ``results.parquet``: every column, then one
-    ``p.<path>`` column per swept parameter, typed by its values' Python type."""
+    ``p.<path>`` column per swept parameter, typed by its values' Python type,
+    then (``adaptive``: a search or estimate) the :data:`ADAPTIVE_COLUMNS`."""
     params = [(PARAM_PREFIX + path, _ARROW_TYPES[tp]) for path, tp in param_types.items()]
-    return pa.schema([(c.name, c.arrow_type) for c in COLUMNS] + params)
+    extra = [(c.name, c.arrow_type) for c in ADAPTIVE_COLUMNS] if adaptive else []
+    return pa.schema([(c.name, c.arrow_type) for c in COLUMNS] + params + extra)

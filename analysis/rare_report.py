@@ -1,0 +1,146 @@
+"""The report of a search or estimate directory (``sdc search``, ``sdc estimate``).
+
+Its runs were drawn toward failure on purpose, so their plain collision rate is
+no probability and is not shown as one. An estimate's report recomputes the
+importance-sampling estimate from the rows' weights (it equals
+``estimate.json``'s), shows how it converged, and what plain Monte Carlo would
+have cost; a search's report says how soon it found a collision. Both group the
+failures into modes (:mod:`analysis.failure_modes`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pandas as pd
+
+from analysis import plots
+from analysis.failure_modes import failure_modes
+from analysis.rare_events import Estimate, estimate_from_rows
+from scenarios.file_read import read_json
+from scenarios.sweep_spec import Param, parse_param
+
+
+def sweep_params(manifest: dict) -> list[Param]:
+    """The swept parameters as the manifest records them."""
+    table = manifest["sweep"]["sweep"].get("params", {})
+    return [parse_param(path, dist, f'sweep.params."{path}"') for path, dist in table.items()]
+
+
+def _failed(rows: pd.DataFrame) -> pd.Series:
+    return rows.score.notna() & (rows.score <= 0)
+
+
+def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
+                max_weight: float = math.inf) -> Estimate | None:
+    """The estimate from the rows' weights: the estimation-phase rows (of batches up to
+    ``upto_batch``), counting every run drawn so far. None before the estimation phase."""
+    rows = results if upto_batch is None else results[results.batch <= upto_batch]
+    estimation = rows[rows.phase == "estimate"]
+    if estimation.empty:
+        return None
+    return estimate_from_rows(estimation.weight.to_numpy(dtype=float),
+                              _failed(estimation).to_numpy(), runs=len(rows),
+                              max_weight=max_weight)
+
+
+def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
+    """The estimate after each estimation batch: runs, p_collision, ci_low, ci_high, rhw."""
+    batches = sorted(results[results.phase == "estimate"].batch.unique())
+    points = []
+    for batch in batches:
+        e = estimate_of(results, batch, max_weight)
+        points.append({"runs": e.runs, "p_collision": e.p_collision, "ci_low": e.ci_low,
+                       "ci_high": e.ci_high, "rhw": e.rhw})
+    return pd.DataFrame(points, columns=["runs", "p_collision", "ci_low", "ci_high", "rhw"])
+
+
+def adaptive_summary(results: pd.DataFrame, manifest: dict, sweep_dir: Path) -> dict:
+    settings = manifest["adaptive"]
+    mode = settings["mode"]
+    saved_path = Path(sweep_dir) / f"{mode}.json"
+    saved = read_json(saved_path, f"the {mode} summary") if saved_path.exists() else {}
+    failed = results[_failed(results)]
+    summary = {
+        "mode": mode,
+        "sweep": manifest["sweep"]["sweep"]["name"],
+        "controller": saved.get("controller", results.controller.iloc[0]),
+        "runs": len(results),
+        "counts": {s: int((results.status == s).sum()) for s in ("ok", "error", "timeout")},
+        "state": saved.get("state", manifest.get("status")),
+        "score": settings["score"],
+        "batches": int(results.batch.max()) + 1,
+        "failures": len(failed),
+        "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
+        "failure_modes": [m.to_plain() for m in failure_modes(results, sweep_params(manifest))],
+    }
+    if mode == "estimate":
+        max_weight = saved.get("max_weight") or math.inf
+        estimate = estimate_of(results, max_weight=max_weight)
+        summary["target_rhw"] = settings["target_rhw"]
+        summary["stopped"] = saved.get("stopped")
+        summary["estimate"] = None if estimate is None else {
+            "p_collision": estimate.p_collision, "ci_low": estimate.ci_low,
+            "ci_high": estimate.ci_high, "rhw": estimate.rhw, "runs": estimate.runs,
+            "estimation_runs": estimate.estimation_runs, "failures": estimate.failures,
+            "ess": estimate.ess, "mc_equivalent_runs": estimate.mc_equivalent_runs,
+            "acceleration": estimate.mc_equivalent_runs / estimate.runs}
+    return summary
+
+
+def headline(summary: dict) -> list[str]:
+    """The lines that say what the directory found."""
+    counts = summary["counts"]
+    lines = [f"{summary['mode']} of {summary['sweep']} for {summary['controller']}: "
+             f"{summary['runs']} runs in {summary['batches']} batches ({counts['ok']} ok, "
+             f"{counts['error']} error, {counts['timeout']} timeout); {summary['state']}"]
+    if summary["mode"] == "estimate":
+        e = summary["estimate"]
+        if e is None:
+            lines.append("no estimate yet: the adaptation has not ended")
+        elif e["failures"] == 0:
+            lines.append(f"P(collision) <= {e['ci_high']:.3g} (95%): no collision in "
+                         f"{e['estimation_runs']} weighted runs")
+        else:
+            stopped = {"target_rhw": "target RHW reached",
+                       "budget": "budget spent before the target RHW"}.get(
+                summary["stopped"], "not finished")
+            lines.append(f"P(collision) = {e['p_collision']:.3g}, 95% interval "
+                         f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
+                         f"(target {summary['target_rhw']:g}; {stopped})")
+            lines.append(f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
+                         f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
+                         f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
+    first = summary["first_failure_run"]
+    lines.append(f"{summary['failures']} failed runs" + (f", the first at run {first}"
+                                                         if first else "")
+                 + ("; the drawn runs are aimed at failure, so their share is no probability"))
+    return lines
+
+
+def mode_rows(summary: dict) -> list[list[str]]:
+    rows = [["mode", "outcome", "runs", "example run", "parameter region"]]
+    for i, mode in enumerate(summary["failure_modes"], start=1):
+        region = [f"{k} = {v!r}" for k, v in mode["discrete"].items()]
+        region += [f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in mode["ranges"].items()]
+        rows.append([str(i), mode["outcome"], str(mode["runs"]), mode["run_ids"][0],
+                     "; ".join(region)])
+    return rows
+
+
+def adaptive_figures(results: pd.DataFrame, summary: dict,
+                     max_weight: float = math.inf) -> list[tuple[str, bytes]]:
+    out = []
+    if summary["mode"] == "estimate":
+        history = convergence(results, max_weight)
+        if len(history):
+            out.append(("Convergence: the estimate and its relative half-width against runs",
+                        plots.convergence(history, summary["target_rhw"])))
+    varying = [c for c in results.columns if c.startswith("p.")
+               and pd.api.types.is_numeric_dtype(results[c]) and results[c].nunique() > 1]
+    if len(varying) >= 2:
+        out.append((f"Runs drawn over {varying[0]} and {varying[1]}",
+                    plots.sampling_path(results, varying[0], varying[1])))
+    out.append(("What was hit", plots.collision_breakdown(results)))
+    return out

@@ -1,0 +1,43 @@
+"""A run's score: how far from a collision it stayed, for search and estimate.
+
+The adaptive samplers (:mod:`analysis.rare_events`) move toward low scores and
+count a run as failed when its score is <= 0. A score must therefore be 0 for
+a collision and positive otherwise, and shrink as a run comes closer to one, so
+near misses lead the search before any collision has been seen.
+
+A run with no outcome (status error or timeout) scores 0: it counts as a
+failure, the conservative reading (its row says why; the estimate reports how
+many there were). A sample that made no valid scenario scores None: there was
+no run, and it counts as no failure.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, Literal
+
+ScoreKind = Literal["gap", "ttc"]
+SCORE_KINDS: tuple[ScoreKind, ...] = ("gap", "ttc")
+#: what each kind reads from the row, and its unit
+SCORE_COLUMNS: dict[ScoreKind, tuple[str, ...]] = {
+    "gap": ("min_gap_obstacle_m", "min_road_edge_gap_m"),
+    "ttc": ("min_ttc_s",),
+}
+#: the score of a run that did not collide but whose measure is 0 or below
+#: (a grazing contact the collision check did not count): positive, so not a failure
+_CLEAR = 1e-9
+
+
+def run_score(row: Mapping[str, Any], kind: ScoreKind = "gap") -> float:
+    """The score of a result row (a dict with the result columns).
+
+    ``gap``: the smallest of the ego's closest approach to an obstacle and a body
+    corner's to a road edge [m]. ``ttc``: the smallest time to reach anything in the
+    ego's path [s]. Infinite when the run never came near anything measurable.
+    """
+    if row["status"] != "ok" or row["collision"]:
+        return 0.0
+    values = [row[c] for c in SCORE_COLUMNS[kind]]
+    values = [float(v) for v in values if v is not None and not math.isnan(v)]
+    return max(min(values, default=math.inf), _CLEAR)

@@ -1,0 +1,306 @@
+"""Search and estimate: sweeps whose samples are drawn batch by batch, toward failure.
+
+``sdc search`` and ``sdc estimate`` read a sweep's ``[sweep.params]`` as the
+nominal distribution and let a cross-entropy sampler (:mod:`analysis.rare_events`)
+draw each batch from what the previous ones scored (:mod:`analysis.run_score`).
+The batches run on the sweep executors.
+
+The directory is a sweep directory whose plan grows: each batch's runs are
+written to ``DIR/plan-parts/`` before they run, rows stream to ``DIR/parts/``,
+and both end in ``plan.parquet`` and ``results.parquet``, so ``sdc replay``
+and ``sdc report`` read it like any sweep. Each row carries its batch, phase,
+importance weight and score (``ADAPTIVE_COLUMNS``); ``DIR/estimate.json`` or
+``DIR/search.json`` says where it stands after every batch.
+
+Resuming replays the stored scores through the sampler: its batches depend only
+on the sweep's seed and the scores told, so it draws the same batches again
+(checked against the stored plan), runs only the runs without a row and goes on.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import time
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+
+from analysis.failure_modes import failure_modes
+from analysis.plain_json import json_plain
+from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
+from analysis.run_score import ScoreKind, run_score
+from scenarios.atomic_write import write_atomic
+from scenarios.controller_ref import controller_label
+from scenarios.errors import SdcError, SpecError
+from scenarios.sweep_spec import PlannedRun, SweepSpec, plan_samples
+from sdc.batch.result_store import ResultStore
+from sdc.batch.run_task import RunTask, TraceMode
+from sdc.batch.sweep_runner import (
+    Executor,
+    Reporter,
+    build_networks,
+    end_session,
+    invalid_row,
+    make_dir,
+    new_manifest,
+    open_dir,
+    plan_table_of,
+    start_session,
+    sweep_columns,
+)
+from sdc.run.result_row import adaptive_row, result_schema
+
+Mode = Literal["search", "estimate"]
+
+
+@dataclasses.dataclass(frozen=True)
+class AdaptiveSettings:
+    """What a search or an estimate does beyond its sweep file (the CLI's options)."""
+
+    mode: Mode
+    controller: str  # one of the sweep's controllers, the one judged
+    max_runs: int  # search: --budget; estimate: --max-runs
+    batch_size: int
+    target_rhw: float | None = None  # estimate only
+    score: ScoreKind = "gap"
+    elite_fraction: float = 0.1
+    stop_after: int | None = None  # search only: failures after which it ends
+
+    def to_plain(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class AdaptiveOutcome:
+    out_dir: Path
+    runs: int  # runs drawn (rows)
+    counts: dict[str, int]
+    collisions: int
+    interrupted: bool
+    wall_time_s: float
+    summary: dict  # what estimate.json or search.json holds
+
+
+def check_adaptive(sweep: SweepSpec, settings: AdaptiveSettings) -> None:
+    """Wrong use, as :class:`SpecError` naming the field or option."""
+    if sweep.sampler == "grid":
+        raise SpecError("sweep.sampler", f"{settings.mode} draws its own samples from the "
+                        "parameters' distributions; a grid has no distribution to adapt "
+                        "(use random, sobol or lhs; the sampler itself is not used)")
+    if not any(p.continuous for p in sweep.params):
+        raise SpecError("sweep.params", f"{settings.mode} adapts the sampling of continuous "
+                        "parameters (uniform, loguniform, normal); this sweep has none")
+    if settings.controller not in sweep.controllers:
+        raise SpecError("--controller", f"{settings.controller!r} is not one of the sweep's "
+                        f"controllers ({', '.join(sweep.controllers)})")
+    option = "--budget" if settings.mode == "search" else "--max-runs"
+    if settings.max_runs < 2 * settings.batch_size:
+        raise SpecError(option, f"{settings.max_runs} runs are too few to adapt: at least two "
+                        f"batches of --batch-size {settings.batch_size} "
+                        f"({2 * settings.batch_size} runs)")
+    if settings.mode == "estimate" and not (settings.target_rhw or 0) > 0:
+        raise SpecError("--target-rhw", f"must be > 0, got {settings.target_rhw!r}")
+
+
+def settings_sha256(sweep: SweepSpec, settings: AdaptiveSettings) -> str:
+    """A digest of everything that decides the runs: resuming needs the same."""
+    body = [sweep.to_plain(), sweep.base.to_plain(), settings.to_plain()]
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | SearchLoop:
+    rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[2])
+    dims = len(sweep.params)
+    if settings.mode == "search":
+        return SearchLoop(dims, settings.max_runs, rng, settings.batch_size,
+                          stop_after=settings.stop_after, elite_fraction=settings.elite_fraction)
+    return EstimationLoop(dims, settings.target_rhw, settings.max_runs, rng,
+                          settings.batch_size, elite_fraction=settings.elite_fraction)
+
+
+def _batch_plan(sweep: SweepSpec, z: np.ndarray, seeds: np.ndarray, first_sample: int,
+                width: int) -> list[PlannedRun]:
+    u = unit_points(z)
+    values = [{p.path: p.at(float(x)) for p, x in zip(sweep.params, row, strict=True)}
+              for row in u]
+    return plan_samples(sweep, values, [int(s) for s in seeds], first_sample=first_sample,
+                        index_width=width)
+
+
+class _Runs:
+    """The directory's rows and plan, and running a batch's missing runs."""
+
+    def __init__(self, out_dir: Path, sweep: SweepSpec, executor: Executor, reporter: Reporter,
+                 traces: TraceMode, settings: AdaptiveSettings):
+        self.out_dir, self.sweep, self.executor, self.reporter = out_dir, sweep, executor, reporter
+        self.traces, self.settings = traces, settings
+        self.store = ResultStore(out_dir, result_schema(sweep.param_types, adaptive=True))
+        self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table="plan",
+                                 parts="plan-parts")
+        self.rows = {r["run_id"]: r for r in self.store.read().to_pylist()}
+        self.planned = {r["run_id"]: r["spec_json"]
+                        for r in self.plans.read().select(["run_id", "spec_json"]).to_pylist()}
+        self.trace_dir = out_dir / "traces"
+        self._entered = False
+
+    def close(self) -> None:
+        if self._entered:
+            self.executor.__exit__(None, None, None)
+            self._entered = False
+
+    def _check_plan(self, batch: int, plan: list[PlannedRun]) -> None:
+        """Write the batch's plan, or check it against the one stored (a resume)."""
+        table = plan_table_of(plan, self.sweep)
+        stored = [self.planned.get(r.run_id) for r in plan]
+        if all(s is None for s in stored):
+            for row in table.to_pylist():
+                self.plans.add(row)
+            self.plans.flush()  # before any of its runs: replay finds every run's spec
+            return
+        if stored != table.column("spec_json").to_pylist():
+            raise SdcError(f"--resume: batch {batch} drawn again differs from the one in "
+                           f"{self.out_dir} (another sdc version or sampler); start a new "
+                           "directory")
+
+    def run(self, batch: int, phase: str, plan: list[PlannedRun],
+            weights: np.ndarray) -> list[dict]:
+        """Every run of the batch's row, in plan order (stored ones are not run again)."""
+        self._check_plan(batch, plan)
+        adaptive = {r.run_id: {"batch": batch, "phase": phase, "weight": float(w)}
+                    for r, w in zip(plan, weights, strict=True)}
+        todo = [r for r in plan if r.run_id not in self.rows]
+        for run in todo:
+            if run.spec is None:
+                self._add(adaptive_row(invalid_row(run), **adaptive[run.run_id], score=None))
+        tasks = [self._task(r) for r in todo if r.spec is not None]
+        if tasks:
+            build_networks(tasks, self.executor.workers)
+            if not self._entered:
+                self.executor.__enter__()
+                self._entered = True
+            for row in self.executor.map(tasks):
+                score = run_score(row, self.settings.score)
+                self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
+        return [self.rows[r.run_id] for r in plan]
+
+    def _task(self, run: PlannedRun) -> RunTask:
+        trace = None if self.traces == "none" else self.trace_dir / f"{run.run_id}.parquet"
+        if trace is not None:
+            self.trace_dir.mkdir(exist_ok=True)
+        return RunTask(run.run_id, run.spec, sweep_columns(run), trace_path=trace,
+                       traces=self.traces)
+
+    def _add(self, row: dict) -> None:
+        self.store.add(row)
+        self.rows[row["run_id"]] = row
+        self.reporter.advance(row)
+
+
+def _scores(rows: list[dict]) -> np.ndarray:
+    return np.array([math.inf if r["score"] is None else r["score"] for r in rows])
+
+
+def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter,
+                 settings: AdaptiveSettings, *, traces: TraceMode = "failures",
+                 resume: bool = False) -> AdaptiveOutcome:
+    """Search or estimate into ``out_dir`` until the loop stops or ``KeyboardInterrupt``."""
+    wall_start = time.perf_counter()
+    check_adaptive(sweep, settings)
+    sweep = dataclasses.replace(sweep, controllers=(settings.controller,))
+    out_dir = Path(out_dir)
+    digest = settings_sha256(sweep, settings)
+    manifest = open_dir(out_dir, digest, resume)
+    if manifest is None:
+        make_dir(out_dir)
+        manifest = new_manifest(sweep, digest, 0, 0)
+        manifest["adaptive"] = settings.to_plain()
+    runs = _Runs(out_dir, sweep, executor, reporter, traces, settings)
+    session = start_session(out_dir, manifest, executor, traces,
+                            max(0, settings.max_runs - len(runs.rows)))
+    loop = _loop(sweep, settings)
+    seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[1])
+    width = max(5, len(str(settings.max_runs - 1)))
+    reporter.start(total=settings.max_runs, done=len(runs.rows),
+                   collisions=sum(bool(r["collision"]) for r in runs.rows.values()),
+                   failed=sum(r["status"] != "ok" for r in runs.rows.values()))
+    state, drawn, batch = "running", 0, 0
+    try:
+        while (z := loop.ask()) is not None:
+            phase = "adapt" if loop.adapting else settings.mode
+            weights = np.exp(loop.log_weights(z))
+            seeds = seed_rng.integers(0, 2**31 - 1, size=len(z))
+            rows = runs.run(batch, phase, _batch_plan(sweep, z, seeds, drawn, width), weights)
+            loop.tell(z, _scores(rows))
+            drawn, batch = drawn + len(z), batch + 1
+            _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
+        state = "finished"
+    except KeyboardInterrupt:
+        state = "interrupted"
+    finally:
+        runs.close()
+        reporter.stop()
+        planned = runs.plans.consolidate().num_rows
+        table = runs.store.consolidate()
+        manifest.update(runs=planned, samples=planned)
+        counts, collisions = end_session(out_dir, manifest, session, table, planned,
+                                         state == "finished")
+        summary = _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
+    return AdaptiveOutcome(out_dir, table.num_rows, counts, collisions, state == "interrupted",
+                           time.perf_counter() - wall_start, summary)
+
+
+def summary_path(out_dir: Path, mode: Mode) -> Path:
+    """Where a search or estimate says how it stands: DIR/search.json, DIR/estimate.json."""
+    return Path(out_dir) / f"{mode}.json"
+
+
+def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
+                   loop: EstimationLoop | SearchLoop, rows: dict[str, dict], state: str) -> dict:
+    """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted."""
+    ordered = sorted(rows.values(), key=lambda r: r["run_index"])
+    results = pd.DataFrame(ordered, columns=list(ordered[0]) if ordered else ["run_id"])
+    modes = failure_modes(results, sweep.params) if ordered else []
+    sampler = loop.sampler
+    summary = {
+        "mode": settings.mode, "state": state,
+        "controller": controller_label(settings.controller), "score": settings.score,
+        "batch_size": settings.batch_size, "max_runs": settings.max_runs,
+        "runs": len(rows),
+        "adaptation_runs": sampler.adaptation_runs,
+        "adaptation_levels": [float(g) for g in sampler.levels],
+        "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
+                               for r in rows.values()),
+        "invalid_samples": sum(r["score"] is None for r in rows.values()),
+        "failure_modes": [m.to_plain() for m in modes],
+    }
+    if isinstance(loop, SearchLoop):
+        failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
+        stopped = "failures found" if loop.found_enough else "budget"
+        summary.update(stopped=stopped if state == "finished" else None,
+                       failures=len(failed), first_failure_run=loop.first_failure_run,
+                       failure_run_ids=failed)
+    else:
+        summary.update(_estimate_fields(loop, state))
+    path = summary_path(out_dir, settings.mode)
+    text = json.dumps(json_plain(summary), indent=2) + "\n"
+    write_atomic(path, lambda tmp: Path(tmp).write_text(text))
+    return summary
+
+
+def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
+    fields = {"target_rhw": loop.target_rhw,
+              "max_weight": loop.sampler.proposal.max_weight,
+              "history": [dataclasses.asdict(h) for h in loop.history],
+              "stopped": loop.stopped if state == "finished" else None}
+    if loop.sampler.estimation_log_weights.size == 0:
+        return fields
+    estimate = loop.result()
+    values = dataclasses.asdict(estimate)
+    values.pop("stopped")
+    acceleration = estimate.mc_equivalent_runs / estimate.runs
+    return {**fields, **values, "acceleration": acceleration}
