@@ -50,6 +50,7 @@ from sdc.batch.sweep_runner import (
     new_manifest,
     open_dir,
     plan_table_of,
+    record_job_files,
     start_session,
     sweep_columns,
 )
@@ -139,6 +140,8 @@ class _Runs:
                  traces: TraceMode, settings: AdaptiveSettings):
         self.out_dir, self.sweep, self.executor, self.reporter = out_dir, sweep, executor, reporter
         self.traces, self.settings = traces, settings
+        self.manifest: dict = {}  # and the session: set by run_adaptive once it started
+        self.session: dict = {}
         self.store = ResultStore(out_dir, result_schema(sweep.param_types, adaptive=True))
         self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table="plan",
                                  parts="plan-parts")
@@ -180,6 +183,7 @@ class _Runs:
         tasks = [self._task(r) for r in todo if r.spec is not None]
         if tasks:
             build_networks(tasks, self.executor.workers)
+            record_job_files(self.out_dir, self.manifest, self.session, tasks)
             if not self._entered:
                 self.executor.__enter__()
                 self._entered = True
@@ -222,6 +226,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
     runs = _Runs(out_dir, sweep, executor, reporter, traces, settings)
     session = start_session(out_dir, manifest, executor, traces,
                             max(0, settings.max_runs - len(runs.rows)))
+    runs.manifest, runs.session = manifest, session
     loop = _loop(sweep, settings)
     seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[1])
     width = max(5, len(str(settings.max_runs - 1)))
