@@ -416,7 +416,8 @@ def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
 @click.option("--budget", type=click.IntRange(min=1), required=True, metavar="N",
               help="Runs to spend.")
 @click.option("--batch-size", type=click.IntRange(min=2), default=20, show_default=True,
-              metavar="N", help="Runs per batch; each batch is drawn from the last ones' scores.")
+              metavar="N", help="Runs per iteration of the search: each iteration is drawn "
+                                "from the scores of those before it.")
 @click.option("--stop-after", type=click.IntRange(min=1), metavar="K",
               help="End after the batch in which K collisions (or runs without an outcome) "
                    "have been found  [default: spend the budget].")
@@ -460,7 +461,8 @@ def _mode_line(mode: dict) -> str:
 @click.option("--max-runs", type=click.IntRange(min=1), default=20_000, show_default=True,
               metavar="N", help="Stop after N runs at most, target reached or not.")
 @click.option("--batch-size", type=click.IntRange(min=2), default=200, show_default=True,
-              metavar="N", help="Runs per batch.")
+              metavar="N", help="Runs per iteration of the sampler (its adaptation steps, "
+                                "and how often the RHW is judged).")
 @_executor_options
 def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int,
              **options) -> None:
