@@ -323,3 +323,20 @@ def test_resume_refuses_another_sweep(tmp_path):
     result = sweep_cli(other, "--out", out, "--resume")
     assert result.returncode == 2
     assert "holds a different sweep" in result.stderr
+
+
+def test_a_directory_left_before_its_manifest_is_taken_and_others_are_refused(tmp_path):
+    """A kill between the plan and the manifest leaves only plan.parquet (or its temporary
+    file): a new sweep takes the directory. Any other file makes it not a sweep's."""
+    sweep = write(tmp_path, "hangs", HANGS.replace("[3.0, 3.74, 9.0]", "[3.0]"))
+    left = tmp_path / "left"
+    left.mkdir()
+    (left / "plan.parquet").write_bytes(b"half a plan")
+    (left / f".plan.parquet.{os.getpid()}.tmp").write_bytes(b"")
+    assert sweep_cli(sweep, "--out", left, "--workers", "1").returncode == 0
+    assert len(pd.read_parquet(left / "results.parquet")) == 1
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("mine")
+    refused = sweep_cli(sweep, "--out", other, "--workers", "1")
+    assert refused.returncode == 2 and "exists and is not a sweep directory" in refused.stderr

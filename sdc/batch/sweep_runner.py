@@ -21,6 +21,7 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.world_backends import prepare_network
@@ -108,9 +109,16 @@ def open_dir(out_dir: Path, digest: str, resume: bool) -> dict | None:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
                            "it (restore it, or start a new sweep)")
         return manifest
-    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+    if out_dir.exists() and (not out_dir.is_dir() or not _unstarted(out_dir)):
         raise SdcError(f"--out: {out_dir} exists and is not a sweep directory")
     return None
+
+
+def _unstarted(out_dir: Path) -> bool:
+    """Is ``out_dir`` empty, or left by a sweep killed before its manifest (holding only
+    its plan, whole or as a temporary file), so a new sweep may take it?"""
+    return all(p.name == "plan.parquet" or p.name.startswith(".plan.parquet.")
+               for p in out_dir.iterdir())
 
 
 def make_dir(out_dir: Path) -> None:
@@ -149,7 +157,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
         return manifest
     plan_table = plan_table_of(plan, sweep)  # before the directory: nothing half-made
     make_dir(out_dir)
-    pq.write_table(plan_table, Path(out_dir) / "plan.parquet")
+    write_atomic(Path(out_dir) / "plan.parquet", lambda tmp: pq.write_table(plan_table, tmp))
     return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}))
 
 
