@@ -134,14 +134,13 @@ def _batch_plan(sweep: SweepSpec, z: np.ndarray, seeds: np.ndarray, first_sample
 
 
 class _Runs:
-    """The directory's rows and plan, and running a batch's missing runs."""
+    """The directory's rows and plan, and running a batch's missing runs (a session of
+    the manifest starts with it)."""
 
     def __init__(self, out_dir: Path, sweep: SweepSpec, executor: Executor, reporter: Reporter,
-                 traces: TraceMode, settings: AdaptiveSettings):
+                 traces: TraceMode, settings: AdaptiveSettings, manifest: dict):
         self.out_dir, self.sweep, self.executor, self.reporter = out_dir, sweep, executor, reporter
-        self.traces, self.settings = traces, settings
-        self.manifest: dict = {}  # and the session: set by run_adaptive once it started
-        self.session: dict = {}
+        self.traces, self.settings, self.manifest = traces, settings, manifest
         self.store = ResultStore(out_dir, result_schema(sweep.param_types, adaptive=True))
         self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table="plan",
                                  parts="plan-parts")
@@ -150,6 +149,8 @@ class _Runs:
                         for r in self.plans.read().select(["run_id", "spec_json"]).to_pylist()}
         self.trace_dir = out_dir / "traces"
         self._entered = False
+        self.session = start_session(out_dir, manifest, executor, traces,
+                                     max(0, settings.max_runs - len(self.rows)))
 
     def close(self) -> None:
         if self._entered:
@@ -223,10 +224,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         make_dir(out_dir)
         manifest = new_manifest(sweep, digest, 0, 0)
         manifest["adaptive"] = settings.to_plain()
-    runs = _Runs(out_dir, sweep, executor, reporter, traces, settings)
-    session = start_session(out_dir, manifest, executor, traces,
-                            max(0, settings.max_runs - len(runs.rows)))
-    runs.manifest, runs.session = manifest, session
+    runs = _Runs(out_dir, sweep, executor, reporter, traces, settings, manifest)
     loop = _loop(sweep, settings)
     seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[1])
     width = max(5, len(str(settings.max_runs - 1)))
@@ -252,7 +250,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         planned = runs.plans.consolidate().num_rows
         table = runs.store.consolidate()
         manifest.update(runs=planned, samples=planned)
-        counts, collisions = end_session(out_dir, manifest, session, table, planned,
+        counts, collisions = end_session(out_dir, manifest, runs.session, table, planned,
                                          state == "finished")
         summary = _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
     return AdaptiveOutcome(out_dir, table.num_rows, counts, collisions, state == "interrupted",
