@@ -56,11 +56,21 @@ def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataF
     return pd.DataFrame(points, columns=["runs", "p_collision", "ci_low", "ci_high", "rhw"])
 
 
-def adaptive_summary(results: pd.DataFrame, manifest: dict, sweep_dir: Path) -> dict:
+def summary_path(sweep_dir: Path, mode: str) -> Path:
+    """Where a search or estimate says how it stands: DIR/search.json, DIR/estimate.json."""
+    return Path(sweep_dir) / f"{mode}.json"
+
+
+def saved_summary(sweep_dir: Path, mode: str) -> dict:
+    """What the search or estimate wrote of itself (empty when it wrote nothing yet)."""
+    path = summary_path(sweep_dir, mode)
+    return read_json(path, f"the {mode} summary") if path.exists() else {}
+
+
+def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict) -> dict:
+    """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
     settings = manifest["adaptive"]
     mode = settings["mode"]
-    saved_path = Path(sweep_dir) / f"{mode}.json"
-    saved = read_json(saved_path, f"the {mode} summary") if saved_path.exists() else {}
     failed = results[_failed(results)]
     summary = {
         "mode": mode,

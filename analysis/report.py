@@ -359,28 +359,25 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     """The report of a search or estimate directory (:mod:`analysis.rare_report`)."""
     from analysis import rare_report
 
-    summary = rare_report.adaptive_summary(results, manifest, sweep_dir)
+    saved = rare_report.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
+    summary = rare_report.adaptive_summary(results, manifest, saved)
     lines = rare_report.headline(summary)
     modes = rare_report.mode_rows(summary)
-    max_weight = math.inf
-    if summary["mode"] == "estimate" and (sweep_dir / "estimate.json").exists():
-        max_weight = read_json(sweep_dir / "estimate.json", "the estimate").get(
-            "max_weight") or math.inf
-    images = rare_report.adaptive_figures(results, summary, max_weight)
+    images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
     title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
     bad = failures(results)
-    listed = bad.head(MAX_LISTED_FAILURES).itertuples()
+    listed = bad.head(MAX_LISTED_FAILURES)
     md = [f"# {title}", "", *lines, "", "## Failure modes", "", *_markdown_table(modes), "",
           "## Runs to look at", ""]
     md += [f"- `{row.run_id}` (batch {row.batch}): {_outcome(row)} — "
-           f"`{replay_command(sweep_dir, row.run_id)}`" for row in listed]
+           f"`{replay_command(sweep_dir, row.run_id)}`" for row in listed.itertuples()]
     parts = [f"<h1>{html.escape(title)}</h1>",
              "".join(f"<p>{html.escape(line)}</p>" for line in lines),
              "<h2>Failure modes</h2>", _table_html(modes)]
     parts += [_figure_html(t, png) for t, png in images]
     table = [["run", "batch", "outcome", "replay"]]
     table += [[row.run_id, str(row.batch), _outcome(row), replay_command(sweep_dir, row.run_id)]
-              for row in bad.head(MAX_LISTED_FAILURES).itertuples()]
+              for row in listed.itertuples()]
     parts += [f"<h2>Runs to look at ({len(bad)})</h2>", _table_html(table)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"

@@ -404,7 +404,9 @@ def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout; {outcome.collisions} collisions "
                f"({outcome.wall_time_s:.1f} s)")
-    click.echo(f"{mode}: {out_dir / (mode + '.json')}  report: sdc report {out_dir}")
+    from analysis.rare_report import summary_path
+
+    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: sdc report {out_dir}")
     if outcome.interrupted:
         click.echo("interrupted; to finish, run the same command with --resume", err=True)
         sys.exit(EXIT_INTERRUPTED)
@@ -439,7 +441,7 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     first = summary.get("first_failure_run")
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
                + (f"; the first at run {first}" if first else ""))
-    modes = summary.get("failure_modes", [])
+    modes = summary.get("failure_modes") or []
     for mode in modes[:8]:
         click.echo(f"  {_mode_line(mode)}")
     if len(modes) > 8:

@@ -33,6 +33,7 @@ import pandas as pd
 from analysis.failure_modes import failure_modes
 from analysis.plain_json import json_plain
 from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
+from analysis.rare_report import summary_path
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
@@ -257,17 +258,15 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
                            time.perf_counter() - wall_start, summary)
 
 
-def summary_path(out_dir: Path, mode: Mode) -> Path:
-    """Where a search or estimate says how it stands: DIR/search.json, DIR/estimate.json."""
-    return Path(out_dir) / f"{mode}.json"
-
-
 def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
                    loop: EstimationLoop | SearchLoop, rows: dict[str, dict], state: str) -> dict:
-    """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted."""
+    """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted
+    (``failure_modes`` is None while running)."""
     ordered = sorted(rows.values(), key=lambda r: r["run_index"])
-    results = pd.DataFrame(ordered, columns=list(ordered[0]) if ordered else ["run_id"])
-    modes = failure_modes(results, sweep.params) if ordered else []
+    modes = None  # grouping every failure is for the end, not for each batch
+    if state != "running":
+        found = failure_modes(pd.DataFrame(ordered), sweep.params) if ordered else []
+        modes = [m.to_plain() for m in found]
     sampler = loop.sampler
     summary = {
         "mode": settings.mode, "state": state,
@@ -279,7 +278,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
         "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
                                for r in rows.values()),
         "invalid_samples": sum(r["score"] is None for r in rows.values()),
-        "failure_modes": [m.to_plain() for m in modes],
+        "failure_modes": modes,
     }
     if isinstance(loop, SearchLoop):
         failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
