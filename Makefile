@@ -36,6 +36,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_perf.py
 	$(BIN)/python benchmarks/bench_controllers.py
 	$(BIN)/python benchmarks/bench_rare.py
+	$(BIN)/python benchmarks/bench_rare_bank.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build

@@ -9,13 +9,18 @@ mass counts towards the low bound only if it fails and towards the high bound
 in any case; the nominal mass outside the grid's box is added to the high
 bound (anything out there might fail).
 
-Two forms:
+Three forms:
 
 * :func:`grid_probability`: an indicator on a full grid (one axis per parameter).
 * :func:`threshold_probability`: failure exactly when ``y < t(x)``, ``t`` known at
   grid points of ``x`` (when one parameter only shifts the boundary, as a lane
   width shifts a road edge); the ``y`` integral is then the normal CDF, exact,
   and a 1-D grid suffices.
+* :func:`box_probability`: failure exactly inside a box whose faces were located
+  by fine scans, each face known to lie within a bracket (between the last scanned
+  value on one side and the first on the other): the mass is a product of normal
+  CDF differences, with bounds from the brackets' ends
+  (:func:`normal_interval_mass` for one side).
 
 Plain numpy and scipy; nothing here runs a simulation.
 """
@@ -123,3 +128,63 @@ def threshold_probability(x: np.ndarray, threshold: np.ndarray, x_normal: tuple[
         p=p, low=float(np.sum(masses * low)), high=float(np.sum(masses * high)) + outside,
         outside_mass=outside, cells=len(x), failing_cells=int(np.sum(below > 1e-15)),
         boundary_cells=int(np.sum(high - low > 1e-15)))
+
+
+#: where a boundary lies when a scan has located it: ``(lo, hi)``, the last scanned value
+#: on one side and the first on the other; ``(x, x)`` when it is known exactly, and
+#: ``(-inf, -inf)`` or ``(inf, inf)`` for an interval open on that side
+Bracket = tuple[float, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class BracketedProbability:
+    """A probability whose region's ends are known only within brackets."""
+
+    p: float  # every end at its bracket's midpoint
+    low: float  # every end where the region is smallest
+    high: float  # ... and where it is largest
+
+    @property
+    def bound(self) -> float:
+        """The largest distance from ``p`` to either bound."""
+        return max(self.p - self.low, self.high - self.p)
+
+    def to_plain(self) -> dict:
+        return {**dataclasses.asdict(self), "bound": self.bound}
+
+
+def _checked_bracket(bracket: Bracket) -> tuple[float, float, float]:
+    lo, hi = (float(v) for v in bracket)
+    if not lo <= hi or ((np.isinf(lo) or np.isinf(hi)) and lo != hi):
+        raise ValueError(f"a bracket is (lo, hi) with lo <= hi, both finite or the same "
+                         f"infinity; got {bracket}")
+    return lo, (lo + hi) / 2 if lo != hi else lo, hi
+
+
+def normal_interval_mass(lower: Bracket, upper: Bracket, mean: float,
+                         sd: float) -> BracketedProbability:
+    """``P(a < X < b)`` for ``X ~ N(mean, sd)``, the end ``a`` somewhere in the bracket
+    ``lower`` and ``b`` in ``upper``. ``low`` is the mass from ``lower``'s top to
+    ``upper``'s bottom (nil if they cross), ``high`` from ``lower``'s bottom to
+    ``upper``'s top."""
+    a_lo, a_mid, a_hi = _checked_bracket(lower)
+    b_lo, b_mid, b_hi = _checked_bracket(upper)
+
+    def mass(a: float, b: float) -> float:
+        return max(0.0, float(norm.cdf(b, mean, sd) - norm.cdf(a, mean, sd)))
+
+    return BracketedProbability(p=mass(a_mid, b_mid), low=mass(a_hi, b_lo), high=mass(a_lo, b_hi))
+
+
+def box_probability(sides: list[tuple[Bracket, Bracket]],
+                    normals: list[tuple[float, float]]) -> BracketedProbability:
+    """``P(a_i < X_i < b_i for every i)`` for independent ``X_i ~ N(mean_i, sd_i)``: the
+    product of :func:`normal_interval_mass` over the sides ``(lower_i, upper_i)``. As
+    every factor is non-negative, the products of the factors' bounds bound the product."""
+    if len(sides) != len(normals) or not sides:
+        raise ValueError(f"{len(sides)} sides for {len(normals)} normals")
+    p = low = high = 1.0
+    for (lower, upper), (mean, sd) in zip(sides, normals, strict=True):
+        side = normal_interval_mass(lower, upper, mean, sd)
+        p, low, high = p * side.p, low * side.low, high * side.high
+    return BracketedProbability(p=p, low=low, high=high)

@@ -146,3 +146,22 @@ def sampling_path(results: pd.DataFrame, x: str, y: str) -> bytes:
     ax.grid(alpha=0.3)
     ax.legend(loc="best")
     return _png(fig)
+
+
+def mode_probabilities(modes: list[dict], total: dict) -> bytes:
+    """Where P(collision) comes from: each failure mode's part with its 95 % interval,
+    and the total (``modes``: plain failure modes with ``p_collision, ci_low, ci_high``;
+    ``total``: the estimate)."""
+    labels = [f"{i}. {m['outcome']}" for i, m in enumerate(modes, start=1)] + ["total"]
+    rows = [*modes, total]
+    p = np.array([r["p_collision"] for r in rows])
+    low = p - np.array([r["ci_low"] for r in rows])
+    high = np.array([r["ci_high"] for r in rows]) - p
+    fig = Figure(figsize=(7, 0.5 * len(rows) + 1.2))
+    ax = fig.subplots()
+    y = np.arange(len(rows))[::-1]
+    ax.barh(y, p, color=["tab:red"] * len(modes) + ["tab:gray"])
+    ax.errorbar(p, y, xerr=[low, high], fmt="none", ecolor="black", capsize=4)
+    ax.set_yticks(y, labels)
+    ax.set(xlabel="P(collision), 95% interval", title="Where the probability comes from")
+    return _png(fig)

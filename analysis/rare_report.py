@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from analysis import plots
@@ -45,6 +46,35 @@ def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
                               max_weight=max_weight)
 
 
+def mode_estimates(results: pd.DataFrame, modes: list[dict],
+                   max_weight: float = math.inf) -> list[dict]:
+    """Each failure mode's part of the estimate: ``p_k = mean(w * 1{row in mode k})`` over
+    the estimation rows, with its own interval (:func:`estimate_from_rows`, so a mode
+    with no estimation failure gets 0 and the rule-of-three bound). Every failed row is
+    in exactly one mode, so the parts add up to the total. ``modes``: plain failure
+    modes (``FailureMode.to_plain``); returns them with ``p_collision, ci_low,
+    ci_high, share`` (of the total) and ``estimation_failures`` added."""
+    estimation = results[results.phase == "estimate"]
+    if estimation.empty:
+        return modes
+    weights = estimation.weight.to_numpy(dtype=float)
+    failed = _failed(estimation).to_numpy()
+    total = float(np.mean(weights * failed))
+    out = []
+    for mode in modes:
+        in_mode = failed & estimation.run_id.isin(mode["run_ids"]).to_numpy()
+        part = estimate_from_rows(weights, in_mode, max_weight=max_weight)
+        out.append({**mode, "p_collision": part.p_collision, "ci_low": part.ci_low,
+                    "ci_high": part.ci_high, "share": part.p_collision / total if total else 0.0,
+                    "estimation_failures": part.failures})
+    return out
+
+
+def with_replay(modes: list[dict], sweep_dir: Path) -> list[dict]:
+    """The modes with the command that replays each one's example run."""
+    return [{**m, "replay": f"sdc replay {sweep_dir} --run {m['example_run']}"} for m in modes]
+
+
 def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
     """The estimate after each estimation batch: runs, p_collision, ci_low, ci_high, rhw."""
     batches = sorted(results[results.phase == "estimate"].batch.unique())
@@ -67,7 +97,8 @@ def saved_summary(sweep_dir: Path, mode: str) -> dict:
     return read_json(path, f"the {mode} summary") if path.exists() else {}
 
 
-def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict) -> dict:
+def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
+                     sweep_dir: Path) -> dict:
     """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
     settings = manifest["adaptive"]
     mode = settings["mode"]
@@ -83,18 +114,23 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict) -> dict
         "batches": int(results.batch.max()) + 1,
         "failures": len(failed),
         "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
-        "failure_modes": [m.to_plain() for m in failure_modes(results, sweep_params(manifest))],
+        "failure_modes": with_replay([m.to_plain() for m in
+                                      failure_modes(results, sweep_params(manifest))], sweep_dir),
+        "adaptation_levels": saved.get("adaptation_levels"),
     }
     if mode == "estimate":
         max_weight = saved.get("max_weight") or math.inf
         estimate = estimate_of(results, max_weight=max_weight)
+        summary["failure_modes"] = mode_estimates(results, summary["failure_modes"], max_weight)
         summary["target_rhw"] = settings["target_rhw"]
         summary["stopped"] = saved.get("stopped")
+        summary["level_ess"] = saved.get("level_ess")
         summary["estimate"] = None if estimate is None else {
             "p_collision": estimate.p_collision, "ci_low": estimate.ci_low,
             "ci_high": estimate.ci_high, "rhw": estimate.rhw, "runs": estimate.runs,
             "estimation_runs": estimate.estimation_runs, "failures": estimate.failures,
-            "ess": estimate.ess, "mc_equivalent_runs": estimate.mc_equivalent_runs,
+            "ess": estimate.ess, "max_term_share": estimate.max_term_share,
+            "mc_equivalent_runs": estimate.mc_equivalent_runs,
             "acceleration": estimate.mc_equivalent_runs / estimate.runs}
     return summary
 
@@ -122,6 +158,11 @@ def headline(summary: dict) -> list[str]:
             lines.append(f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
                          f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
                          f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
+            lines.append(_diagnostics(summary))
+            lines += [f"  mode {i}: {m['outcome']}, P = {m['p_collision']:.3g} "
+                      f"[{m['ci_low']:.3g}, {m['ci_high']:.3g}], {100 * m['share']:.0f}% of it"
+                      for i, m in enumerate(summary["failure_modes"], start=1)
+                      if "p_collision" in m]
     first = summary["first_failure_run"]
     lines.append(f"{summary['failures']} failed runs" + (f", the first at run {first}"
                                                          if first else "")
@@ -129,12 +170,29 @@ def headline(summary: dict) -> list[str]:
     return lines
 
 
+def _diagnostics(summary: dict) -> str:
+    """The sampler's own diagnostics, one line."""
+    e, levels = summary["estimate"], summary.get("adaptation_levels") or []
+    ess = summary.get("level_ess") or []
+    ess = list(ess) + [None] * (len(levels) - len(ess))
+    steps = ", ".join(f"{g:.3g}" + (f" (ESS {n:.0f})" if n is not None else "")
+                      for g, n in zip(levels, ess, strict=True))
+    return (f"diagnostics: {len(summary['failure_modes'])} failure mode(s); the largest run "
+            f"carries {100 * e['max_term_share']:.1f}% of P; adaptation thresholds {steps}")
+
+
 def mode_rows(summary: dict) -> list[list[str]]:
-    rows = [["mode", "outcome", "runs", "example run", "parameter region"]]
-    for i, mode in enumerate(summary["failure_modes"], start=1):
+    """The failure modes as a table; an estimate's with each mode's part of P."""
+    modes = summary["failure_modes"]
+    split = any("p_collision" in m for m in modes)
+    rows = [["mode", "outcome", "runs"] + (["P (95% interval)", "share"] if split else [])
+            + ["example run", "parameter region"]]
+    for i, mode in enumerate(modes, start=1):
         region = [f"{k} = {v!r}" for k, v in mode["discrete"].items()]
         region += [f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in mode["ranges"].items()]
-        rows.append([str(i), mode["outcome"], str(mode["runs"]), mode["run_ids"][0],
+        part = ([f"{mode['p_collision']:.3g} [{mode['ci_low']:.3g}, {mode['ci_high']:.3g}]",
+                 f"{100 * mode['share']:.0f}%"] if split else [])
+        rows.append([str(i), mode["outcome"], str(mode["runs"]), *part, mode["example_run"],
                      "; ".join(region)])
     return rows
 
@@ -147,6 +205,10 @@ def adaptive_figures(results: pd.DataFrame, summary: dict,
         if len(history):
             out.append(("Convergence: the estimate and its relative half-width against runs",
                         plots.convergence(history, summary["target_rhw"])))
+        split = [m for m in summary["failure_modes"] if "p_collision" in m]
+        if split and summary["estimate"] and summary["estimate"]["failures"]:
+            out.append(("Where P(collision) comes from: each failure mode's part",
+                        plots.mode_probabilities(split, summary["estimate"])))
     varying = [c for c in results.columns if c.startswith("p.")
                and pd.api.types.is_numeric_dtype(results[c]) and results[c].nunique() > 1]
     if len(varying) >= 2:

@@ -360,7 +360,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     from analysis import rare_report
 
     saved = rare_report.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
-    summary = rare_report.adaptive_summary(results, manifest, saved)
+    summary = rare_report.adaptive_summary(results, manifest, saved, sweep_dir)
     lines = rare_report.headline(summary)
     modes = rare_report.mode_rows(summary)
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
@@ -389,7 +389,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     markdown_path.write_text("\n".join(md) + "\n")
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
-    terminal = lines + [f"  {r[0]}. {r[1]}: {r[2]} runs, e.g. {r[3]}; {r[4]}"
+    terminal = lines + [f"  {r[0]}. {r[1]}: {r[2]} runs, " + "; ".join(r[3:])
                         for r in modes[1:MAX_TERMINAL_MODES + 1]]
     if len(modes) > MAX_TERMINAL_MODES + 1:
         more = len(modes) - 1 - MAX_TERMINAL_MODES

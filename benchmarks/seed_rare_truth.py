@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from truth_sweeps import read_sweep, sweep_record  # beside this script
 
 from analysis.grid_probability import grid_probability, threshold_probability
 from scenarios import CATALOG_DIR
@@ -69,30 +70,6 @@ def edge_factor(path: Path = FAMILY) -> float:
     """k: the left road edge's distance from the ego's lane centre, in lane widths."""
     base = load_sweep(path).base
     return base.road.lanes - base.ego.lane - 0.5
-
-
-def read_sweep(out_dir: Path) -> tuple[pd.DataFrame, dict]:
-    rows = pd.read_parquet(out_dir / "results.parquet")
-    manifest = json.loads((out_dir / "manifest.json").read_text())
-    bad = rows[rows.status != "ok"]
-    if len(bad):
-        raise SystemExit(f"{out_dir}: {len(bad)} runs are not ok, e.g. {bad.error.iloc[0]}")
-    return rows, manifest
-
-
-def sweep_record(out_dir: Path, rows: pd.DataFrame, manifest: dict) -> dict:
-    return {
-        "sweep": manifest["sweep"]["sweep"]["name"], "runs": len(rows),
-        "collisions": int(rows.collision.sum()),
-        "run_wall_time_s_median": float(rows.wall_time_s.median()),
-        "run_wall_time_s_sum": float(rows.wall_time_s.sum()),
-        "sweep_wall_time_s": sum(
-            pd.Timestamp(s["ended_at"]).timestamp() - pd.Timestamp(s["started_at"]).timestamp()
-            for s in manifest["sessions"]),
-        "workers": [s["workers"] for s in manifest["sessions"]],
-        "started_at": manifest["started_at"], "git": manifest["git"],
-        "plan_sha256": manifest["plan_sha256"], "versions": manifest["versions"],
-    }
 
 
 def swing_by_speed(rows: pd.DataFrame, k: float) -> tuple[float, pd.Series]:

@@ -462,7 +462,7 @@ def _mode_line(mode: dict) -> str:
               help="Stop when the 95% interval's relative half-width is at most R.")
 @click.option("--max-runs", type=click.IntRange(min=1), default=20_000, show_default=True,
               metavar="N", help="Stop after N runs at most, target reached or not.")
-@click.option("--batch-size", type=click.IntRange(min=2), default=200, show_default=True,
+@click.option("--batch-size", type=click.IntRange(min=2), default=500, show_default=True,
               metavar="N", help="Runs per iteration of the sampler (its adaptation steps, "
                                 "and how often the RHW is judged).")
 @_executor_options

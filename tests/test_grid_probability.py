@@ -7,9 +7,11 @@ import pytest
 from scipy.stats import norm
 
 from analysis.grid_probability import (
+    box_probability,
     cell_edges,
     grid_probability,
     normal_cell_masses,
+    normal_interval_mass,
     threshold_probability,
 )
 
@@ -51,3 +53,41 @@ def test_a_threshold_linear_in_x_gives_the_exact_probability_within_its_bounds()
     assert result.low <= exact <= result.high
     assert result.p == pytest.approx(exact, rel=1e-3)
     assert result.bound < 0.1 * exact
+
+
+def test_an_interval_with_exact_ends_is_the_cdf_difference():
+    result = normal_interval_mass((-1.0, -1.0), (2.0, 2.0), 0.5, 2.0)
+    exact = norm.cdf(2.0, 0.5, 2.0) - norm.cdf(-1.0, 0.5, 2.0)
+    assert result.p == result.low == result.high == pytest.approx(exact)
+    assert result.bound == pytest.approx(0.0)
+
+
+def test_bracketed_ends_bound_the_interval_and_open_ends_reach_infinity():
+    """The tail X > 3 of N(0, 1), its end known to lie in (2.99, 3.01)."""
+    result = normal_interval_mass((2.99, 3.01), (np.inf, np.inf), 0.0, 1.0)
+    assert result.low == pytest.approx(norm.sf(3.01))
+    assert result.high == pytest.approx(norm.sf(2.99))
+    assert result.p == pytest.approx(norm.sf(3.0))
+    assert result.low <= norm.sf(3.0) <= result.high
+    # brackets that cross leave nothing certain
+    assert normal_interval_mass((0.0, 1.0), (0.5, 0.6), 0.0, 1.0).low == 0.0
+
+
+def test_a_bracket_must_be_ordered_and_not_half_infinite():
+    for bad in ((1.0, 0.0), (-np.inf, 0.0), (0.0, np.inf), (np.nan, 1.0)):
+        with pytest.raises(ValueError):
+            normal_interval_mass(bad, (np.inf, np.inf), 0.0, 1.0)
+
+
+def test_a_box_is_the_product_of_its_sides():
+    """X > 2 and |Y| < 1 under N(0, 1) x N(0, 0.5), each face bracketed by 0.01."""
+    box = box_probability([((1.995, 2.005), (np.inf, np.inf)),
+                           ((-1.005, -0.995), (0.995, 1.005))], [(0.0, 1.0), (0.0, 0.5)])
+    exact = norm.sf(2.0) * (norm.cdf(1.0, 0, 0.5) - norm.cdf(-1.0, 0, 0.5))
+    assert box.low <= exact <= box.high
+    assert box.p == pytest.approx(exact, rel=1e-3)
+    assert box.low == pytest.approx(norm.sf(2.005) * (norm.cdf(0.995, 0, 0.5)
+                                                      - norm.cdf(-0.995, 0, 0.5)))
+    assert box.to_plain()["bound"] == box.bound
+    with pytest.raises(ValueError):
+        box_probability([((0.0, 0.0), (1.0, 1.0))], [(0.0, 1.0), (0.0, 1.0)])

@@ -9,11 +9,12 @@ import pytest
 from scipy import stats
 
 from analysis.rare_events import (
-    CrossEntropyIS,
-    GaussianProposal,
+    MultilevelIS,
     estimate,
     estimate_from_rows,
+    gaussian_proposal,
     nominal_log_density,
+    nominal_proposal,
     unit_points,
     weights_from_log_densities,
 )
@@ -102,7 +103,7 @@ def test_history_ends_at_the_estimate():
 def test_weights_are_the_nominal_over_the_mixture_proposal():
     rng = np.random.default_rng(1)
     mean, cov, alpha = np.array([2.0, -1.0]), np.array([[0.5, 0.2], [0.2, 0.8]]), 0.1
-    proposal = GaussianProposal(mean, cov, defensive_fraction=alpha)
+    proposal = gaussian_proposal(mean, cov, defensive_fraction=alpha)
     z = proposal.sample(500, rng)
     nominal = stats.multivariate_normal(np.zeros(2), np.eye(2)).pdf(z)
     mixture = alpha * nominal + (1 - alpha) * stats.multivariate_normal(mean, cov).pdf(z)
@@ -114,10 +115,10 @@ def test_weights_are_the_nominal_over_the_mixture_proposal():
 
 def test_proposal_equal_to_nominal_is_plain_monte_carlo():
     rng = np.random.default_rng(2)
-    z = GaussianProposal(np.zeros(3), np.eye(3)).sample(4000, rng)
+    z = nominal_proposal(3).sample(4000, rng)
     failed = z[:, 0] > 1.5
     weights = weights_from_log_densities(nominal_log_density(z),
-                                         GaussianProposal(np.zeros(3), np.eye(3)).log_density(z))
+                                         nominal_proposal(3).log_density(z))
     np.testing.assert_allclose(weights, 1.0)
     result = estimate_from_rows(weights, failed, max_weight=1.0)
     p = failed.mean()
@@ -130,7 +131,7 @@ def test_proposal_equal_to_nominal_is_plain_monte_carlo():
 
 def test_estimate_from_rows_recomputes_the_samplers_estimate():
     score_fn, _ = linear_problem(2, 1e-3)
-    sampler = CrossEntropyIS(2, np.random.default_rng(3), 100)
+    sampler = MultilevelIS(2, np.random.default_rng(3), 100)
     for _ in range(15):
         z = sampler.ask()
         sampler.tell(z, score_fn(z))
@@ -169,7 +170,7 @@ def test_wrong_use_names_the_argument(kwargs, argument):
 
 
 def test_tell_rejects_a_batch_of_the_wrong_shape_or_with_nan_scores():
-    sampler = CrossEntropyIS(2, np.random.default_rng(0), 10)
+    sampler = MultilevelIS(2, np.random.default_rng(0), 10)
     z = sampler.ask()
     with pytest.raises(ValueError, match="scores"):
         sampler.tell(z, np.ones(9))

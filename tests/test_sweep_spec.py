@@ -26,7 +26,7 @@ def make(**table) -> SweepSpec:
     return SweepSpec.from_plain(sweep_plain(**table), CATALOG_DIR)
 
 
-@pytest.mark.parametrize("name", ["seed-envelope", "highway-traffic", "seed-rare"])
+@pytest.mark.parametrize("name", ["seed-envelope", "highway-traffic", "seed-rare", "seed-modes"])
 def test_catalog_sweeps_expand_to_valid_deterministic_plans(name):
     path = CATALOG_DIR / "sweeps" / f"{name}.toml"
     plan = expand(load_sweep(path))

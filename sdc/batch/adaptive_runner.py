@@ -33,7 +33,7 @@ import pandas as pd
 from analysis.failure_modes import failure_modes
 from analysis.plain_json import json_plain
 from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
-from analysis.rare_report import summary_path
+from analysis.rare_report import mode_estimates, summary_path, with_replay
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
@@ -265,20 +265,22 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
     ordered = sorted(rows.values(), key=lambda r: r["run_index"])
     modes = None  # grouping every failure is for the end, not for each batch
     if state != "running":
-        found = failure_modes(pd.DataFrame(ordered), sweep.params) if ordered else []
-        modes = [m.to_plain() for m in found]
-    sampler = loop.sampler
+        table = pd.DataFrame(ordered)
+        found = failure_modes(table, sweep.params) if ordered else []
+        modes = with_replay([m.to_plain() for m in found], out_dir)
+        if isinstance(loop, EstimationLoop) and ordered:
+            modes = mode_estimates(table, modes, loop.sampler.proposal.max_weight)
     summary = {
         "mode": settings.mode, "state": state,
         "controller": controller_label(settings.controller), "score": settings.score,
         "batch_size": settings.batch_size, "max_runs": settings.max_runs,
         "runs": len(rows),
-        "adaptation_runs": sampler.adaptation_runs,
-        "adaptation_levels": [float(g) for g in sampler.levels],
+        "adaptation_levels": [float(g) for g in loop.levels],
         "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
                                for r in rows.values()),
         "invalid_samples": sum(r["score"] is None for r in rows.values()),
         "failure_modes": modes,
+        "modes_found": None if modes is None else len(modes),
     }
     if isinstance(loop, SearchLoop):
         failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
@@ -295,8 +297,11 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
 
 
 def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
+    sampler = loop.sampler
     fields = {"target_rhw": loop.target_rhw,
-              "max_weight": loop.sampler.proposal.max_weight,
+              "adaptation_runs": sampler.adaptation_runs,
+              "level_ess": [float(e) for e in sampler.level_ess],
+              "max_weight": sampler.proposal.max_weight,
               "history": [dataclasses.asdict(h) for h in loop.history],
               "stopped": loop.stopped if state == "finished" else None}
     if loop.sampler.estimation_log_weights.size == 0:

@@ -1,0 +1,143 @@
+"""The catalog family seed-modes: three rare failure regions of the seed maneuver (and a
+tiny fourth), with a documented truth."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from analysis.grid_probability import box_probability, grid_probability
+from scenarios import CATALOG_DIR
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.sweep_spec import expand, load_sweep, set_path
+
+FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"
+TRUTH = json.loads((CATALOG_DIR / "sweeps" / "seed-modes.truth.json").read_text())
+SPEED, OFFSET = "ego.speed_mps", "obstacles[0].lateral_offset_m"
+INF = float("inf")
+
+
+def normals() -> list[tuple[float, float]]:
+    return [tuple(TRUTH["nominal"][name]["normal"]) for name in (SPEED, OFFSET)]
+
+
+def test_the_family_is_continuous_deterministic_and_runs_the_seed():
+    sweep = load_sweep(FAMILY)
+    assert sweep.controllers == ("seed",) and sweep.sampler == "random"
+    assert {p.kind for p in sweep.params} == {"normal"}
+    base = sweep.base
+    assert base.traffic.flow_vph_per_lane == 0 and base.lidar.noise_std_m == 0
+    assert all(run.spec is not None for run in expand(sweep.with_samples(50)))
+
+
+def test_the_truth_file_describes_this_family():
+    """The nominal, and what the truth's geometry rests on: the barrel on the ego's
+    lane centre of five 3.5 m lanes (both road edges 2.5 lane widths away), the seed's
+    11 beams reaching 5 m, the lidar's 1-degree beams."""
+    sweep = load_sweep(FAMILY)
+    params = {p.path: list(p.args) for p in sweep.params}
+    assert {name: table["normal"] for name, table in TRUTH["nominal"].items()} == params
+    assert TRUTH["family"] == "scenarios/catalog/sweeps/seed-modes.toml"
+    base = sweep.base
+    assert (base.road.lanes, base.road.lane_width_m, base.ego.lane) == (5, 3.5, 2)
+    assert [(o.kind, o.lane, o.lateral_offset_m) for o in base.obstacles] == [("barrel", 2, 0.0)]
+    assert (base.lidar.beams, base.lidar.fov_deg) == (180, 180.0)
+    seed = base.controller.params
+    assert (base.controller.name, seed.detect_beams, seed.detect_range_m) == ("seed", 11, 5.0)
+
+
+def test_the_recorded_truth_is_rare_tight_and_the_sum_of_its_modes():
+    p = TRUTH["p_true"]
+    assert 1e-4 <= p <= 1e-3
+    assert TRUTH["p_low"] <= p <= TRUTH["p_high"]
+    assert TRUTH["bound"] == pytest.approx(max(p - TRUTH["p_low"], TRUTH["p_high"] - p))
+    assert TRUTH["bound"] < 0.01 * p
+    modes = TRUTH["modes"]
+    assert [(m["name"], m["outcome"]) for m in modes] == [
+        ("speed", "road_edge"), ("left", "obstacle"), ("right", "obstacle"),
+        ("low_speed", "obstacle")]
+    for mode_key, total_key in (("p", "p_true"), ("p_low", "p_low"), ("p_high", "p_high")):
+        assert sum(m[mode_key] for m in modes) == pytest.approx(TRUTH[total_key])
+    for m in modes:
+        assert m["p_low"] <= m["p"] <= m["p_high"]
+    # three modes of about a third each; the fourth negligible
+    assert all(0.25 * p < m["p"] < 0.45 * p for m in modes[:3])
+    assert modes[3]["p_high"] < 1e-3 * p
+
+
+def test_the_truth_recomputes_from_the_recorded_boundaries():
+    """benchmarks/seed_modes_truth.py's integral over the recorded brackets and the
+    recorded low-speed region, without SUMO."""
+    b = TRUTH["boundaries"]
+    v_e, d_l, d_r = tuple(b["speed_mps"]), tuple(b["left_offset_m"]), tuple(b["right_offset_m"])
+    f_l, f_r = tuple(b["far_left_offset_m"]), tuple(b["far_right_offset_m"])
+
+    def neg(bracket):
+        return -bracket[1], -bracket[0]
+
+    anywhere = ((-INF, -INF), (INF, INF))
+    boxes = [box_probability([(v_e, (INF, INF)), (neg(d_r), d_l)], normals()),
+             box_probability([anywhere, (d_l, f_l)], normals()),
+             box_probability([anywhere, (neg(f_r), neg(d_r))], normals())]
+    check = TRUTH["check"]
+    speeds = np.linspace(*check["speed_grid"])
+    offsets = np.linspace(*check["offset_grid"])
+    last = np.array([-INF if t is None else t for t in check["low_speed_last_hit_by_offset_mps"]])
+    low = grid_probability(speeds[:, None] <= last[None, :] + 1e-9, [speeds, offsets], normals())
+    again = [(x.p, x.low, x.high) for x in boxes] + [(low.p, low.low, low.high)]
+    for mode, (p, p_low, p_high) in zip(TRUTH["modes"], again, strict=True):
+        assert (mode["p"], mode["p_low"], mode["p_high"]) == pytest.approx((p, p_low, p_high),
+                                                                           rel=1e-9)
+    assert sum(p for p, _, _ in again) == pytest.approx(TRUTH["p_true"], rel=1e-9)
+
+
+def test_the_boundaries_are_where_the_geometry_puts_them():
+    b = TRUTH["boundaries"]
+    for side in ("left_offset_m", "right_offset_m"):
+        assert b[side][0] <= b["detection_offset_geometry_m"] <= b[side][1]
+    assert b["speed_mps"][1] - b["speed_mps"][0] < 1e-4
+    assert b["speed_mps"][0] <= b["speed_interpolated_mps"] <= b["speed_mps"][1]
+
+
+def test_the_scans_and_the_check_grid_agreed_run_by_run():
+    scans = TRUTH["scans"]
+    assert scans["speed"]["gap_spread_across_offsets_m"] <= 1e-6
+    assert len(scans["speed"]["offsets_m"]) >= 3
+    assert len(scans["left"]["speeds_mps"]) >= 3 and len(scans["right"]["speeds_mps"]) >= 3
+    check = TRUTH["check"]
+    assert check["outcome_mismatches"] == 0 and check["maneuver_mismatches"] == 0
+    assert check["road_edge_gap_spread_in_detected_band_m"] <= 1e-6
+    assert check["collision_with"] == ["obstacle", "road_edge"]
+    grid = check["grid_estimate"]
+    assert grid["low"] <= TRUTH["p_true"] <= grid["high"]
+    assert grid["outside_mass"] < 1e-6 * TRUTH["p_true"]
+
+
+def test_the_gap_score_leads_to_the_speed_boundary_only():
+    """What the family tests in an estimator: the default score falls to 0 toward the
+    road_edge region, but stays flat up to the offset regions' boundaries."""
+    score = TRUTH["score"]
+    toward_speed = [point["score"] for point in score["speed_at_offset_0"]]
+    assert toward_speed == sorted(toward_speed, reverse=True) and toward_speed[-1] < 0.01
+    for side in ("left_at_3.6_mps", "right_at_3.6_mps"):
+        assert min(point["score"] for point in score[side]) > 2.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("example", TRUTH["boundary_examples"],
+                         ids=lambda e: f"{e['boundary']}-{e['speed_mps']:.6g}mps-"
+                                       f"{e['lateral_offset_m']:.6g}m")
+def test_runs_beside_the_boundaries_collide_or_pass_as_the_truth_says(example):
+    from sdc.run.episode import run_episode
+
+    plain = load_sweep(FAMILY).base.to_plain()
+    set_path(plain, SPEED, example["speed_mps"])
+    set_path(plain, OFFSET, example["lateral_offset_m"])
+    row = run_episode(ScenarioSpec.from_plain(plain)).row
+    assert row["collision"] is example["collision"]
+    assert row["collision_with"] == example["collision_with"]
+    if "predicted_road_edge_gap_m" in example and not example["collision"]:
+        assert row["min_road_edge_gap_m"] == pytest.approx(example["predicted_road_edge_gap_m"],
+                                                           abs=1e-6)
