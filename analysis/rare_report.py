@@ -70,9 +70,17 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     return out
 
 
-def with_replay(modes: list[dict], sweep_dir: Path) -> list[dict]:
-    """The modes with the command that replays each one's example run."""
-    return [{**m, "replay": f"sdc replay {sweep_dir} --run {m['example_run']}"} for m in modes]
+def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
+                    max_weight: float = math.inf) -> list[dict]:
+    """The failure modes of a search or estimate directory's rows, plain: each with the
+    command that replays its example run and, where there are estimation rows, its part
+    of P (:func:`mode_estimates`). The one place ``search.json``, ``estimate.json`` and
+    the report get them from."""
+    if results.empty:
+        return []
+    modes = [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
+             for m in failure_modes(results, params)]
+    return mode_estimates(results, modes, max_weight)
 
 
 def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
@@ -114,14 +122,13 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
         "batches": int(results.batch.max()) + 1,
         "failures": len(failed),
         "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
-        "failure_modes": with_replay([m.to_plain() for m in
-                                      failure_modes(results, sweep_params(manifest))], sweep_dir),
+        "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
+                                         saved.get("max_weight") or math.inf),
         "adaptation_levels": saved.get("adaptation_levels"),
     }
     if mode == "estimate":
         max_weight = saved.get("max_weight") or math.inf
         estimate = estimate_of(results, max_weight=max_weight)
-        summary["failure_modes"] = mode_estimates(results, summary["failure_modes"], max_weight)
         summary["target_rhw"] = settings["target_rhw"]
         summary["stopped"] = saved.get("stopped")
         summary["level_ess"] = saved.get("level_ess")

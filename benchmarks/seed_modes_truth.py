@@ -63,14 +63,13 @@ Prints the result as JSON; ``--write`` stores it beside the family as
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from truth_sweeps import read_sweep, sweep_record  # beside this script
+from truth_sweeps import publish, read_sweep, sweep_record  # beside this script
 
 from analysis.grid_probability import Bracket, box_probability, grid_probability
 from analysis.run_score import run_score
@@ -459,17 +458,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write", action="store_true", help=f"store as {TRUTH_FILE.name}")
     args = parser.parse_args(argv)
     result = truth(args.speed_dir, args.left_dir, args.right_dir, args.check_dir)
-    text = json.dumps(result, indent=1) + "\n"
-    print(text, end="")
     check = result["check"]
-    if (check["outcome_mismatches"] or check["maneuver_mismatches"]
-            or check["road_edge_gap_spread_in_detected_band_m"] > GAP_TOLERANCE_M):
-        print("the check grid contradicts the structure: the truth does not hold",
-              file=sys.stderr)
-        return 1
-    if args.write:
-        TRUTH_FILE.write_text(text)
-    return 0
+    contradicted = (check["outcome_mismatches"] or check["maneuver_mismatches"]
+                    or check["road_edge_gap_spread_in_detected_band_m"] > GAP_TOLERANCE_M)
+    return publish(result, "the structure" if contradicted else None, TRUTH_FILE, args.write)
 
 
 if __name__ == "__main__":

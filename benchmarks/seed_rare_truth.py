@@ -37,14 +37,13 @@ Prints the result as JSON; ``--write`` stores it beside the family as
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from truth_sweeps import read_sweep, sweep_record  # beside this script
+from truth_sweeps import publish, read_sweep, sweep_record  # beside this script
 
 from analysis.grid_probability import grid_probability, threshold_probability
 from scenarios import CATALOG_DIR
@@ -191,16 +190,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write", action="store_true", help=f"store as {TRUTH_FILE.name}")
     args = parser.parse_args(argv)
     result = truth(args.scan_dir, args.check_dir)
-    text = json.dumps(result, indent=1) + "\n"
-    print(text, end="")
     check = result["check"]
-    if check["outcome_mismatches"] or check["passing_runs_gap_larger_than_predicted"]:
-        print("the check grid contradicts the shift claim: the truth does not hold",
-              file=sys.stderr)
-        return 1
-    if args.write:
-        TRUTH_FILE.write_text(text)
-    return 0
+    contradicted = (check["outcome_mismatches"]
+                    or check["passing_runs_gap_larger_than_predicted"])
+    return publish(result, "the shift claim" if contradicted else None, TRUTH_FILE, args.write)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ as scripts and import it from beside them.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -37,3 +38,17 @@ def sweep_record(out_dir: Path, rows: pd.DataFrame, manifest: dict) -> dict:
         "started_at": manifest["started_at"], "git": manifest["git"],
         "plan_sha256": manifest["plan_sha256"], "versions": manifest["versions"],
     }
+
+
+def publish(result: dict, contradicted: str | None, truth_file: Path, write: bool) -> int:
+    """Print the truth as JSON; refuse it (exit status 1, ``contradicted`` says why) when the
+    check grid contradicts what it assumed, else store it as ``truth_file`` if ``write``."""
+    text = json.dumps(result, indent=1) + "\n"
+    print(text, end="")
+    if contradicted:
+        print(f"the check grid contradicts {contradicted}: the truth does not hold",
+              file=sys.stderr)
+        return 1
+    if write:
+        truth_file.write_text(text)
+    return 0

@@ -30,10 +30,9 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
-from analysis.failure_modes import failure_modes
 from analysis.plain_json import json_plain
 from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
-from analysis.rare_report import mode_estimates, summary_path, with_replay
+from analysis.rare_report import described_modes, summary_path
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
@@ -265,16 +264,14 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
     ordered = sorted(rows.values(), key=lambda r: r["run_index"])
     modes = None  # grouping every failure is for the end, not for each batch
     if state != "running":
-        table = pd.DataFrame(ordered)
-        found = failure_modes(table, sweep.params) if ordered else []
-        modes = with_replay([m.to_plain() for m in found], out_dir)
-        if isinstance(loop, EstimationLoop) and ordered:
-            modes = mode_estimates(table, modes, loop.sampler.proposal.max_weight)
+        modes = described_modes(pd.DataFrame(ordered), sweep.params, out_dir,
+                                loop.sampler.proposal.max_weight)
     summary = {
         "mode": settings.mode, "state": state,
         "controller": controller_label(settings.controller), "score": settings.score,
         "batch_size": settings.batch_size, "max_runs": settings.max_runs,
         "runs": len(rows),
+        "adaptation_runs": loop.sampler.adaptation_runs,
         "adaptation_levels": [float(g) for g in loop.levels],
         "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
                                for r in rows.values()),
@@ -299,7 +296,6 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
 def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
     sampler = loop.sampler
     fields = {"target_rhw": loop.target_rhw,
-              "adaptation_runs": sampler.adaptation_runs,
               "level_ess": [float(e) for e in sampler.level_ess],
               "max_weight": sampler.proposal.max_weight,
               "history": [dataclasses.asdict(h) for h in loop.history],
