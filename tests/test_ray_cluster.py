@@ -247,14 +247,17 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
     assert all(a.read_bytes() == b.read_bytes()  # metadata too: the driver's paths
                for a, b in zip(traces["ray"], traces["local"], strict=True))
 
-    # the manifest names the files by the driver's paths and their hashes, and every
-    # node ran on copies of its own with those hashes
+    # the manifest names the files by the driver's paths and their hashes, and the nodes
+    # ran on copies of their own with those hashes. Ray decides which node takes which
+    # run (a node that starts its worker late may take none of one controller's), so
+    # each file must have reached a node, and every copy a node holds must be exact.
     net, plugin = (tmp_path / "scenarios" / "net" / "town.net.xml",
                    tmp_path / "scenarios" / "plugins" / "cautious.py")
     recorded = json.loads((tmp_path / "ray" / "manifest.json").read_text())["files"]
     for path, field in ((net, "road.net_file"), (plugin, "controller.name")):
         sha = hashlib.sha256(path.read_bytes()).hexdigest()
         assert recorded[str(path)] == {"field": field, "sha256": sha}
-        for node in nodes:
-            copy = node / "cache" / "job-files" / sha / path.name
-            assert copy.read_bytes() == path.read_bytes(), copy
+        copies = [node / "cache" / "job-files" / sha / path.name for node in nodes]
+        present = [copy for copy in copies if copy.exists()]
+        assert present, f"no node holds a copy of {path.name}"
+        assert all(copy.read_bytes() == path.read_bytes() for copy in present), present
