@@ -132,6 +132,7 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
         summary["target_rhw"] = settings["target_rhw"]
         summary["stopped"] = saved.get("stopped")
         summary["level_ess"] = saved.get("level_ess")
+        summary["level_uncovered"] = saved.get("level_uncovered")
         summary["estimate"] = None if estimate is None else {
             "p_collision": estimate.p_collision, "ci_low": estimate.ci_low,
             "ci_high": estimate.ci_high, "rhw": estimate.rhw, "runs": estimate.runs,
@@ -180,10 +181,13 @@ def headline(summary: dict) -> list[str]:
 def _diagnostics(summary: dict) -> str:
     """The sampler's own diagnostics, one line."""
     e, levels = summary["estimate"], summary.get("adaptation_levels") or []
-    ess = summary.get("level_ess") or []
-    ess = list(ess) + [None] * (len(levels) - len(ess))
+    ess = list(summary.get("level_ess") or [])
+    ess += [None] * (len(levels) - len(ess))
+    uncovered = list(summary.get("level_uncovered") or [])
+    uncovered += [0] * (len(levels) - len(uncovered))
     steps = ", ".join(f"{g:.3g}" + (f" (ESS {n:.0f})" if n is not None else "")
-                      for g, n in zip(levels, ess, strict=True))
+                      + (f" ({u} beyond its kernels)" if u else "")
+                      for g, n, u in zip(levels, ess, uncovered, strict=True))
     return (f"diagnostics: {len(summary['failure_modes'])} failure mode(s); the largest run "
             f"carries {100 * e['max_term_share']:.1f}% of P; adaptation thresholds {steps}")
 

@@ -428,12 +428,16 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
            **options) -> None:
     """Search a sweep's parameter space for collisions with few runs.
 
-    The sweep's [sweep.params] distributions are where it starts; a cross-entropy
-    search then draws each batch closer to the runs with the lowest score (closest
-    approach), so near misses lead it to collisions. Every run is a row of DIR
-    (with its batch), replayable with sdc replay. DIR/search.json names the
-    failures found, grouped into modes by what was hit and parameter region.
-    A search finds failures; how often it fails is not a probability (sdc estimate).
+    The sweep's [sweep.params] distributions are where it starts. Each batch then
+    descends toward the runs with the lowest score (closest approach), so near
+    misses lead it to collisions; once a collision is found, its direction is
+    set aside and the descent heads elsewhere, part of each batch revisits every
+    mode found, and a wide share keeps landing runs in regions no near miss warns
+    of, so a scenario that fails in several ways shows each of them. Every run is
+    a row of DIR (with its batch), replayable with sdc replay. DIR/search.json
+    lists the failure modes (what was hit, parameter region, runs, an example run
+    and its replay command). A search finds failures; how often it fails is not a
+    probability (sdc estimate).
     """
     outcome = _adaptive("search", sweep_file, options, budget, batch_size,
                         stop_after=stop_after)
@@ -470,12 +474,15 @@ def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int
              **options) -> None:
     """Estimate P(collision) under a sweep's parameter distributions, by importance sampling.
 
-    The [sweep.params] distributions are the nominal distribution. A cross-entropy
-    adaptation moves a sampling distribution toward the collisions; then runs are
-    drawn from it and each weighted by nominal / sampling density (the weight is in
-    its row). DIR/estimate.json holds p_collision with its 95% interval, rhw, ess,
-    the runs and mc_equivalent_runs (the plain Monte Carlo runs that would reach
-    the same RHW), and says whether the target RHW or the budget stopped it.
+    The [sweep.params] distributions are the nominal distribution. A multilevel
+    adaptation moves a sampling distribution (a kernel mixture that keeps every
+    failure region it reaches, plus a wide share and the nominal) toward the
+    collisions; then runs are drawn from it and each weighted by nominal /
+    sampling density (the weight is in its row). P(collision) is split by failure
+    mode, each part with its interval. DIR/estimate.json holds p_collision with
+    its 95% interval, rhw, ess, the runs and mc_equivalent_runs (the plain Monte
+    Carlo runs that would reach the same RHW), and says whether the target RHW or
+    the budget stopped it.
     A run with no outcome (error, timeout) counts as a collision.
     """
     if not target_rhw > 0:

@@ -113,9 +113,10 @@ def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     modes = summary["failure_modes"]
     assert sum(m["runs"] for m in modes) == summary["failures"]
     assert {m["outcome"] for m in modes} <= {"obstacle", "road_edge"}
-    # the batches went toward failure: the later ones fail more than the nominal first one
-    by_batch = results.groupby("batch").collision.mean()
-    assert by_batch[2] > by_batch[0]
+    # each mode names an example run of its own and the command that replays it
+    for mode in modes:
+        assert mode["example_run"] in mode["run_ids"]
+        assert mode["replay"] == f"sdc replay {out} --run {mode['example_run']}"
     # a failed run replays to the same trace
     run_id = results[collided].run_id.iloc[0]
     replay = sdc("replay", out, "--run", run_id, "--verify")
@@ -181,16 +182,24 @@ def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path)
 
 
 @pytest.mark.slow
-def test_a_search_on_ray_draws_the_same_runs_as_on_local_processes(tmp_path):
+@pytest.mark.parametrize("settings", [
+    AdaptiveSettings("search", "seed", 40, 20),
+    AdaptiveSettings("estimate", "seed", 150, 50, target_rhw=0.05),
+], ids=["search", "estimate"])
+def test_search_and_estimate_on_ray_draw_the_same_runs_as_on_local_processes(tmp_path,
+                                                                             settings):
     sweep = load_sweep(write(tmp_path, "toy", TOY))
-    settings = AdaptiveSettings("search", "seed", 40, 20)
-    tables = []
+    tables, summaries = [], []
     for name, executor in (("local", LocalExecutor(2)), ("ray", RayExecutor(2))):
-        run_adaptive(sweep, tmp_path / name, executor, QuietReporter(), settings)
+        outcome = run_adaptive(sweep, tmp_path / name, executor, QuietReporter(), settings)
         tables.append(pd.read_parquet(tmp_path / name / "results.parquet"))
-    columns = ["run_id", "seed", "batch", "weight", "score", "trace_sha256",
+        summaries.append(outcome.summary)
+    columns = ["run_id", "seed", "batch", "phase", "weight", "score", "trace_sha256",
                "p.ego.speed_mps"]
     assert tables[0][columns].equals(tables[1][columns])
+    assert set(tables[0].phase) > {"adapt"}  # past the adaptation: the estimate's own runs
+    if settings.mode == "estimate":
+        assert summaries[0]["p_collision"] == summaries[1]["p_collision"] > 0
 
 
 # ---------------------------------------------------------------- wrong use

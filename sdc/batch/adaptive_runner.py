@@ -1,8 +1,10 @@
 """Search and estimate: sweeps whose samples are drawn batch by batch, toward failure.
 
 ``sdc search`` and ``sdc estimate`` read a sweep's ``[sweep.params]`` as the
-nominal distribution and let a cross-entropy sampler (:mod:`analysis.rare_events`)
-draw each batch from what the previous ones scored (:mod:`analysis.run_score`).
+nominal distribution and let a sampler draw each batch from what the previous
+ones scored (:mod:`analysis.run_score`): the mode-finding search of
+:mod:`analysis.mode_search`, the multilevel importance sampler of
+:mod:`analysis.rare_events`.
 The batches run on the sweep executors.
 
 The directory is a sweep directory whose plan grows: each batch's runs are
@@ -30,8 +32,9 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
+from analysis.mode_search import ModeSearch
 from analysis.plain_json import json_plain
-from analysis.rare_events import EstimationLoop, SearchLoop, unit_points
+from analysis.rare_events import EstimationLoop, unit_points
 from analysis.rare_report import described_modes, summary_path
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
@@ -114,11 +117,11 @@ def settings_sha256(sweep: SweepSpec, settings: AdaptiveSettings) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
-def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | SearchLoop:
+def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | ModeSearch:
     rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[2])
     dims = len(sweep.params)
     if settings.mode == "search":
-        return SearchLoop(dims, settings.max_runs, rng, settings.batch_size,
+        return ModeSearch(dims, settings.max_runs, rng, settings.batch_size,
                           stop_after=settings.stop_after, elite_fraction=settings.elite_fraction)
     return EstimationLoop(dims, settings.target_rhw, settings.max_runs, rng,
                           settings.batch_size, elite_fraction=settings.elite_fraction)
@@ -258,20 +261,20 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
 
 
 def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
-                   loop: EstimationLoop | SearchLoop, rows: dict[str, dict], state: str) -> dict:
+                   loop: EstimationLoop | ModeSearch, rows: dict[str, dict], state: str) -> dict:
     """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted
     (``failure_modes`` is None while running)."""
     ordered = sorted(rows.values(), key=lambda r: r["run_index"])
     modes = None  # grouping every failure is for the end, not for each batch
-    if state != "running":
-        modes = described_modes(pd.DataFrame(ordered), sweep.params, out_dir,
-                                loop.sampler.proposal.max_weight)
+    if state != "running":  # a search has no estimation rows, hence no max_weight
+        max_weight = loop.max_weight if isinstance(loop, EstimationLoop) else math.inf
+        modes = described_modes(pd.DataFrame(ordered), sweep.params, out_dir, max_weight)
     summary = {
         "mode": settings.mode, "state": state,
         "controller": controller_label(settings.controller), "score": settings.score,
         "batch_size": settings.batch_size, "max_runs": settings.max_runs,
         "runs": len(rows),
-        "adaptation_runs": loop.sampler.adaptation_runs,
+        "adaptation_runs": loop.adaptation_runs,
         "adaptation_levels": [float(g) for g in loop.levels],
         "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
                                for r in rows.values()),
@@ -279,7 +282,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
         "failure_modes": modes,
         "modes_found": None if modes is None else len(modes),
     }
-    if isinstance(loop, SearchLoop):
+    if isinstance(loop, ModeSearch):
         failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
         stopped = "failures found" if loop.found_enough else "budget"
         summary.update(stopped=stopped if state == "finished" else None,
@@ -297,7 +300,8 @@ def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
     sampler = loop.sampler
     fields = {"target_rhw": loop.target_rhw,
               "level_ess": [float(e) for e in sampler.level_ess],
-              "max_weight": sampler.proposal.max_weight,
+              "level_uncovered": list(sampler.level_uncovered),
+              "max_weight": loop.max_weight,
               "history": [dataclasses.asdict(h) for h in loop.history],
               "stopped": loop.stopped if state == "finished" else None}
     if loop.sampler.estimation_log_weights.size == 0:
