@@ -259,9 +259,20 @@ def html_data(scene: Scene, every: int = 1) -> dict:
 _PAGE = Path(__file__).with_name("replay_page.html")
 
 
+#: characters a JSON text may hold that HTML reads inside a <script> block (``</script>``,
+#: ``<!--``) and their JSON escapes, which JavaScript reads back as the same characters
+_SCRIPT_SAFE = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026"})
+
+
+def script_json(data) -> str:
+    """``data`` as JSON that can sit in a ``<script>`` block: a scenario name, a controller
+    label, a phase or an error message from a shared file stays text and never ends the
+    block (json.dumps leaves ``</script>`` as it is)."""
+    return json.dumps(data, separators=(",", ":")).translate(_SCRIPT_SAFE)
+
+
 def write_html(scene: Scene, path: Path, every: int = 1) -> int:
     """Write the self-contained interactive page; returns the number of frames."""
     data = html_data(scene, every)
-    text = _PAGE.read_text().replace("/*DATA*/null", json.dumps(data, separators=(",", ":")))
-    Path(path).write_text(text)
+    Path(path).write_text(_PAGE.read_text().replace("/*DATA*/null", script_json(data)))
     return len(data["frames"])

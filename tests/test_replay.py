@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import shutil
 import subprocess
 import sys
@@ -12,7 +13,7 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from analysis.render import frame_steps
+from analysis.render import frame_steps, scene_from_trace, script_json, write_html
 from analysis.trace_file import Trace, read_trace
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
@@ -152,6 +153,39 @@ def test_html_page_steps_on_click_in_headless_chromium(sweep_dir, tmp_path):
         page.click("#beams")  # beams off, still drawing
         page.click("#prev")
         assert page.get_attribute("body", "data-step") == "3"
+        browser.close()
+    assert problems == []
+
+
+HOSTILE = "</script><img src=x onerror=document.title=666><!-- & \u2028"
+
+
+def test_data_in_a_script_block_stays_text():
+    data = {"title": HOSTILE, "frames": [{"phase": "</SCRIPT >"}]}
+    text = script_json(data)
+    assert not set("<>&") & set(text)
+    assert json.loads(text) == data
+
+
+@pytest.mark.slow
+def test_a_hostile_scenario_name_runs_no_script_in_the_replay_page(sweep_dir, tmp_path):
+    """The issue's case: a name that closes the script block and adds a handler."""
+    from playwright.sync_api import sync_playwright
+
+    scene = scene_from_trace(*read_trace(sweep_dir / "traces" / f"{RUN}.parquet"))
+    page_file = tmp_path / "run.html"
+    write_html(dataclasses.replace(scene, title=HOSTILE), page_file, every=20)
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
+            "--no-sandbox", "--disable-gpu", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update"])
+        page = browser.new_page()
+        problems = []
+        page.on("pageerror", lambda e: problems.append(str(e)))
+        page.goto(page_file.as_uri())
+        page.wait_for_timeout(200)  # time for an injected image's error handler
+        assert page.text_content("#title") == HOSTILE  # shown as text
+        assert page.title() != "666" and page.query_selector("img") is None
         browser.close()
     assert problems == []
 
