@@ -324,6 +324,16 @@ def junit_xml(results: pd.DataFrame, name: str) -> str:
     return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
 
 
+def by_column(results: pd.DataFrame, name: str) -> str:
+    """The column ``--by NAME`` means: a swept parameter's path with or without its
+    ``p.`` prefix (``ego.speed_mps`` or ``p.ego.speed_mps``), or any other column."""
+    for column in (name, f"p.{name}"):
+        if column in results.columns:
+            return column
+    known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
+    raise ReportError("--by", f"no column {name!r} (swept parameters: {known})")
+
+
 def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),
                  junit_path: Path | None = None, method: Method = "wilson") -> Report:
     sweep_dir = Path(sweep_dir)
@@ -336,11 +346,7 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
             raise ReportError("--by", "a search or estimate has no rates by parameter (its "
                               "runs were drawn toward failure); see its failure modes")
         return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
-    for column in by:
-        if column not in results.columns:
-            known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
-            raise ReportError("--by", f"no column {column!r} (swept parameters: {known})")
-    by = list(by) or varying_parameters(results)
+    by = [by_column(results, column) for column in by] or varying_parameters(results)
     summary = build_summary(results, manifest, by, method)
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(html_page(summary, results, sweep_dir, figures(results, by, method)))

@@ -210,8 +210,9 @@ def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] 
 @click.option("--out", "html_path", type=click.Path(dir_okay=False, path_type=Path),
               metavar="FILE.html", help="The HTML page  [default: DIR/report.html].")
 @click.option("--by", multiple=True, metavar="PARAM",
-              help="Group rates by this column, e.g. p.ego.speed_mps (repeatable; "
-                   "continuous ones in bins)  [default: every swept parameter that varies].")
+              help="Group rates by this parameter, e.g. ego.speed_mps or p.ego.speed_mps "
+                   "(repeatable; continuous ones in bins)  [default: every swept parameter "
+                   "that varies].")
 @click.option("--junit", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.xml",
               help="Also write JUnit XML: one test case per run, a collision a failure.")
 @click.option("--interval", type=click.Choice(["wilson", "clopper-pearson"]),

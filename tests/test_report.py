@@ -177,6 +177,11 @@ def test_cli_report_and_its_bad_inputs(small_sweep, tmp_path):
     assert sum(line.startswith("seed") and f"{low} - {high}" in line
                for line in result.output.splitlines()) == 1
 
+    # a parameter's path as the sweep file spells it is the same column
+    plain = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "ego.speed_mps"])
+    assert plain.exit_code == 0, plain.output
+    assert list(json.loads((small_sweep / "summary.json").read_text())["by"]) == \
+        ["p.ego.speed_mps"]
     bad_by = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "p.ego.nope"])
     assert bad_by.exit_code == 2 and "--by: no column 'p.ego.nope'" in bad_by.output
     no_dir = CliRunner().invoke(main, ["report", str(small_sweep), "--out",
