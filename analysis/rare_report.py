@@ -122,6 +122,8 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
         "batches": int(results.batch.max()) + 1,
         "failures": len(failed),
         "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
+        "first_failure_run_id": (failed.loc[failed.run_index.idxmin(), "run_id"]
+                                 if len(failed) else None),
         "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
                                          saved.get("max_weight") or math.inf),
         "adaptation_levels": saved.get("adaptation_levels"),
@@ -141,6 +143,14 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
             "mc_equivalent_runs": estimate.mc_equivalent_runs,
             "acceleration": estimate.mc_equivalent_runs / estimate.runs}
     return summary
+
+
+def first_failure_words(summary: dict) -> str:
+    """", the first: run ID, after N runs" (ids count from 0, N from 1), or nothing."""
+    first = summary.get("first_failure_run")
+    if not first:
+        return ""
+    return f", the first: run {summary['first_failure_run_id']}, after {first} runs"
 
 
 def headline(summary: dict) -> list[str]:
@@ -171,9 +181,7 @@ def headline(summary: dict) -> list[str]:
                       f"[{m['ci_low']:.3g}, {m['ci_high']:.3g}], {100 * m['share']:.0f}% of it"
                       for i, m in enumerate(summary["failure_modes"], start=1)
                       if "p_collision" in m]
-    first = summary["first_failure_run"]
-    lines.append(f"{summary['failures']} failed runs" + (f", the first at run {first}"
-                                                         if first else "")
+    lines.append(f"{summary['failures']} failed runs" + first_failure_words(summary)
                  + ("; the drawn runs are aimed at failure, so their share is no probability"))
     return lines
 

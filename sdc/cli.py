@@ -440,12 +440,13 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     and its replay command). A search finds failures; how often it fails is not a
     probability (sdc estimate).
     """
+    from analysis.rare_report import first_failure_words
+
     outcome = _adaptive("search", sweep_file, options, budget, batch_size,
                         stop_after=stop_after)
     summary = outcome.summary
-    first = summary.get("first_failure_run")
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
-               + (f"; the first at run {first}" if first else ""))
+               + first_failure_words(summary))
     modes = summary.get("failure_modes") or []
     for mode in modes[:8]:
         click.echo(f"  {_mode_line(mode)}")

@@ -287,6 +287,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
         stopped = "failures found" if loop.found_enough else "budget"
         summary.update(stopped=stopped if state == "finished" else None,
                        failures=len(failed), first_failure_run=loop.first_failure_run,
+                       first_failure_run_id=failed[0] if failed else None,
                        failure_run_ids=failed)
     else:
         summary.update(_estimate_fields(loop, state))
