@@ -64,8 +64,8 @@ def _field_value(obj: Any, name: str) -> Any:
     return getattr(obj, name, None)
 
 
-def check_path(spec: ScenarioSpec, path: str) -> None:
-    """Raise ``ValueError`` unless ``path`` names a single value of ``spec``."""
+def check_path(spec: ScenarioSpec, path: str) -> Any:
+    """The value ``path`` names in ``spec``; ``ValueError`` unless it names a single one."""
     obj: Any = spec
     segments = parse_path(path)
     for depth, (name, index) in enumerate(segments):
@@ -83,6 +83,7 @@ def check_path(spec: ScenarioSpec, path: str) -> None:
             obj = obj[index]
     if dataclasses.is_dataclass(obj) or isinstance(obj, tuple):
         raise ValueError("names a table; address one of its fields")
+    return obj
 
 
 def set_path(plain: dict, path: str, value: Any) -> None:
@@ -281,7 +282,7 @@ class SweepSpec:
         for path, dist in params.items():
             field = f'sweep.params."{path}"'
             try:
-                check_path(base, path)
+                base_value = check_path(base, path)
             except ValueError as e:
                 raise SpecError(field, f"unknown parameter path: {e}") from None
             name = path.removeprefix("controller.")
@@ -289,7 +290,13 @@ class SweepSpec:
                     base.controller.takes(c, name) for c in controllers):
                 raise SpecError(field, f"none of the sweep's controllers takes {name!r} "
                                 f"(a plug-in takes parameters when the base scenario names it)")
-            parsed.append(parse_param(path, dist, field))
+            param = parse_param(path, dist, field)
+            if (param.continuous and isinstance(base_value, int)
+                    and not isinstance(base_value, bool)):
+                raise SpecError(field, f"{path} is a whole number (the base has "
+                                f"{base_value!r}) and {param.kind} draws fractions: "
+                                "use int_range or choice")
+            parsed.append(param)
 
         if meta.sampler == "grid":
             if meta.samples is not None:

@@ -130,6 +130,10 @@ def test_an_invalid_sample_is_reported_with_its_values():
      'sweep.params."ego.speed_mps".uniform', "inverted range"),
     ({"params": {"ego.lane": {"int_range": [2, 0]}}}, 'sweep.params."ego.lane".int_range',
      "inverted range"),
+    ({"params": {"ego.lane": {"uniform": [0, 2]}}}, 'sweep.params."ego.lane"',
+     "whole number"),
+    ({"params": {"obstacles[0].lane": {"normal": [1.0, 0.5]}}},
+     'sweep.params."obstacles[0].lane"', "use int_range or choice"),
     ({"params": {"ego.speed_mps": {"loguniform": [0.0, 2.0]}}},
      'sweep.params."ego.speed_mps".loguniform', "> 0"),
     ({"params": {"ego.speed_mps": {"normal": [3.0, -1.0]}}},
@@ -178,6 +182,8 @@ def write_sweep(tmp_path, text: str):
      'sweep.params."ego.lane".choice'),
     ('samples = 4\n[sweep.params]\n"ego.speed_mps" = { uniform = [3.0, 1.0] }\n',
      'sweep.params."ego.speed_mps".uniform'),
+    ('samples = 4\n[sweep.params]\n"ego.lane" = { uniform = [0, 2] }\n',
+     'sweep.params."ego.lane"'),
     ("samples = 0\n", "sweep.samples"),
     ('samples = 4\nsampler = "magic"\n', "sweep.sampler"),
     ('samples = 4\ncontrollers = ["seed", "pid"]\n', "sweep.controllers[1]"),
@@ -189,6 +195,8 @@ def test_cli_rejects_bad_sweep_files_with_exit_2(tmp_path, text, field):
     assert f"error: {path}: {field}:" in result.output
     assert "Traceback" not in result.output
     assert not (tmp_path / "out").exists()
+    dry = CliRunner().invoke(main, ["sweep", str(path), "--dry-run"])  # before any run
+    assert dry.exit_code == 2 and f"error: {path}: {field}:" in dry.output
 
 
 def test_cli_dry_run_prints_the_plan(tmp_path):
