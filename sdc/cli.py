@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import shutil
 import sys
 from pathlib import Path
@@ -323,10 +324,28 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
                f"{outcome.collisions} collisions ({outcome.wall_time_s:.1f} s)")
     click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
     if outcome.interrupted or counts["missing"]:
-        click.echo(f"interrupted; to finish: sdc sweep {sweep_file} --out {out_dir} --resume",
-                   err=True)
+        hint = resume_command(sweep_file, out_dir, samples=samples, traces=traces,
+                              executor=executor, workers=workers, ray_address=ray_address,
+                              run_timeout=run_timeout, batch_runs=batch_runs)
+        click.echo(f"interrupted; to finish: {hint}", err=True)
         sys.exit(EXIT_INTERRUPTED)
     sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
+
+
+def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
+                   executor: str, workers: int, ray_address: str | None,
+                   run_timeout: float | None, batch_runs: int | None) -> str:
+    """The command that finishes an interrupted sweep: every option that shaped its plan
+    (--samples; another plan is refused) and how it ran, then --resume; shell-quoted."""
+    words = ["sdc", "sweep", str(sweep_file), "--out", str(out_dir)]
+    optional = [("--samples", samples), ("--traces", None if traces == "failures" else traces),
+                ("--executor", None if executor == "local" else executor),
+                ("--workers", workers), ("--ray-address", ray_address),
+                ("--run-timeout", run_timeout), ("--batch", batch_runs)]
+    for option, value in optional:
+        if value is not None:
+            words += [option, str(value)]
+    return shlex.join([*words, "--resume"])
 
 
 def _executor_options(command):

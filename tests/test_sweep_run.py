@@ -6,6 +6,7 @@ import contextlib
 import inspect
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -293,7 +294,7 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
         else:
             os.killpg(proc.pid, signal.SIGINT)
             assert proc.wait(timeout=60) == 130, proc.stderr.read()
-            assert "--resume" in proc.stderr.read()
+            hint = proc.stderr.read().split("interrupted; to finish: ", 1)[1].splitlines()[0]
             manifest = json.loads((out / "manifest.json").read_text())
             assert manifest["status"] == "interrupted" and manifest["counts"]["missing"] > 0
             partial = pd.read_parquet(out / "results.parquet")
@@ -307,7 +308,12 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
 
     again = sweep_cli(path, "--out", out, "--workers", "2")
     assert again.returncode == 2 and "--resume" in again.stderr  # no silent overwrite
-    resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
+    if how == "ctrl-c":  # the command it printed, as printed
+        words = shlex.split(hint)
+        assert words[:2] == ["sdc", "sweep"] and words[-1] == "--resume"
+        resumed = sweep_cli(*words[2:])
+    else:
+        resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
     assert resumed.returncode == 0, resumed.stderr
     manifest = json.loads((out / "manifest.json").read_text())
     assert [s["runs_to_do"] for s in manifest["sessions"]] == [MANY_RUNS, MANY_RUNS - kept]
@@ -340,3 +346,15 @@ def test_a_directory_left_before_its_manifest_is_taken_and_others_are_refused(tm
     (other / "notes.txt").write_text("mine")
     refused = sweep_cli(sweep, "--out", other, "--workers", "1")
     assert refused.returncode == 2 and "exists and is not a sweep directory" in refused.stderr
+
+
+def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
+    from sdc.cli import resume_command
+
+    hint = resume_command(tmp_path / "my sweep.toml", tmp_path / "out", samples=200,
+                          traces="all", executor="ray", workers=4, ray_address="10.0.0.1:6379",
+                          run_timeout=30.0, batch_runs=None)
+    assert shlex.split(hint) == [
+        "sdc", "sweep", str(tmp_path / "my sweep.toml"), "--out", str(tmp_path / "out"),
+        "--samples", "200", "--traces", "all", "--executor", "ray", "--workers", "4",
+        "--ray-address", "10.0.0.1:6379", "--run-timeout", "30.0", "--resume"]
