@@ -75,7 +75,29 @@ def summary_lines(name: str, row: dict) -> list[str]:
     ]
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Cli(click.Group):
+    """The command group, with one error prefix: click's own usage errors (a missing
+    option, a bad choice) print ``error: ...`` as sdc's do, not ``Error: ...``, with the
+    same exit codes (2 bad input; 130 interrupted)."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
+             **extra):
+        try:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.Abort:  # Ctrl-C where no command catches it
+            click.echo("error: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        except click.ClickException as e:
+            context = getattr(e, "ctx", None)
+            if context is not None:
+                click.echo(context.get_usage(), err=True)
+                click.echo(f"Try '{context.command_path} {context.help_option_names[0]}' "
+                           "for help.\n", err=True)
+            click.echo(f"error: {e.format_message()}", err=True)
+            sys.exit(e.exit_code)
+
+
+@click.group(cls=_Cli, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="sdc")
 def main() -> None:
     """sdc: traffic-scale scenario simulator for a lidar avoid-then-return maneuver.

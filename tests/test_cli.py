@@ -133,3 +133,12 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
     assert other.exit_code == 0, other.output
     assert "starting anew" in other.stderr
     assert len(pd.read_parquet(out / "results.parquet")) == 2 * 3
+
+
+@pytest.mark.parametrize("args", [["sweep"], ["sweep", "x.toml", "--executor", "foo"],
+                                  ["search", "x.toml"], ["nope"]])
+def test_click_usage_errors_carry_the_same_error_prefix_and_exit_2(args):
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 2
+    assert "\nerror: " in result.output and "Error:" not in result.output
+    assert "for help." in result.output
