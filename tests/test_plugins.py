@@ -292,3 +292,15 @@ def test_a_plugin_failing_during_a_run_is_an_error_row_and_the_sweep_goes_on(on_
     assert message["ReturnsNan"].startswith(
         "ControllerError: ReturnsNan.step returned Command(steer_rad=nan")
     assert message["WritesRanges"].startswith("ValueError: assignment destination is read-only")
+
+
+def test_the_example_plugins_sweep_file_runs_as_its_docstring_says(tmp_path):
+    sweep = REPO / "examples" / "cautious-sweep.toml"
+    assert "sdc sweep examples/cautious-sweep.toml" in EXAMPLE.read_text()
+    done = subprocess.run([*SDC, "sweep", "examples/cautious-sweep.toml", "--out",
+                           str(tmp_path / "out"), "--samples", "2", "--workers", "2",
+                           "--quiet"], capture_output=True, text=True, timeout=600, cwd=REPO)
+    assert sweep.exists() and done.returncode == 0, done.stderr
+    rows = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert sorted(rows.controller.unique()) == ["Cautious", "avoid", "seed"]
+    assert (rows.status == "ok").all()
