@@ -26,3 +26,22 @@ def temporary_cache(tmp_path_factory):
         del os.environ["SDC_CACHE_DIR"]
     else:
         os.environ["SDC_CACHE_DIR"] = before
+
+
+@pytest.fixture
+def chromium_page():
+    """A page of headless Chromium (Debian's, driven by Playwright) and the list its
+    uncaught script errors land in."""
+    import shutil
+
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
+            "--no-sandbox", "--disable-gpu", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update"])
+        page = browser.new_page()
+        problems: list[str] = []
+        page.on("pageerror", lambda e: problems.append(str(e)))
+        yield page, problems
+        browser.close()

@@ -168,25 +168,17 @@ def test_data_in_a_script_block_stays_text():
 
 
 @pytest.mark.slow
-def test_a_hostile_scenario_name_runs_no_script_in_the_replay_page(sweep_dir, tmp_path):
+def test_a_hostile_scenario_name_runs_no_script_in_the_replay_page(sweep_dir, tmp_path,
+                                                                  chromium_page):
     """The issue's case: a name that closes the script block and adds a handler."""
-    from playwright.sync_api import sync_playwright
-
     scene = scene_from_trace(*read_trace(sweep_dir / "traces" / f"{RUN}.parquet"))
     page_file = tmp_path / "run.html"
     write_html(dataclasses.replace(scene, title=HOSTILE), page_file, every=20)
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
-            "--no-sandbox", "--disable-gpu", "--no-first-run",
-            "--disable-background-networking", "--disable-component-update"])
-        page = browser.new_page()
-        problems = []
-        page.on("pageerror", lambda e: problems.append(str(e)))
-        page.goto(page_file.as_uri())
-        page.wait_for_timeout(200)  # time for an injected image's error handler
-        assert page.text_content("#title") == HOSTILE  # shown as text
-        assert page.title() != "666" and page.query_selector("img") is None
-        browser.close()
+    page, problems = chromium_page
+    page.goto(page_file.as_uri())
+    page.wait_for_timeout(200)  # time for an injected image's error handler
+    assert page.text_content("#title") == HOSTILE  # shown as text
+    assert page.title() != "666" and page.query_selector("img") is None
     assert problems == []
 
 

@@ -211,11 +211,10 @@ def test_demo_shows_the_physics(tmp_path):
 HOSTILE = "</script><img src=x onerror=document.title=666><!-- \" ' &"
 
 
-def test_a_report_built_from_hostile_names_runs_no_script(small_sweep, tmp_path):
+def test_a_report_built_from_hostile_names_runs_no_script(small_sweep, tmp_path,
+                                                          chromium_page):
     """A sweep name, a controller label and error messages from shared files reach the
     page: they stay text (opened in headless Chromium)."""
-    from playwright.sync_api import sync_playwright
-
     hostile = tmp_path / "hostile"
     shutil.copytree(small_sweep, hostile)
     manifest = json.loads((hostile / "manifest.json").read_text())
@@ -226,20 +225,12 @@ def test_a_report_built_from_hostile_names_runs_no_script(small_sweep, tmp_path)
     results.loc[results.status == "error", "error"] = f"RuntimeError: {HOSTILE}"
     results.to_parquet(hostile / "results.parquet")
     report = write_report(hostile, html_path=tmp_path / "report.html")
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
-            "--no-sandbox", "--disable-gpu", "--no-first-run",
-            "--disable-background-networking", "--disable-component-update"])
-        page = browser.new_page()
-        problems = []
-        page.on("pageerror", lambda e: problems.append(str(e)))
-        page.goto(report.html_path.as_uri())
-        page.wait_for_timeout(200)  # time for an injected image's error handler
-        assert page.title() == f"sdc report: {HOSTILE}"  # the name, as text
-        assert HOSTILE in page.text_content("h1")
-        assert page.evaluate("document.querySelectorAll('img:not([src^=\"data:\"])').length") \
-            == 0
-        body = page.text_content("body")
-        assert f"lk {HOSTILE}" in body and f"error: RuntimeError: {HOSTILE}" in body
-        browser.close()
+    page, problems = chromium_page
+    page.goto(report.html_path.as_uri())
+    page.wait_for_timeout(200)  # time for an injected image's error handler
+    assert page.title() == f"sdc report: {HOSTILE}"  # the name, as text
+    assert HOSTILE in page.text_content("h1")
+    assert page.evaluate("document.querySelectorAll('img:not([src^=\"data:\"])').length") == 0
+    body = page.text_content("body")
+    assert f"lk {HOSTILE}" in body and f"error: RuntimeError: {HOSTILE}" in body
     assert problems == []
