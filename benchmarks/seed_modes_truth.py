@@ -69,12 +69,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from truth_sweeps import publish, read_sweep, sweep_record  # beside this script
+from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # beside this script
 
 from analysis.grid_probability import Bracket, box_probability, grid_probability
 from analysis.run_score import run_score
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
 
 SWEEPS = "scenarios/catalog/sweeps"
 FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"
@@ -102,12 +101,7 @@ class StructureError(SystemExit):
 
 def nominal(path: Path = FAMILY) -> dict[str, tuple[float, float]]:
     """The family's ``(mean, sd)`` per parameter; refuses anything but the two normals."""
-    sweep = load_sweep(path)
-    params = {p.path: p for p in sweep.params}
-    if set(params) != {SPEED, OFFSET} or any(p.kind != "normal" for p in params.values()):
-        raise SystemExit(f"{path}: expected normal {SPEED} and {OFFSET}, got "
-                         f"{[(p.path, p.kind) for p in sweep.params]}")
-    return {name: tuple(p.args) for name, p in params.items()}
+    return normal_params(path, {SPEED, OFFSET})
 
 
 def outcomes(rows: pd.DataFrame) -> np.ndarray:

@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from truth_sweeps import publish, read_sweep, sweep_record  # beside this script
+from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # beside this script
 
 from analysis.grid_probability import grid_probability, threshold_probability
 from scenarios import CATALOG_DIR
@@ -57,12 +57,7 @@ GAP_TOLERANCE_M = 1e-6  # float noise between runs that should give the same cor
 
 def nominal(path: Path = FAMILY) -> dict[str, tuple[float, float]]:
     """The family's ``(mean, sd)`` per parameter; refuses anything but two normals."""
-    sweep = load_sweep(path)
-    params = {p.path: p for p in sweep.params}
-    if set(params) != {SPEED, WIDTH} or any(p.kind != "normal" for p in params.values()):
-        raise SystemExit(f"{path}: expected normal {SPEED} and {WIDTH}, got "
-                         f"{[(p.path, p.kind) for p in sweep.params]}")
-    return {name: tuple(p.args) for name, p in params.items()}
+    return normal_params(path, {SPEED, WIDTH})
 
 
 def edge_factor(path: Path = FAMILY) -> float:

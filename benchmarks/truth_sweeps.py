@@ -13,6 +13,18 @@ from pathlib import Path
 
 import pandas as pd
 
+from scenarios.sweep_spec import load_sweep
+
+
+def normal_params(path: Path, names: set[str]) -> dict[str, tuple[float, float]]:
+    """The family's ``(mean, sd)`` per parameter; refuses anything but normals of ``names``
+    (the truth integrates a product of normal densities)."""
+    params = {p.path: p for p in load_sweep(path).params}
+    if set(params) != names or any(p.kind != "normal" for p in params.values()):
+        raise SystemExit(f"{path}: expected normal {' and '.join(sorted(names))}, got "
+                         f"{[(p.path, p.kind) for p in params.values()]}")
+    return {name: tuple(p.args) for name, p in params.items()}
+
 
 def read_sweep(out_dir: Path) -> tuple[pd.DataFrame, dict]:
     """The rows and the manifest of a sweep directory; refuses one with a run not ok."""

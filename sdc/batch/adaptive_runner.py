@@ -305,7 +305,7 @@ def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
               "max_weight": loop.max_weight,
               "history": [dataclasses.asdict(h) for h in loop.history],
               "stopped": loop.stopped if state == "finished" else None}
-    if loop.sampler.estimation_log_weights.size == 0:
+    if sampler.estimation_log_weights.size == 0:
         return fields
     estimate = loop.result()
     values = dataclasses.asdict(estimate)
