@@ -40,17 +40,26 @@ def stop_gap_m(spec: ScenarioSpec, road: RoadGeometry, model: VehicleModel) -> f
     """
     ego, band_half_m = spec.ego, model.width_m / 2
     ego_d_m = road.lane_center_d_m(ego.lane)
-    lane_scale = 1 - ego_d_m / spec.road.curve_radius_m if spec.road.kind == "curve" else 1.0
+    scale = lane_scale(spec, road)
     gaps_m = []
     for obstacle in spec.obstacles:
         length_m, width_m = obstacle.size_m
         d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
         if abs(d_m - ego_d_m) >= band_half_m + width_m / 2:
             continue  # beside the path
-        ahead_m = (road.place_s_m(obstacle.position_m, length_m) - ego.start_m) * lane_scale
+        ahead_m = (road.place_s_m(obstacle.position_m, length_m) - ego.start_m) * scale
         if ahead_m > 0:  # its centre ahead of the ego's; 0 if touching (the spec refuses it)
             gaps_m.append(max(0.0, ahead_m - (model.length_m + length_m) / 2))
     return min(gaps_m, default=None)
+
+
+def lane_scale(spec: ScenarioSpec, road: RoadGeometry) -> float:
+    """Metres along the ego's lane per metre along the road's centre line: on a curve
+    ``1 - d / curve_radius_m``, ``d`` the lane centre's offset (left positive); 1
+    elsewhere (a ``sumo_net`` road is the route's own lane)."""
+    if spec.road.kind != "curve":
+        return 1.0
+    return 1 - road.lane_center_d_m(spec.ego.lane) / spec.road.curve_radius_m
 
 
 def stop_possible(speed_mps: float, max_decel_mps2: float, gap_m: float | None) -> bool | None:

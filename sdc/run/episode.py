@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from analysis import run_outcome
 from analysis.metrics import trace_metrics
-from analysis.safety import road_edge_gaps_m, stop_gap_m, stop_possible
+from analysis.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
 from analysis.trace_file import Trace
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
@@ -180,6 +181,10 @@ class Simulation:
             road)
         hit = self.hit
         gap_m = stop_gap_m(spec, road, model)
+        floats, obstacles = trace.floats, self.snapshot.obstacle_boxes
+        passed = run_outcome.passed_every_obstacle(
+            floats["s_m"], model.length_m, road.to_frenet(obstacles[:, :2])[0], obstacles[:, 3])
+        progress_m = run_outcome.progress_m(floats["s_m"], lane_scale(spec, road))
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
                                   spec.controller.detect_beams),
@@ -191,6 +196,10 @@ class Simulation:
             collision=hit is not None,
             collision_with=hit or "none",
             collision_time_s=t_end if hit else None,
+            outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
+                                            floats["speed_mps"]),
+            progress_m=round(progress_m, 6),
+            time_lost_s=run_outcome.time_lost_s(t_end, progress_m, spec.ego.speed_mps),
             min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
             stop_gap_m=gap_m,
             stop_possible=stop_possible(spec.ego.speed_mps, model.max_decel_mps2, gap_m),
@@ -208,7 +217,7 @@ class Simulation:
                         "width_m": model.width_m,
                         "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
             "run": {k: row[k] for k in ("seed", "controller", "backend", "termination",
-                                        "collision_with", "trace_sha256")},
+                                        "collision_with", "outcome", "trace_sha256")},
         }
         return Episode(row, trace, metadata)
 

@@ -57,6 +57,15 @@ COLUMNS: tuple[Column, ...] = (
     Column("collision", pa.bool_(), OUTCOME, "the ego's body touched something"),
     Column("collision_with", pa.string(), OUTCOME, "none | obstacle | vehicle | road_edge"),
     Column("collision_time_s", pa.float64(), OUTCOME, "simulated time of the collision [s]"),
+    Column("outcome", pa.string(), OUTCOME,
+           "how the run ended (analysis/run_outcome.py): completed (passed every obstacle "
+           "ahead of its start, no collision) | collided | stuck (neither; under 0.1 m/s for "
+           "the last 3 s or more) | unfinished (neither; still moving when it ended)"),
+    Column("progress_m", pa.float64(), OUTCOME,
+           "distance the body centre made along the route, measured along the ego's lane [m]"),
+    Column("time_lost_s", pa.float64(), OUTCOME,
+           "the run's time minus the time driving progress_m at the start speed would take; "
+           "None: it started at rest [s]"),
     Column("min_gap_obstacle_m", pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
     Column("min_ttc_s", pa.float64(), METRIC,

@@ -1,0 +1,76 @@
+"""How a run ended, and how far it got: plain arrays of its trace, no simulator.
+
+- ``completed``: no collision, and the ego's rear passed the front of every obstacle
+  that stood ahead of its start (along the road; a run without such an obstacle
+  completes unless it collided).
+- ``collided``: the ego's body touched something.
+- ``stuck``: neither, and it stood still (speed under :data:`STUCK_SPEED_MPS`) for at
+  least :data:`STUCK_HOLD_S` before the run ended.
+- ``unfinished``: neither, and still moving when the run ended.
+
+Error and timeout rows have no outcome.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+COMPLETED, COLLIDED, STUCK, UNFINISHED = "completed", "collided", "stuck", "unfinished"
+OUTCOMES = (COMPLETED, COLLIDED, STUCK, UNFINISHED)
+#: under this speed [m/s] the car stands still
+STUCK_SPEED_MPS = 0.1
+#: standing still this long [s] at the end of a run that did not complete is ``stuck``
+STUCK_HOLD_S = 3.0
+
+
+def still_at_end_s(t_s: np.ndarray, speed_mps: np.ndarray) -> float:
+    """How long [s] the car had stood still (under :data:`STUCK_SPEED_MPS`) when the
+    trace ended; 0 when it was moving at its last step."""
+    moving = np.flatnonzero(np.asarray(speed_mps) >= STUCK_SPEED_MPS)
+    since = 0 if len(moving) == 0 else int(moving[-1]) + 1  # still from this step on
+    return float(t_s[-1] - t_s[since]) if since < len(t_s) else 0.0
+
+
+def passed_every_obstacle(s_m: np.ndarray, ego_length_m: float, obstacle_s_m: np.ndarray,
+                          obstacle_length_m: np.ndarray) -> bool:
+    """Did the ego's rear (body centre ``s_m`` per step, along the road; NaN where
+    unknown) pass the front of every obstacle whose centre was ahead of its start?"""
+    known = np.asarray(s_m, float)[np.isfinite(s_m)]
+    if len(known) == 0:
+        return len(obstacle_s_m) == 0
+    start_m, farthest_m = known[0], known.max()
+    obstacle_s_m, obstacle_length_m = np.asarray(obstacle_s_m), np.asarray(obstacle_length_m)
+    ahead = obstacle_s_m > start_m
+    need_m = obstacle_s_m[ahead] + (ego_length_m + obstacle_length_m[ahead]) / 2
+    return bool(np.all(farthest_m >= need_m))
+
+
+def run_outcome(collided: bool, passed: bool, t_s: np.ndarray, speed_mps: np.ndarray) -> str:
+    """One of :data:`OUTCOMES` (the module's docstring)."""
+    if collided:
+        return COLLIDED
+    if passed:
+        return COMPLETED
+    if still_at_end_s(t_s, speed_mps) >= STUCK_HOLD_S - 1e-9:
+        return STUCK
+    return UNFINISHED
+
+
+def progress_m(s_m: np.ndarray, lane_scale: float = 1.0) -> float:
+    """Distance made along the route [m]: the body centre's last known ``s`` minus
+    its first, times ``lane_scale`` (the ego lane's length per metre of the road's
+    centre line: on a curve its lane is longer or shorter)."""
+    known = np.asarray(s_m, float)[np.isfinite(s_m)]
+    if len(known) == 0:
+        return 0.0
+    return float(known[-1] - known[0]) * lane_scale
+
+
+def time_lost_s(sim_time_s: float, progress: float, start_speed_mps: float) -> float | None:
+    """The run's time [s] minus the time driving ``progress`` metres at the start speed
+    would take; None when the car started at rest (there is no such time)."""
+    if start_speed_mps <= 0 or not math.isfinite(start_speed_mps):
+        return None
+    return round(sim_time_s - progress / start_speed_mps, 6)
