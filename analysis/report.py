@@ -20,14 +20,24 @@ import pandas as pd
 
 from analysis import plots
 from analysis.plain_json import json_plain
+from analysis.run_outcome import COMPLETED
 from analysis.stats import (
     Method,
     by_controller,
     interval,
+    interval_of,
     mcnemar,
+    rate_summary,
     rates_by,
     safe_envelope,
     stop_possible_summary,
+)
+from analysis.verdicts import (
+    NO_OUTCOME,
+    RARELY_COMPLETES,
+    shared_samples,
+    verdict_sentence,
+    verdict_summary,
 )
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
@@ -54,6 +64,7 @@ class Report:
     markdown_path: Path
     junit_path: Path | None
     terminal: list[str]
+    gate_failed: list[str] = dataclasses.field(default_factory=list)  # --fail-above
 
 
 def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
@@ -82,12 +93,41 @@ def _finite(value):
     return None if isinstance(value, float) and not math.isfinite(value) else value
 
 
+def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
+    """What the sweep ran of its plan, and which samples the controllers are compared on."""
+    planned = manifest.get("runs")
+    missing = max(0, planned - len(results)) if planned is not None else None
+    samples = int(results["sample"].nunique())
+    compared = results["sample"].isin(shared)
+    return {"runs_planned": planned, "runs": len(results), "runs_missing": missing,
+            "partial": bool(missing) or manifest.get("status") not in (None, "complete"),
+            "sweep_status": manifest.get("status"), "samples": samples,
+            "samples_compared": len(shared), "runs_left_out": int((~compared).sum())}
+
+
+def gate(results: pd.DataFrame, controllers: list[str], rate: float, method: Method) -> dict:
+    """``--fail-above RATE``: which controllers' collision rate may exceed ``rate``: the
+    upper end of its 95% interval, its error and timeout runs counted as collisions."""
+    bounds = {}
+    for c in controllers:
+        numbers = rate_summary(results[results.controller == c])
+        failed = numbers["n_error"] + numbers["n_timeout"]
+        bounds[c] = interval_of(numbers["collisions"] + failed, numbers["n_ok"] + failed,
+                                method)[1]
+    return {"rate": rate, "upper_bounds": bounds,
+            "failed": [c for c, high in bounds.items() if high > rate]}
+
+
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
-                  method: Method) -> dict:
+                  method: Method, fail_above: float | None = None) -> dict:
+    """Everything the report says. Controllers are compared on the samples every one
+    of them ran (all of them, unless the sweep is partial or lost runs)."""
+    shared = shared_samples(results)
+    counted = results[results["sample"].isin(shared)]
     controllers = list(dict.fromkeys(results.controller))
     grouped = {}
     for column in by:
-        table = rates_by(results, column, method)
+        table = rates_by(counted, column, method)
         grouped[column] = [{**row, "group": str(row["group"]),
                             "collision_rate": _finite(row["collision_rate"])}
                            for row in table.to_dict(orient="records")]
@@ -98,18 +138,21 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
         "runs": len(results),
         "counts": {s: int(status.get(s, 0)) for s in ("ok", "error", "timeout")},
         "sweep_status": manifest.get("status"),
+        "coverage": coverage(results, manifest, shared),
         "interval": method,
-        "by_controller": by_controller(results),
+        "verdicts": verdict_summary(counted),
+        "by_controller": by_controller(counted),
         # side by side when a sweep ran on more than one world backend
         "by_backend": ({str(b): by_controller(rows) for b, rows in
-                        results.groupby("backend", sort=False)}
-                       if results.backend.nunique() > 1 else {}),
-        "paired": [mcnemar(results, a, b) for a, b in itertools.combinations(controllers, 2)],
+                        counted.groupby("backend", sort=False)}
+                       if counted.backend.nunique() > 1 else {}),
+        "paired": [mcnemar(counted, a, b) for a, b in itertools.combinations(controllers, 2)],
         # the same where braking alone could have stopped the car before the obstacle
-        "stop_possible": stop_possible_summary(results, controllers),
+        "stop_possible": stop_possible_summary(counted, controllers),
         "by": grouped,
-        "envelope": ([safe_envelope(results, SPEED, c) for c in controllers]
-                     if SPEED in results.columns else []),
+        "envelope": ([safe_envelope(counted, SPEED, c) for c in controllers]
+                     if SPEED in counted.columns else []),
+        "gate": None if fail_above is None else gate(counted, controllers, fail_above, method),
     }
 
 
@@ -124,8 +167,52 @@ def _rate_row(keys: list[str], numbers: dict, method: Method) -> list[str]:
             str(numbers["n_error"]), str(numbers["n_timeout"])]
 
 
+def coverage_lines(summary: dict) -> list[str]:
+    """Whether the sweep is partial, and which samples the comparisons use."""
+    cov, lines = summary["coverage"], []
+    if cov["partial"]:
+        planned = "?" if cov["runs_planned"] is None else cov["runs_planned"]
+        missing = "" if cov["runs_missing"] is None else f", {cov['runs_missing']} missing"
+        lines.append(f"PARTIAL sweep ({cov['sweep_status'] or 'status unknown'}): "
+                     f"{cov['runs']} of {planned} planned runs{missing}.")
+    if cov["samples_compared"] < cov["samples"]:
+        lines.append(f"Controllers are compared on the {cov['samples_compared']} samples every "
+                     f"one of them ran, of {cov['samples']} with a run "
+                     f"({cov['runs_left_out']} runs left out of every table).")
+    return lines
+
+
+def verdict_rows(summary: dict) -> list[list[str]]:
+    """How each controller's runs ended, highest completed rate first; [] when the
+    results do not record it."""
+    verdicts = summary["verdicts"]
+    if not verdicts["recorded"]:
+        return []
+    rows = [["controller", "runs", "completed without collision", "95% interval", "collided",
+             "stuck", "unfinished", "no outcome", "median time lost"]]
+    for controller, numbers in verdicts["by_controller"].items():
+        outcomes = numbers["outcomes"]
+        done = outcomes[COMPLETED]
+        lost = numbers["median_time_lost_s"]
+        rows.append([controller, str(numbers["runs"]),
+                     f"{done['runs']} ({_pct(done['rate'])})",
+                     f"{_pct(done['low'])} - {_pct(done['high'])}",
+                     *(f"{outcomes[o]['runs']} ({_pct(outcomes[o]['rate'])})"
+                       for o in ("collided", "stuck", "unfinished", NO_OUTCOME)),
+                     "-" if lost is None else f"{lost:.1f} s"])
+    return rows
+
+
+VERDICT_TITLE = ("How the runs ended (of every run: an error or timeout has no outcome and "
+                 "never counts as completed; Wilson 95%):")
+NOT_RECORDED = ("How the runs ended: not recorded (results from before the outcome column); "
+                "only collisions can be judged, and a controller that never passes the "
+                "obstacle cannot be told from a safe one.")
+COLLISION_TITLE = "Collisions (of the ok runs; errors and timeouts counted apart):"
+
+
 def headline_rows(summary: dict) -> list[list[str]]:
-    """The headline table: per controller, or per controller and backend side by side
+    """The collision table: per controller, or per controller and backend side by side
     when the sweep ran on several backends."""
     by_backend = summary["by_backend"]
     if by_backend:
@@ -164,33 +251,76 @@ def _paired(pair: dict, where: str = "") -> str:
             f"both in {pair['both']}; McNemar exact p = {pair['p_value']:.3g}")
 
 
+def _paired_completed(pair: dict) -> str:
+    return (f"{pair['a']} vs {pair['b']}, completed without collision, on {pair['pairs']} "
+            f"shared scenarios: only {pair['a']} completed in {pair['only_a']}, only "
+            f"{pair['b']} in {pair['only_b']}, both in {pair['both']}; McNemar exact "
+            f"p = {pair['p_value']:.3g}")
+
+
+def _envelope(envelope: dict, completes_rarely: bool) -> str:
+    limit = f"{envelope['threshold']:.0%}"
+    stopped = envelope["stopped_at"]
+    if stopped is None:
+        text = f"is shown at or below {limit} over the whole range"
+    else:
+        counts = (f"{stopped['collisions']} collisions in {stopped['n_ok']} ok runs"
+                  + (f" and {stopped['n_failed']} without an outcome" if stopped["n_failed"]
+                     else "") + f", 95% up to {_pct(stopped['high'])}")
+        why = {"above": f"exceeds {limit} in {stopped['group']} ({counts})",
+               "too_few": f"cannot be shown at or below {limit} in {stopped['group']}: too "
+                          f"few runs there ({counts})",
+               "no_runs": f"has no ok run in {stopped['group']}"}[stopped["why"]]
+        text = (why if envelope["safe_up_to"] is None else
+                f"is shown at or below {limit} up to {envelope['safe_up_to']:.3g} m/s, then "
+                + why)
+    line = f"{envelope['controller']}: the collision rate along ego speed {text}"
+    if completes_rarely:
+        line += "; it rarely completes, so a low collision rate there is not safety"
+    return line
+
+
 def findings(summary: dict) -> list[str]:
-    """Sentences for the paired comparisons (all samples, those where a stop was
-    possible) and the safe envelope."""
-    lines = [_paired(pair) for pair in summary["paired"]]
+    """Sentences: each controller's verdict, the paired comparisons (completing; on
+    collisions over all samples and where a stop was possible) and the envelope."""
+    verdicts = summary["verdicts"]
+    lines = [verdict_sentence(c, numbers)
+             for c, numbers in verdicts.get("by_controller", {}).items()]
+    lines += [_paired_completed(pair) for pair in verdicts.get("paired", [])]
+    lines += [_paired(pair) for pair in summary["paired"]]
     lines += [_paired(pair, ", where a stop was possible,")
               for pair in summary["stop_possible"].get("paired", [])]
-    for envelope in summary["envelope"]:
-        if envelope["crossing_group"] is None:
-            text = "stays at or below 5% over the whole range"
-        elif envelope["safe_up_to"] is None:
-            text = f"is above 5% already in the lowest bin {envelope['crossing_group']}"
-        else:
-            text = (f"stays at or below 5% up to {envelope['safe_up_to']:.3g} m/s and first "
-                    f"exceeds it in {envelope['crossing_group']}")
-        lines.append(f"{envelope['controller']}: the collision rate along ego speed {text}")
+    rare = {c for c, numbers in verdicts.get("by_controller", {}).items()
+            if (numbers["outcomes"][COMPLETED]["rate"] or 0.0) < RARELY_COMPLETES}
+    lines += [_envelope(e, e["controller"] in rare) for e in summary["envelope"]]
+    if summary["gate"] is not None:
+        lines.append(gate_line(summary["gate"]))
     return lines
 
 
+def gate_line(gate: dict) -> str:
+    bounds = ", ".join(f"{c} {_pct(high)}" for c, high in gate["upper_bounds"].items())
+    verdict = ("FAILED: " + ", ".join(gate["failed"]) if gate["failed"] else "passed")
+    return (f"--fail-above {gate['rate']:g}: {verdict} (upper 95% bounds of the collision "
+            f"rates, errors and timeouts counted as collisions: {bounds})")
+
+
+def _aligned(rows: list[list[str]]) -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
+            for row in rows]
+
+
 def terminal_table(summary: dict) -> list[str]:
-    """The headline, then the rates where a stop was possible in the same columns."""
+    """Partial-sweep lines, the verdicts, the collision table, then the collision rates
+    where a stop was possible in the same columns."""
+    verdicts = verdict_rows(summary)
+    lines = [*coverage_lines(summary)]
+    lines += [VERDICT_TITLE, *_aligned(verdicts)] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
-    widths = [max(len(r[i]) for r in rows + stop) for i in range(len(rows[0]))]
-
-    def line(row):
-        return "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
-
-    return [*map(line, rows), stop_title(summary), *map(line, stop)]
+    table = _aligned(rows + stop)
+    return [*lines, COLLISION_TITLE, *table[:len(rows)], stop_title(summary),
+            *table[len(rows):]]
 
 
 def failures(results: pd.DataFrame) -> pd.DataFrame:
@@ -215,13 +345,20 @@ def _markdown_table(rows: list[list[str]]) -> list[str]:
             *("| " + " | ".join(r) + " |" for r in rows[1:])]
 
 
+def _count_line(summary: dict) -> str:
+    counts = summary["counts"]
+    return (f"{summary['runs']} runs ({counts['ok']} ok, {counts['error']} error, "
+            f"{counts['timeout']} timeout); intervals: {summary['interval']} 95%.")
+
+
 def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
-    rows = headline_rows(summary)
-    lines = [f"# Collision report: {summary['sweep']}", "",
-             f"{summary['runs']} runs ({summary['counts']['ok']} ok, "
-             f"{summary['counts']['error']} error, {summary['counts']['timeout']} timeout); "
-             f"intervals: {summary['interval']} 95%.", "", *_markdown_table(rows), "",
-             f"Collision rates {stop_title(summary)}", ""]
+    rows, verdicts = headline_rows(summary), verdict_rows(summary)
+    lines = [f"# Collision report: {summary['sweep']}", "", _count_line(summary), "",
+             *(f"**{line}**" for line in coverage_lines(summary)), ""]
+    lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
+              else [NOT_RECORDED, ""])
+    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "",
+              f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
     lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", ""]
@@ -256,14 +393,16 @@ th { background: #f2f2f2; }
 code { background: #f6f6f6; padding: 1px 4px; }
 figure { margin: 1.5em 0; }
 img { max-width: 100%; }
+.warn { background: #fff3cd; border: 1px solid #e0c36c; padding: 6px 10px; }
 """
 
 
-def _table_html(rows: list[list[str]]) -> str:
+def _table_html(rows: list[list[str]], table_id: str | None = None) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in rows[0])
     body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
                    for row in rows[1:])
-    return f"<table><tr>{head}</tr>{body}</table>"
+    ident = f' id="{html.escape(table_id)}"' if table_id else ""
+    return f"<table{ident}><tr>{head}</tr>{body}</table>"
 
 
 def _figure_html(title: str, png: bytes) -> str:
@@ -274,11 +413,15 @@ def _figure_html(title: str, png: bytes) -> str:
 
 def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
               images: list[tuple[str, bytes]]) -> str:
+    verdicts = verdict_rows(summary)
     parts = [f"<h1>Collision report: {html.escape(summary['sweep'])}</h1>",
-             f"<p>{summary['runs']} runs: {summary['counts']['ok']} ok, "
-             f"{summary['counts']['error']} error, {summary['counts']['timeout']} timeout "
-             f"(errors and timeouts are not counted as safe). Intervals: "
-             f"{html.escape(summary['interval'])} 95%.</p>",
+             f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
+             "as safe.</p>",
+             *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
+             f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
+             "</p>",
+             _table_html(verdicts, "verdicts") if verdicts else "",
+             f"<h2>Collisions</h2><p>{html.escape(COLLISION_TITLE)}</p>",
              _table_html(headline_rows(summary)),
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
@@ -335,7 +478,10 @@ def by_column(results: pd.DataFrame, name: str) -> str:
 
 
 def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),
-                 junit_path: Path | None = None, method: Method = "wilson") -> Report:
+                 junit_path: Path | None = None, method: Method = "wilson",
+                 fail_above: float | None = None) -> Report:
+    """Write the report of ``sweep_dir``; with ``fail_above`` the summary holds the
+    gate (:func:`gate`), and ``Report.gate_failed`` lists the controllers over it."""
     sweep_dir = Path(sweep_dir)
     for option, path in (("--out", html_path), ("--junit", junit_path)):
         if path is not None and not Path(path).parent.is_dir():
@@ -345,11 +491,15 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
         if by:
             raise ReportError("--by", "a search or estimate has no rates by parameter (its "
                               "runs were drawn toward failure); see its failure modes")
+        if fail_above is not None:
+            raise ReportError("--fail-above", "a search or estimate has no collision rate to "
+                              "gate (its runs were drawn toward failure); gate on a sweep")
         return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
     by = [by_column(results, column) for column in by] or varying_parameters(results)
-    summary = build_summary(results, manifest, by, method)
+    summary = build_summary(results, manifest, by, method, fail_above)
+    counted = results[results["sample"].isin(shared_samples(results))]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
-    html_path.write_text(html_page(summary, results, sweep_dir, figures(results, by, method)))
+    html_path.write_text(html_page(summary, results, sweep_dir, figures(counted, by, method)))
     summary_path = sweep_dir / "summary.json"
     summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
@@ -357,7 +507,9 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
     terminal = terminal_table(summary) + findings(summary)
-    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)
+    gate_failed = summary["gate"]["failed"] if summary["gate"] else []
+    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal,
+                  gate_failed)
 
 
 def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,

@@ -42,6 +42,11 @@ def clopper_pearson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[
     return low, high
 
 
+def interval_of(k: int, n: int, method: Method) -> tuple[float, float]:
+    """The 95% interval of ``k`` in ``n`` by ``method``."""
+    return (wilson_interval if method == "wilson" else clopper_pearson_interval)(k, n)
+
+
 def rate_summary(rows: pd.DataFrame) -> dict:
     """Counts by status, collisions among the ok rows, their rate and 95% intervals
     (Wilson, and Clopper-Pearson as ``cp_low``/``cp_high``)."""
@@ -99,17 +104,15 @@ def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> p
     return pd.DataFrame(out)
 
 
-def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
-    """Paired comparison of controllers ``a`` and ``b`` on the samples both ran ok.
+def paired_test(flags: pd.DataFrame, a: str, b: str) -> dict:
+    """McNemar's exact test of controllers ``a`` and ``b`` on ``flags``: one row per
+    sample, one bool column per controller (NaN where it has no run to count).
 
-    ``only_a`` counts samples where only ``a`` collided, ``only_b`` where only ``b``
-    did; the exact two-sided McNemar p-value is a binomial test of ``only_a``
-    among the discordant pairs at 1/2.
+    ``only_a`` counts samples where the flag holds for ``a`` alone, ``only_b`` for
+    ``b`` alone; the two-sided p-value is a binomial test of ``only_a`` among the
+    discordant pairs at 1/2. Samples missing either controller are left out.
     """
-    ok = results[results.status == "ok"]
-    pairs = (ok.pivot_table(index="sample", columns="controller", values="collision",
-                            aggfunc="first") if len(ok) else pd.DataFrame())
-    pairs = pairs.reindex(columns=[a, b]).dropna()  # a controller without an ok run: no pair
+    pairs = flags.reindex(columns=[a, b]).dropna()
     ca, cb = pairs[a].astype(bool), pairs[b].astype(bool)
     only_a, only_b = int((ca & ~cb).sum()), int((~ca & cb).sum())
     discordant = only_a + only_b
@@ -117,6 +120,15 @@ def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
     return {"a": a, "b": b, "pairs": len(pairs), "both": int((ca & cb).sum()),
             "neither": int((~ca & ~cb).sum()), "only_a": only_a, "only_b": only_b,
             "p_value": p}
+
+
+def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
+    """:func:`paired_test` of collisions on the samples both controllers ran ok
+    (``only_a``: samples where only ``a`` collided)."""
+    ok = results[results.status == "ok"]
+    flags = (ok.pivot_table(index="sample", columns="controller", values="collision",
+                            aggfunc="first") if len(ok) else pd.DataFrame())
+    return paired_test(flags, a, b)
 
 
 def sample_stop_possible(results: pd.DataFrame) -> pd.Series | None:
@@ -149,19 +161,40 @@ def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> dict
 
 def safe_envelope(results: pd.DataFrame, column: str, controller: str,
                   threshold: float = ENVELOPE_RATE) -> dict:
-    """Where the collision rate along ``column`` first exceeds ``threshold``.
+    """How far along ``column`` the collision rate of ``controller`` is shown to stay at
+    or below ``threshold``.
 
-    Groups (bins) are taken in increasing order; ``safe_up_to`` is the upper edge of
-    the last group before the first one whose rate exceeds ``threshold`` (None when
-    the first already does), ``crossing_group`` that group (None: never crossed).
+    Groups (bins) are walked in increasing order. A group is *shown* at or below
+    ``threshold`` when the upper end of its Wilson 95% interval is, its error and
+    timeout runs counted as collisions (missing evidence is never safety).
+    ``safe_up_to`` is the upper edge of the last such group before the first that is
+    not (None when the first is not); that group is ``stopped_at``, and ``why`` says
+    why: ``above`` (its rate exceeds ``threshold``), ``too_few`` (its rate does not,
+    but its runs are too few to show it), ``no_runs`` (no ok run). ``why`` is None
+    when every group was shown at or below.
     """
-    table = rates_by(results[results.controller == controller], column)
-    safe_up_to, crossing = None, None
-    for row in table.itertuples():
-        if row.collision_rate is not None and row.collision_rate > threshold:
-            crossing = row.group
-            break
-        safe_up_to = row.group.right if isinstance(row.group, pd.Interval) else row.group
+    grouped = group_values(results[column])  # every controller's groups: the same bins
+    groups = (list(grouped.cat.categories) if isinstance(grouped.dtype, pd.CategoricalDtype)
+              else sorted(grouped.dropna().unique()))
+    table = rates_by(results, column)
+    rows = {str(r.group): r for r in table[table.controller == controller].itertuples()}
+    safe_up_to, stopped = None, None
+    for group in groups:
+        row = rows.get(str(group))
+        n_ok = 0 if row is None else int(row.n_ok)
+        k = 0 if row is None else int(row.collisions)
+        failed = 0 if row is None else int(row.n_failed)
+        high = wilson_interval(k + failed, n_ok + failed)[1]
+        if n_ok == 0:
+            why = "no_runs"
+        elif high <= threshold:
+            safe_up_to = group.right if isinstance(group, pd.Interval) else group
+            continue
+        else:
+            why = "above" if k / n_ok > threshold else "too_few"
+        stopped = {"group": str(group), "why": why, "n_ok": n_ok, "collisions": k,
+                   "n_failed": failed, "high": high}
+        break
     return {"controller": controller, "column": column, "threshold": threshold,
             "safe_up_to": None if safe_up_to is None else float(safe_up_to),
-            "crossing_group": None if crossing is None else str(crossing)}
+            "stopped_at": stopped}

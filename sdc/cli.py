@@ -218,12 +218,13 @@ def _other_demo(out_dir: Path, spec) -> bool:
 
 
 def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] = (),
-            junit: Path | None = None, interval: str = "wilson"):
+            junit: Path | None = None, interval: str = "wilson",
+            fail_above: float | None = None):
     from analysis.report import write_report
 
     try:
         return write_report(sweep_dir, html_path=html_path, by=list(by), junit_path=junit,
-                            method=interval)
+                            method=interval, fail_above=fail_above)
     except SdcError as e:  # a ReportError too
         _bad_input(str(e))
 
@@ -240,18 +241,27 @@ def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] 
               help="Also write JUnit XML: one test case per run, a collision a failure.")
 @click.option("--interval", type=click.Choice(["wilson", "clopper-pearson"]),
               default="wilson", show_default=True, help="95% interval for the rates.")
+@click.option("--fail-above", type=click.FloatRange(0.0, 1.0), metavar="RATE",
+              help="Exit 1 when any controller's collision rate may exceed RATE: the upper "
+                   "end of its 95% interval, error and timeout runs counted as collisions "
+                   "(a gate for CI, e.g. 0.05).")
 def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: Path | None,
-           interval: str) -> None:
-    """Collision statistics of a sweep directory.
+           interval: str, fail_above: float | None) -> None:
+    """How the runs of a sweep directory ended, and its collision statistics.
 
-    Writes a self-contained HTML page (headline table, plots, the runs to look at
-    with their replay commands), DIR/summary.json and DIR/report.md, and prints
-    the headline. Error and timeout runs are counted apart, never as safe.
+    Leads with the verdicts: per controller the runs that completed without a
+    collision, collided, got stuck or were unfinished, with 95% intervals and
+    paired comparisons. Writes a self-contained HTML page (tables, plots, the runs
+    to look at with their replay commands), DIR/summary.json and DIR/report.md,
+    and prints the tables. Error and timeout runs never count as safe; a partial
+    sweep says so and controllers are compared on the samples they all ran.
     """
-    result = _report(sweep_dir, html_path, by, junit, interval)
+    result = _report(sweep_dir, html_path, by, junit, interval, fail_above)
     for line in result.terminal:
         click.echo(line)
     click.echo(f"report: {result.html_path}")
+    if result.gate_failed:
+        sys.exit(EXIT_RUN_ERROR)
 
 def _plan_lines(sweep, plan) -> list[str]:
     invalid = sum(run.spec is None for run in plan)

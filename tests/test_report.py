@@ -13,11 +13,13 @@ from pathlib import Path
 
 import matplotlib.image
 import pandas as pd
+import pyarrow
 import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
-from analysis.report import write_report
+from analysis.report import COLLISION_TITLE, NOT_RECORDED, VERDICT_TITLE, write_report
+from analysis.stats import wilson_interval
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
@@ -117,7 +119,9 @@ def test_report_rates_where_a_stop_was_possible(small_sweep, tmp_path):
     assert stop["paired"][0]["pairs"] == 3
 
     title = "where braking alone could stop in time (v^2 / 2a <= gap), 3 of 4 samples run:"
-    assert report.terminal[0].split()[:3] == ["controller", "ok", "runs"]
+    assert report.terminal[0] == VERDICT_TITLE
+    head = report.terminal.index(COLLISION_TITLE) + 1
+    assert report.terminal[head].split()[:3] == ["controller", "ok", "runs"]
     at = report.terminal.index(title)
     assert [line.split()[:2] for line in report.terminal[at + 1:at + 3]] == \
         [["seed", "3"], ["lane-keep", "3"]]
@@ -167,7 +171,8 @@ def test_cli_report_and_its_bad_inputs(small_sweep, tmp_path):
     result = CliRunner().invoke(main, ["report", str(small_sweep), "--by", "p.ego.speed_mps",
                                        "--interval", "clopper-pearson"])
     assert result.exit_code == 0, result.output
-    assert result.output.splitlines()[0].split()[:3] == ["controller", "ok", "runs"]
+    lines = result.output.splitlines()
+    assert lines[0] == VERDICT_TITLE and lines[1].split()[:2] == ["controller", "runs"]
     assert f"report: {small_sweep / 'report.html'}" in result.output
     summary = json.loads((small_sweep / "summary.json").read_text())
     assert list(summary["by"]) == ["p.ego.speed_mps"] and summary["interval"] == "clopper-pearson"
@@ -234,3 +239,112 @@ def test_a_report_built_from_hostile_names_runs_no_script(small_sweep, tmp_path,
     body = page.text_content("body")
     assert f"lk {HOSTILE}" in body and f"error: RuntimeError: {HOSTILE}" in body
     assert problems == []
+
+
+def _copy_with(sweep_dir: Path, dest: Path, edit) -> Path:
+    """A copy of ``sweep_dir`` whose results table went through ``edit``."""
+    shutil.copytree(sweep_dir, dest)
+    results = pq.read_table(dest / "results.parquet")
+    pq.write_table(edit(results.to_pandas()).pipe(
+        lambda frame: pyarrow.Table.from_pandas(frame, schema=results.schema,
+                                                preserve_index=False)),
+        dest / "results.parquet")
+    return dest
+
+
+def test_the_report_leads_with_how_the_runs_ended(small_sweep, tmp_path):
+    report = write_report(small_sweep, html_path=tmp_path / "r.html")
+    results = pd.read_parquet(small_sweep / "results.parquet")
+    verdicts = report.summary["verdicts"]
+    assert verdicts["recorded"] is True
+    for controller, numbers in verdicts["by_controller"].items():
+        rows = results[results.controller == controller]
+        outcomes = numbers["outcomes"]
+        assert numbers["runs"] == len(rows) == 8
+        assert outcomes["no outcome"]["runs"] == 4  # the barrel off the road: error rows
+        for outcome in ("completed", "collided", "stuck", "unfinished"):
+            assert outcomes[outcome]["runs"] == int((rows.outcome == outcome).sum())
+        assert sum(o["runs"] for o in outcomes.values()) == 8  # rates over every run
+        done = outcomes["completed"]
+        assert (done["low"], done["high"]) == pytest.approx(
+            wilson_interval(done["runs"], 8))
+    lane_keep = verdicts["by_controller"]["lane-keep"]["outcomes"]
+    assert lane_keep["collided"]["runs"] == 4 and lane_keep["completed"]["runs"] == 0
+    assert list(verdicts["by_controller"])[-1] == "lane-keep"  # ranked: least completed last
+    sentence = next(line for line in report.terminal if line.startswith("lane-keep: completed"))
+    assert "0 of 8 runs" in sentence and "not a safe controller" in sentence
+    assert any("completed without collision, on 8 shared" in line for line in report.terminal)
+    page = report.html_path.read_text()
+    assert '<table id="verdicts">' in page and VERDICT_TITLE in page
+    assert "| lane-keep | 8 | 0 (0.0%) |" in (small_sweep / "report.md").read_text()
+
+
+def test_results_from_before_the_outcome_column_say_not_recorded(small_sweep, tmp_path):
+    old = tmp_path / "old"
+    shutil.copytree(small_sweep, old)
+    table = pq.read_table(old / "results.parquet").drop_columns(
+        ["outcome", "progress_m", "time_lost_s"])
+    pq.write_table(table, old / "results.parquet")
+    report = write_report(old)
+    assert report.summary["verdicts"] == {"recorded": False}
+    assert NOT_RECORDED in report.terminal
+    assert NOT_RECORDED in (old / "report.md").read_text()
+    assert NOT_RECORDED in report.html_path.read_text()
+
+
+def test_a_partial_sweep_says_so_and_compares_only_shared_samples(small_sweep, tmp_path):
+    # interrupted: lane-keep's runs of two ok samples never ran
+    def drop(frame):
+        ok_samples = frame[frame.status == "ok"]["sample"].unique()[:2]
+        return frame[~((frame.controller == "lane-keep") & frame["sample"].isin(ok_samples))]
+
+    partial = _copy_with(small_sweep, tmp_path / "partial", drop)
+    manifest = json.loads((partial / "manifest.json").read_text())
+    manifest["status"] = "interrupted"
+    (partial / "manifest.json").write_text(json.dumps(manifest))
+    report = write_report(partial)
+    cov = report.summary["coverage"]
+    assert (cov["runs_planned"], cov["runs"], cov["runs_missing"]) == (16, 14, 2)
+    assert (cov["samples"], cov["samples_compared"], cov["runs_left_out"]) == (8, 6, 2)
+    assert report.terminal[0] == "PARTIAL sweep (interrupted): 14 of 16 planned runs, 2 missing."
+    assert report.terminal[1].startswith("Controllers are compared on the 6 samples every one")
+    # every table counts the 6 shared samples only: seed's 2 extra runs are left out
+    assert report.summary["by_controller"]["seed"]["n_ok"] == 2
+    assert report.summary["verdicts"]["by_controller"]["seed"]["runs"] == 6
+    assert report.summary["paired"][0]["pairs"] == 2
+    assert "PARTIAL sweep" in (partial / "report.md").read_text()
+    assert "PARTIAL sweep" in report.html_path.read_text()
+
+
+def test_a_controller_whose_runs_all_errored_is_never_safe(small_sweep, tmp_path):
+    def all_errors(frame):
+        mine = frame.controller == "lane-keep"
+        frame.loc[mine, "status"] = "error"
+        frame.loc[mine, "error"] = "RuntimeError: boom"
+        for column in ("collision", "outcome", "progress_m", "time_lost_s"):
+            frame.loc[mine, column] = None
+        return frame
+
+    errored = _copy_with(small_sweep, tmp_path / "errored", all_errors)
+    report = write_report(errored, fail_above=0.99)
+    envelope = next(e for e in report.summary["envelope"] if e["controller"] == "lane-keep")
+    assert envelope["safe_up_to"] is None and envelope["stopped_at"]["why"] == "no_runs"
+    line = next(t for t in report.terminal if t.startswith("lane-keep: the collision rate"))
+    assert "has no ok run" in line and "shown at or below" not in line
+    outcomes = report.summary["verdicts"]["by_controller"]["lane-keep"]["outcomes"]
+    assert outcomes["no outcome"]["runs"] == 8 and outcomes["completed"]["runs"] == 0
+    # no evidence: its bound is 100%; seed's 4 errors count as collisions but it completes
+    assert report.gate_failed == ["lane-keep"]
+    assert report.summary["gate"]["upper_bounds"]["lane-keep"] == 1.0
+
+
+def test_fail_above_gates_a_ci_on_the_upper_bound(small_sweep):
+    strict = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "0.05"])
+    assert strict.exit_code == 1, strict.output
+    assert "--fail-above 0.05: FAILED: seed, lane-keep" in strict.output \
+        or "--fail-above 0.05: FAILED: lane-keep" in strict.output
+    # seed: at most 8 runs, 4 of them errors counted as collisions: above 50% too
+    loose = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1"])
+    assert loose.exit_code == 0 and "--fail-above 1: passed" in loose.output
+    bad = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1.5"])
+    assert bad.exit_code == 2 and "--fail-above" in bad.output

@@ -1,0 +1,101 @@
+"""How each controller's runs ended: the verdicts a sweep's report leads with.
+
+The headline rate is *completed without collision* over **every** run of a
+controller: an error or a timeout is a run that did not complete, never a safe
+one. Each outcome's rate (:mod:`analysis.run_outcome`) has a Wilson 95% interval
+over the same runs, with the runs without an outcome (error, timeout) beside
+them, so the rates add up to one. Controllers are compared on the samples they
+all ran (:func:`shared_samples`), pair by pair with McNemar's exact test.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import pandas as pd
+
+from analysis.run_outcome import COMPLETED, OUTCOMES
+from analysis.stats import paired_test, wilson_interval
+
+NO_OUTCOME = "no outcome"  # error and timeout runs
+#: a controller completing fewer of its runs than this is never presented as safe
+RARELY_COMPLETES = 0.5
+
+
+def outcomes_recorded(results: pd.DataFrame) -> bool:
+    """Do the results say how every ok run ended (sweeps before the ``outcome``
+    column do not)?"""
+    if "outcome" not in results.columns:
+        return False
+    return bool(results.outcome[results.status == "ok"].notna().all())
+
+
+def shared_samples(results: pd.DataFrame) -> pd.Index:
+    """The samples every controller of the results has a run of (ok or not)."""
+    present = results.groupby("sample").controller.nunique()
+    return present.index[present == results.controller.nunique()]
+
+
+def _rate(k: int, n: int) -> dict:
+    low, high = wilson_interval(k, n)
+    return {"runs": k, "rate": k / n if n else None, "low": low, "high": high}
+
+
+def outcome_summary(rows: pd.DataFrame) -> dict:
+    """One controller's runs: each outcome's count and rate over all its runs, with
+    the runs without an outcome as :data:`NO_OUTCOME`; the median time lost and
+    progress of the ok runs."""
+    ok = rows[rows.status == "ok"]
+    n = len(rows)
+    counts = {o: int((ok.outcome == o).sum()) for o in OUTCOMES}
+    counts[NO_OUTCOME] = n - len(ok)
+    time_lost = ok.time_lost_s.dropna()
+    return {
+        "runs": n,
+        "outcomes": {o: _rate(k, n) for o, k in counts.items()},
+        "median_time_lost_s": float(time_lost.median()) if len(time_lost) else None,
+        "median_progress_m": float(ok.progress_m.median()) if len(ok) else None,
+    }
+
+
+def completed_flags(results: pd.DataFrame) -> pd.DataFrame:
+    """Per sample (rows) and controller (columns): did the run complete without a
+    collision (an error or timeout did not); NaN where the controller has no run."""
+    done = results.assign(_done=(results.status == "ok") & (results.outcome == COMPLETED))
+    return done.pivot_table(index="sample", columns="controller", values="_done",
+                            aggfunc="first")
+
+
+def verdict_summary(results: pd.DataFrame) -> dict:
+    """Per controller :func:`outcome_summary`, ranked by the completed rate (highest
+    first), and the paired comparisons of completing; ``{"recorded": False}`` for
+    results without the ``outcome`` column."""
+    if not outcomes_recorded(results):
+        return {"recorded": False}
+    controllers = list(dict.fromkeys(results.controller))
+    summaries = {c: outcome_summary(results[results.controller == c]) for c in controllers}
+    ranked = sorted(controllers, key=lambda c: -(summaries[c]["outcomes"][COMPLETED]["rate"]
+                                                or 0.0))
+    flags = completed_flags(results)
+    return {"recorded": True,
+            "by_controller": {c: summaries[c] for c in ranked},
+            "paired": [paired_test(flags, a, b) for a, b in itertools.combinations(ranked, 2)]}
+
+
+def verdict_sentence(controller: str, summary: dict) -> str:
+    """What a controller's runs say, led by how many completed without collision."""
+    outcomes, n = summary["outcomes"], summary["runs"]
+    done = outcomes[COMPLETED]
+    rest = ", ".join(f"{name} {outcomes[name]['runs']}"
+                     for name in (*OUTCOMES[1:], NO_OUTCOME) if outcomes[name]["runs"])
+    text = (f"{controller}: completed without collision in {done['runs']} of {n} runs "
+            f"({_pct(done['rate'])}, 95% {_pct(done['low'])} - {_pct(done['high'])})")
+    text += f"; {rest}" if rest else ""
+    if n == 0 or (done["rate"] or 0.0) < RARELY_COMPLETES:
+        text += (f". It completes fewer than {RARELY_COMPLETES:.0%} of its runs: not a safe "
+                 "controller, whatever its collision rate")
+    return text
+
+
+def _pct(value) -> str:
+    return "-" if value is None else f"{100 * value:.1f}%"
