@@ -264,9 +264,9 @@ def _envelope(envelope: dict, completes_rarely: bool) -> str:
     if stopped is None:
         text = f"is shown at or below {limit} over the whole range"
     else:
-        counts = (f"{stopped['collisions']} collisions in {stopped['n_ok']} ok runs"
-                  + (f" and {stopped['n_failed']} without an outcome" if stopped["n_failed"]
-                     else "") + f", 95% up to {_pct(stopped['high'])}")
+        counts = (f"{stopped['collisions']} of {stopped['n_ok']} ok runs collided"
+                  + (f", {stopped['n_failed']} runs without an outcome" if stopped["n_failed"]
+                     else "") + f"; 95% up to {_pct(stopped['high'])}")
         why = {"above": f"exceeds {limit} in {stopped['group']} ({counts})",
                "too_few": f"cannot be shown at or below {limit} in {stopped['group']}: too "
                           f"few runs there ({counts})",
@@ -275,8 +275,8 @@ def _envelope(envelope: dict, completes_rarely: bool) -> str:
                 f"is shown at or below {limit} up to {envelope['safe_up_to']:.3g} m/s, then "
                 + why)
     line = f"{envelope['controller']}: the collision rate along ego speed {text}"
-    if completes_rarely:
-        line += "; it rarely completes, so a low collision rate there is not safety"
+    if completes_rarely and (stopped is None or envelope["safe_up_to"] is not None):
+        line += "; but it rarely completes, so a low collision rate there is not safety"
     return line
 
 

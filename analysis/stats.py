@@ -86,6 +86,13 @@ def group_values(column: pd.Series, max_groups: int = MAX_GROUPS) -> pd.Series:
     return column
 
 
+def group_label(group) -> str:
+    """A group as people read it: a bin as ``(a, b]``, a number to 3 digits."""
+    if isinstance(group, float):
+        return f"{group:.3g}"
+    return str(group)
+
+
 def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> pd.DataFrame:
     """One row per (group of ``column``, controller): counts, rate, interval."""
     if column not in results.columns:
@@ -192,7 +199,7 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
             continue
         else:
             why = "above" if k / n_ok > threshold else "too_few"
-        stopped = {"group": str(group), "why": why, "n_ok": n_ok, "collisions": k,
+        stopped = {"group": group_label(group), "why": why, "n_ok": n_ok, "collisions": k,
                    "n_failed": failed, "high": high}
         break
     return {"controller": controller, "column": column, "threshold": threshold,

@@ -295,12 +295,29 @@ def test_a_plugin_failing_during_a_run_is_an_error_row_and_the_sweep_goes_on(on_
 
 
 def test_the_example_plugins_sweep_file_runs_as_its_docstring_says(tmp_path):
+    """...and its brake-only plug-in, which never collides, is never called safe: all
+    its runs end stuck behind the barrel, and the report's verdicts rank it below avoid."""
     sweep = REPO / "examples" / "cautious-sweep.toml"
     assert "sdc sweep examples/cautious-sweep.toml" in EXAMPLE.read_text()
     done = subprocess.run([*SDC, "sweep", "examples/cautious-sweep.toml", "--out",
-                           str(tmp_path / "out"), "--samples", "2", "--workers", "2",
+                           str(tmp_path / "out"), "--samples", "10", "--workers", "2",
                            "--quiet"], capture_output=True, text=True, timeout=600, cwd=REPO)
     assert sweep.exists() and done.returncode == 0, done.stderr
     rows = pd.read_parquet(tmp_path / "out" / "results.parquet")
     assert sorted(rows.controller.unique()) == ["Cautious", "avoid", "seed"]
     assert (rows.status == "ok").all()
+    braking = rows[rows.controller == "Cautious"]
+    assert len(braking) == 10 and (braking.outcome == "stuck").all()
+    assert not braking.collision.any()
+
+    report = subprocess.run([*SDC, "report", str(tmp_path / "out")], capture_output=True,
+                            text=True, timeout=600, cwd=REPO)
+    assert report.returncode == 0, report.stderr
+    ranked = list(json.loads((tmp_path / "out" / "summary.json").read_text())
+                  ["verdicts"]["by_controller"])
+    assert ranked.index("avoid") < ranked.index("Cautious")
+    lines = report.stdout.splitlines()
+    table = lines[1:5]  # the verdict table's header and its three rows, ranked
+    assert table[0].startswith("controller") and table[-1].startswith("Cautious")
+    assert any(line.startswith("Cautious: completed without collision in 0 of 10 runs")
+               and "stuck 10" in line and "not a safe controller" in line for line in lines)
