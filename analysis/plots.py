@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from analysis.stats import Method, group_values, rates_by
+from analysis.stats import Method, group_levels, group_values, rates_by
 
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 
@@ -28,27 +28,40 @@ def _label(column: str) -> str:
 
 
 def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
-    """x positions and tick labels: bin midpoints for intervals, else categories in order."""
+    """x positions and tick labels: bin midpoints for intervals, the values for numbers,
+    else categories in order."""
     values = list(groups)
     if values and isinstance(values[0], pd.Interval):
         return np.array([v.mid for v in values]), []
+    if values and all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
+                      for v in values):
+        return np.array(values, dtype=float), []
     return np.arange(len(values)), [str(v) for v in values]
 
 
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
 def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wilson") -> bytes:
-    """Collision rate per group of ``column``, one line per controller, 95% band."""
+    """Collision rate per group of ``column``, one line per controller, 95% band. Lines
+    differ by colour and marker and are nudged apart along x, so none hides another."""
     table = rates_by(results, column, method)
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
     categories: list[str] = []
-    for controller, rows in table.groupby("controller", sort=False):
-        rows = rows.dropna(subset=["collision_rate"])
+    controllers = list(dict.fromkeys(results.controller))
+    xs = _positions(table.group.drop_duplicates())[0]
+    span = float(np.ptp(xs)) if len(xs) > 1 else 1.0
+    for i, controller in enumerate(controllers):
+        rows = table[table.controller == controller].dropna(subset=["collision_rate"])
         x, categories = _positions(rows.group)
-        ax.plot(x, rows.collision_rate, marker="o", label=controller)
-        ax.fill_between(x, rows.low, rows.high, alpha=0.2)
+        x = x + (i - (len(controllers) - 1) / 2) * 0.012 * span
+        ax.plot(x, rows.collision_rate, marker=MARKERS[i % len(MARKERS)], label=controller,
+                alpha=0.85)
+        ax.fill_between(x, rows.low, rows.high, alpha=0.12)
     if categories:
-        ax.set_xticks(range(len(categories)), categories)
-    ax.set(xlabel=_label(column), ylabel="collision rate", ylim=(-0.02, 1.02),
+        ax.set_xticks(range(len(categories)), categories, rotation=30, ha="right")
+    ax.set(xlabel=_label(column), ylabel="collision rate (ok runs)", ylim=(-0.02, 1.02),
            title=f"Collision rate by {_label(column)} ({method} 95% interval)")
     ax.grid(alpha=0.3)
     ax.legend()
@@ -56,20 +69,99 @@ def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wils
 
 
 def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
-    """Collision rate of ``controller`` over two parameters (ok runs; empty cells blank)."""
+    """Collision rate of ``controller`` over two parameters (ok runs; a cell without one
+    says "no data")."""
     ok = results[(results.status == "ok") & (results.controller == controller)]
-    gx, gy = group_values(ok[x], 8), group_values(ok[y], 8)
-    grid = (ok.assign(_x=gx, _y=gy).groupby(["_y", "_x"], observed=False).collision.mean()
-            .unstack("_x"))
+    all_x, all_y = group_values(results[x], 8), group_values(results[y], 8)
+    grid = (ok.assign(_x=all_x[ok.index], _y=all_y[ok.index])
+            .groupby(["_y", "_x"], observed=True).collision.mean().unstack("_x")
+            .reindex(index=group_levels(all_y), columns=group_levels(all_x)))
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
-    image = ax.imshow(grid.to_numpy(dtype=float), origin="lower", aspect="auto",
-                      cmap="viridis", vmin=0, vmax=1)
+    values = grid.to_numpy(dtype=float)
+    image = ax.imshow(values, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=1)
+    for iy, ix in zip(*np.nonzero(np.isnan(values)), strict=True):  # empty is not zero
+        ax.text(ix, iy, "no\ndata", ha="center", va="center", fontsize=7, color="0.4")
     ax.set_xticks(range(grid.shape[1]), [str(c) for c in grid.columns], rotation=45,
                   ha="right", fontsize=8)
     ax.set_yticks(range(grid.shape[0]), [str(i) for i in grid.index], fontsize=8)
     ax.set(xlabel=_label(x), ylabel=_label(y), title=f"Collision rate, {controller}")
     fig.colorbar(image, ax=ax, label="collision rate")
+    return _png(fig)
+
+
+OUTCOME_STYLE = {"completed": ("tab:green", "o"), "collided": ("tab:red", "X"),
+                 "stuck": ("tab:orange", "s"), "unfinished": ("tab:purple", "D"),
+                 "no outcome": ("black", "x")}
+
+
+def run_outcomes(results: pd.DataFrame) -> pd.Series:
+    """Each run's outcome, ``no outcome`` for errors and timeouts."""
+    return results.outcome.where(results.status == "ok", "no outcome")
+
+
+def outcome_bars(results: pd.DataFrame) -> bytes:
+    """How each controller's runs ended, as shares of all its runs (stacked bars)."""
+    controllers = list(dict.fromkeys(results.controller))
+    outcomes = run_outcomes(results)
+    fig = Figure(figsize=(7, 0.6 * len(controllers) + 1.6))
+    ax = fig.subplots()
+    left = np.zeros(len(controllers))
+    for name, (color, _) in OUTCOME_STYLE.items():
+        share = np.array([(outcomes[results.controller == c] == name).mean()
+                          for c in controllers])
+        ax.barh(controllers, share, left=left, color=color, label=name,
+                hatch="//" if name == "no outcome" else None)
+        left += share
+    ax.invert_yaxis()
+    ax.set(xlabel="share of the controller's runs", xlim=(0, 1),
+           title="How the runs ended")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _png(fig)
+
+
+def separating_parameters(results: pd.DataFrame, columns: list[str]) -> list[str]:
+    """The (up to two) numeric ``columns`` that separate runs that completed from the
+    rest best: the largest |AUC - 1/2| of the value between the two groups."""
+    done = run_outcomes(results) == "completed"
+    scores = {}
+    for column in columns:
+        values = results[column]
+        if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
+            continue
+        ranks = values.rank()
+        n_done, n_rest = int(done.sum()), int((~done).sum())
+        if n_done == 0 or n_rest == 0:
+            scores[column] = 0.0
+            continue
+        auc = (ranks[done].sum() - n_done * (n_done + 1) / 2) / (n_done * n_rest)
+        scores[column] = abs(auc - 0.5)
+    return sorted(scores, key=lambda c: -scores[c])[:2]
+
+
+def failure_map(results: pd.DataFrame, x: str, y: str | None) -> bytes:
+    """Every run's outcome over the two parameters that separate failures best, one
+    panel per controller (with one parameter, runs are spread over y by outcome)."""
+    controllers = list(dict.fromkeys(results.controller))
+    fig = Figure(figsize=(4.2 * len(controllers), 3.8))
+    axes = np.atleast_1d(fig.subplots(1, len(controllers), sharex=True, sharey=True))
+    outcomes = run_outcomes(results)
+    names = list(OUTCOME_STYLE)
+    for ax, controller in zip(axes, controllers, strict=True):
+        mine = results.controller == controller
+        for name, (color, marker) in OUTCOME_STYLE.items():
+            rows = results[mine & (outcomes == name)]
+            ys = rows[y] if y else np.full(len(rows), names.index(name))
+            ax.scatter(rows[x], ys, c=color, marker=marker, s=22, label=name,
+                       edgecolors="none" if marker != "x" else None)
+        ax.set(title=controller, xlabel=_label(x))
+        ax.grid(alpha=0.3)
+    if y:
+        axes[0].set_ylabel(_label(y))
+    else:
+        axes[0].set_yticks(range(len(names)), names)
+    axes[-1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fig.suptitle("How every run ended, over the parameters that separate failures best")
     return _png(fig)
 
 

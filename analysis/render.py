@@ -10,6 +10,7 @@ matplotlib backend is left alone.
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import math
 from collections.abc import Callable
@@ -22,6 +23,7 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 
 from analysis.metrics import central_range_m
+from analysis.run_outcome import STUCK_SPEED_MPS
 from analysis.trace_file import Trace
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
@@ -197,6 +199,39 @@ def frame_rgb(scene: Scene, k: int, width_px: int = 640, height_px: int = 320) -
     _scene_axes(ax, scene)(k)
     fig.canvas.draw()
     return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
+def decisive_step(scene: Scene, outcome: str | None) -> int:
+    """The step that shows how the run ended: its last for a collision or an unfinished
+    run, the step it came to rest for a stuck one, the closest approach to an obstacle
+    (the shortest central range) for one that completed."""
+    last = len(scene.t_s) - 1
+    if outcome == "stuck":
+        moving = np.flatnonzero(scene.speed_mps >= STUCK_SPEED_MPS)
+        return min(last, int(moving[-1]) + 1) if len(moving) else 0
+    if outcome == "completed" and np.isfinite(scene.central_range_m).any():
+        return int(np.argmin(scene.central_range_m))
+    return last
+
+
+def step_at(scene: Scene, t_s: float) -> int:
+    """The last step at or before ``t_s`` (the first before the start, the last past the end)."""
+    return int(np.clip(np.searchsorted(scene.t_s, t_s + 1e-9, side="right") - 1, 0,
+                       len(scene.t_s) - 1))
+
+
+def frame_png(scene: Scene, k: int, width_px: int = 800, height_px: int = 420,
+              title: bool = True) -> bytes:
+    """Step ``k`` drawn top-down as PNG bytes: road, obstacles, traffic, the ego and its
+    lidar rays, with the time, phase and speed; ``title``: the run's title above."""
+    fig = _figure(figsize=(width_px / 80, height_px / 80), dpi=80)
+    ax = fig.add_axes([0.09, 0.12, 0.89, 0.78 if title else 0.85])
+    _scene_axes(ax, scene)(k)
+    if title:
+        fig.suptitle(scene.title, fontsize=8)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=80)
+    return buffer.getvalue()
 
 
 def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,

@@ -19,6 +19,7 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
+from analysis.look_at import MAX_THUMBNAILS, RANKING, params_text, ranked_runs, thumbnail
 from analysis.plain_json import json_plain
 from analysis.run_outcome import COMPLETED
 from analysis.stats import (
@@ -35,6 +36,7 @@ from analysis.stats import (
 from analysis.verdicts import (
     NO_OUTCOME,
     RARELY_COMPLETES,
+    outcomes_recorded,
     shared_samples,
     verdict_sentence,
     verdict_summary,
@@ -334,6 +336,36 @@ def replay_command(sweep_dir: Path, run_id: str) -> str:
     return f"sdc replay {sweep_dir} --run {run_id}"
 
 
+def _row_outcome(row: dict) -> str:
+    """How a run (a record) ended, in words."""
+    if row["status"] != "ok":
+        return f"{row['status']}: {row['error']}"
+    outcome = row.get("outcome") or ("collided" if row["collision"] else "no collision")
+    if row["collision"]:
+        outcome += f" with {row['collision_with']} at {row['collision_time_s']:.2f} s"
+    return outcome
+
+
+def _look_at_table(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str:
+    """The ranked runs as an HTML table, a thumbnail beside the first that kept a trace."""
+    head = ["#", "run", "controller", "why", "outcome", "parameters", "decisive moment",
+            "replay"]
+    body, drawn = [], 0
+    for rank, row in enumerate(bad.to_dict("records"), start=1):
+        png = thumbnail(sweep_dir, row["run_id"]) if drawn < MAX_THUMBNAILS else None
+        drawn += png is not None
+        picture = ("" if png is None else
+                   f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
+                   f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
+        cells = [str(rank), row["run_id"], row["controller"], row["why"], _row_outcome(row),
+                 params_text(row, params)]
+        body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
+                    + f"<td>{picture}</td><td><code>"
+                    f"{html.escape(replay_command(sweep_dir, row['run_id']))}</code></td></tr>")
+    header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
+    return f'<table id="look-at"><tr>{header}</tr>{"".join(body)}</table>'
+
+
 def _outcome(row) -> str:
     if row.status != "ok":
         return f"{row.status}: {row.error}"
@@ -361,18 +393,28 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
               f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
-    lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", ""]
-    bad = failures(results)
-    for row in bad.head(MAX_LISTED_FAILURES).itertuples():
-        lines.append(f"- `{row.run_id}` ({row.controller}): {_outcome(row)} — "
-                     f"`{replay_command(sweep_dir, row.run_id)}`")
+    lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", "",
+                                                          RANKING, ""]
+    bad = ranked_runs(results)
+    params = varying_parameters(results)
+    for rank, row in enumerate(bad.head(MAX_LISTED_FAILURES).to_dict("records"), start=1):
+        lines.append(f"{rank}. `{row['run_id']}` ({row['controller']}): {_row_outcome(row)}; "
+                     f"{params_text(row, params)} — `{replay_command(sweep_dir, row['run_id'])}`")
     if len(bad) > MAX_LISTED_FAILURES:
         lines.append(f"- ... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet")
     return "\n".join(lines) + "\n"
 
 
 def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[str, bytes]]:
-    out = [(f"Collision rate by {c.removeprefix('p.')}", plots.rate_by_parameter(results, c,
+    out = []
+    if outcomes_recorded(results):
+        out.append(("How the runs ended", plots.outcome_bars(results)))
+        pair = plots.separating_parameters(results, varying_parameters(results))
+        if pair:
+            y = pair[1] if len(pair) > 1 else None
+            out.append((f"Failure map over {' and '.join(p.removeprefix('p.') for p in pair)}",
+                        plots.failure_map(results, pair[0], y)))
+    out += [(f"Collision rate by {c.removeprefix('p.')}", plots.rate_by_parameter(results, c,
                                                                                  method))
            for c in by]
     numeric = [c for c in by if pd.api.types.is_numeric_dtype(results[c])]
@@ -386,13 +428,14 @@ def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[
 
 
 _CSS = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1300px; color: #222; }
 table { border-collapse: collapse; margin: 1em 0; }
 th, td { border: 1px solid #ccc; padding: 4px 8px; text-align: left; font-size: 14px; }
 th { background: #f2f2f2; }
 code { background: #f6f6f6; padding: 1px 4px; }
 figure { margin: 1.5em 0; }
 img { max-width: 100%; }
+img.thumb { width: 320px; max-width: none; }
 .warn { background: #fff3cd; border: 1px solid #e0c36c; padding: 6px 10px; }
 """
 
@@ -436,12 +479,12 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
                    str(r["n_failed"])] for r in rows]
         parts.append(f"<details><summary>By {html.escape(column)}</summary>"
                      f"{_table_html(table)}</details>")
-    bad = failures(results)
-    parts.append(f"<h2>Runs to look at ({len(bad)})</h2>")
-    table = [["run", "controller", "outcome", "replay"]]
-    table += [[row.run_id, row.controller, _outcome(row), replay_command(sweep_dir, row.run_id)]
-              for row in bad.head(MAX_LISTED_FAILURES).itertuples()]
-    parts.append(_table_html(table))
+    bad = ranked_runs(results)
+    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", f"<p>{html.escape(RANKING)} The "
+              f"pictures show the moment that decided the first {MAX_THUMBNAILS} runs with "
+              "a kept trace (top-down; lidar returns in orange).</p>",
+              _look_at_table(bad.head(MAX_LISTED_FAILURES), sweep_dir,
+                             varying_parameters(results))]
     if len(bad) > MAX_LISTED_FAILURES:
         parts.append(f"<p>... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet</p>")
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"

@@ -86,6 +86,13 @@ def group_values(column: pd.Series, max_groups: int = MAX_GROUPS) -> pd.Series:
     return column
 
 
+def group_levels(groups: pd.Series) -> list:
+    """Every group of a :func:`group_values` column, in order: its bins, or its values."""
+    if isinstance(groups.dtype, pd.CategoricalDtype):
+        return list(groups.cat.categories)
+    return sorted(groups.dropna().unique())
+
+
 def group_label(group) -> str:
     """A group as people read it: a bin as ``(a, b]``, a number to 3 digits."""
     if isinstance(group, float):
@@ -180,9 +187,7 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
     but its runs are too few to show it), ``no_runs`` (no ok run). ``why`` is None
     when every group was shown at or below.
     """
-    grouped = group_values(results[column])  # every controller's groups: the same bins
-    groups = (list(grouped.cat.categories) if isinstance(grouped.dtype, pd.CategoricalDtype)
-              else sorted(grouped.dropna().unique()))
+    groups = group_levels(group_values(results[column]))  # every controller's: same bins
     table = rates_by(results, column)
     rows = {str(r.group): r for r in table[table.controller == controller].itertuples()}
     safe_up_to, stopped = None, None

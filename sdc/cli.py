@@ -298,7 +298,8 @@ def _plan_lines(sweep, plan) -> list[str]:
               help="Stop a run after S wall seconds; it becomes a timeout row.")
 @click.option("--traces", type=click.Choice(["none", "failures", "all"]), default="failures",
               show_default=True,
-              help="Write DIR/traces/<run_id>.parquet for no run, runs that collided, or all.")
+              help="Write DIR/traces/<run_id>.parquet for no run, runs that did not "
+                   "complete (collided, stuck, unfinished), or all.")
 @click.option("--samples", type=click.IntRange(min=1), metavar="N",
               help="Override the sweep's sample count (not for the grid sampler).")
 @click.option("--dry-run", is_flag=True, help="Print the plan (one line per run) and stop.")
@@ -399,8 +400,8 @@ def _executor_options(command):
                      help="Stop a run after S wall seconds; it becomes a timeout row."),
         click.option("--traces", type=click.Choice(["none", "failures", "all"]),
                      default="failures", show_default=True,
-                     help="Write DIR/traces/<run_id>.parquet for no run, runs that collided, "
-                          "or all."),
+                     help="Write DIR/traces/<run_id>.parquet for no run, runs that did not "
+                          "complete (collided, stuck, unfinished), or all."),
         click.option("--controller", metavar="NAME",
                      help="The controller judged, one of the sweep's  [default: its only "
                           "one]."),
@@ -575,12 +576,25 @@ def _has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
-def _render(trace, metadata, out: Path, every: int) -> None:
+def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -> None:
     from rich.console import Console
 
-    from analysis.render import animate, scene_from_trace, write_html
+    from analysis.render import (
+        animate,
+        decisive_step,
+        frame_png,
+        scene_from_trace,
+        step_at,
+        write_html,
+    )
 
     scene = scene_from_trace(trace, metadata)
+    if out.suffix == ".png":
+        k = (decisive_step(scene, metadata.get("run", {}).get("outcome")) if at_s is None
+             else step_at(scene, at_s))
+        out.write_bytes(frame_png(scene, k))
+        click.echo(f"step {k} (t = {scene.t_s[k]:.3f} s) written to {out}")
+        return
     if out.suffix == ".html":
         frames = write_html(scene, out, every)
     else:  # about 0.2 s a frame: show the progress
@@ -599,13 +613,18 @@ def _render(trace, metadata, out: Path, every: int) -> None:
 @click.option("--run", "run_id", metavar="ID", help="The run of sweep DIR to re-simulate.")
 @click.option("--verify", is_flag=True, help="Exit 1 unless the re-simulation is identical.")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
-              metavar="FILE.gif|.mp4|.html",
-              help="Draw the run: an animation (mp4 needs ffmpeg) or an interactive page.")
+              metavar="FILE.gif|.mp4|.html|.png",
+              help="Draw the run: an animation (mp4 needs ffmpeg), an interactive page, or "
+                   "one frame (.png: the decisive moment, or --at).")
+@click.option("--at", "at_s", type=float, metavar="T",
+              help="With --out FILE.png: draw the step at simulated time T [s] (default: the "
+                   "moment that shows how the run ended: the collision, where it came to "
+                   "rest, or the closest approach).")
 @click.option("--every", type=click.IntRange(min=1), default=1, show_default=True, metavar="K",
               help="Keep one frame in K.")
 @click.option("--gui", is_flag=True, help="Re-simulate in sumo-gui (needs a display).")
 def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, every: int,
-           gui: bool) -> None:
+           at_s: float | None, gui: bool) -> None:
     """Re-simulate one run of a sweep exactly, or draw a recorded trace.
 
     With a sweep DIR and --run ID, the run is rebuilt from DIR's plan (same spec,
@@ -616,8 +635,10 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
     """
     from analysis.trace_file import read_trace
 
-    if out is not None and out.suffix not in (".gif", ".mp4", ".html"):
-        _bad_input(f"--out: {out} must end in .gif, .mp4 or .html")
+    if out is not None and out.suffix not in (".gif", ".mp4", ".html", ".png"):
+        _bad_input(f"--out: {out} must end in .gif, .mp4, .html or .png")
+    if at_s is not None and (out is None or out.suffix != ".png"):
+        _bad_input("--at: draws one frame; give --out FILE.png with it")
     if out is not None and not out.parent.is_dir():
         _bad_input(f"--out: directory {out.parent} does not exist")
     if out is not None and out.suffix == ".mp4":
@@ -633,11 +654,11 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
             if run_id or verify or gui:
                 _bad_input("--run, --verify and --gui need a sweep DIR, not a trace file")
             trace, metadata = read_trace(target)
-            _render(trace, metadata, out or target.with_suffix(".html"), every)
+            _render(trace, metadata, out or target.with_suffix(".html"), every, at_s)
             return
         if run_id is None:
             _bad_input("--run: a run ID is required with a sweep DIR (see its results)")
-        diverged = _replay_run(target, run_id, out, every, gui)
+        diverged = _replay_run(target, run_id, out, every, gui, at_s)
     except SdcError as e:
         _bad_input(str(e))
     except KeyboardInterrupt:
@@ -647,7 +668,8 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
         sys.exit(EXIT_RUN_ERROR)
 
 
-def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui: bool) -> bool:
+def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui: bool,
+                at_s: float | None = None) -> bool:
     """Re-simulate, compare, report and draw; True when the replay is not identical."""
     from analysis.trace_file import read_trace
     from sdc.batch.replay_check import first_divergence, load_recorded_run, version_warnings
@@ -687,5 +709,5 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
                    "(the sweep kept no trace of this run to find the step; sweep with "
                    "--traces all)")
     if out is not None:
-        _render(episode.trace, episode.metadata, out, every)
+        _render(episode.trace, episode.metadata, out, every, at_s)
     return diverged

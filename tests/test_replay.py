@@ -226,3 +226,28 @@ def test_mp4_is_written_with_ffmpeg_and_refused_clearly_without(sweep_dir, tmp_p
         assert result.exit_code == 0 and out.stat().st_size > 0
     else:
         assert result.exit_code == 2 and "needs ffmpeg" in result.output and not out.exists()
+
+
+@pytest.mark.slow
+def test_one_frame_as_png_at_the_decisive_moment_or_at_a_time(sweep_dir, tmp_path):
+    crash = "00000-lane-keep"  # 3.74 m/s into the barrel: the collision is its last step
+    trace, metadata = read_trace(sweep_dir / "traces" / f"{crash}.parquet")
+    assert metadata["run"]["outcome"] == "collided"
+    out = tmp_path / "frame.png"
+    result = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", crash, "--out",
+                                       str(out)])
+    assert result.exit_code == 0, result.output
+    last = len(trace) - 1
+    assert f"step {last} (t = {trace.floats['t_s'][last]:.3f} s) written to {out}" \
+        in result.output
+    image = Image.open(out)
+    assert image.format == "PNG" and image.size[0] >= 600
+    assert np.asarray(image.convert("L")).std() > 10  # a drawing, not a blank
+    at = tmp_path / "at.png"
+    result = CliRunner().invoke(main, ["replay", str(sweep_dir / "traces" / f"{crash}.parquet"),
+                                       "--out", str(at), "--at", "2.0"])
+    k = int(np.searchsorted(trace.floats["t_s"], 2.0 + 1e-9, side="right") - 1)
+    assert result.exit_code == 0 and f"step {k} (t = " in result.output
+    assert trace.floats["t_s"][k] <= 2.0 < trace.floats["t_s"][k + 1]
+    bad = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", crash, "--at", "2"])
+    assert bad.exit_code == 2 and "--at: draws one frame" in bad.output

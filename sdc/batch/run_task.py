@@ -74,7 +74,8 @@ def execute(task: RunTask) -> dict:
         episode = run_episode(task.spec, run_id=task.run_id, cache_dir=task.cache_dir)
     except Exception as e:  # the run's own failure is an outcome row, not a crash
         return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
-    wanted = task.traces == "all" or (task.traces == "failures" and episode.row["collision"])
+    wanted = task.traces == "all" or (task.traces == "failures"
+                                      and episode.row["outcome"] != "completed")
     if task.trace_path is not None and wanted:
         if task.recorded_spec is not None:  # the driver's paths, not a worker's copies
             _record_driver_paths(episode.metadata, task.recorded_spec)
