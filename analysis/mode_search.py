@@ -261,6 +261,12 @@ class ModeSearch:
         """Each mode's unit direction in normal space, (modes, dims)."""
         return self._modes.cones()[0]
 
+    @property
+    def planned_runs(self) -> int:
+        """The runs the search will take in all (a progress bar's total): its budget,
+        or the runs it took once it found enough."""
+        return self.runs if self.found_enough else self.max_runs
+
     def ask(self) -> np.ndarray | None:
         """The next batch (n, dims), or None when the search is finished."""
         left = self.max_runs - self.runs

@@ -626,6 +626,25 @@ class EstimationLoop:
         """The largest weight a run of the estimation proposal can carry."""
         return self.sampler.proposal.max_weight
 
+    @property
+    def planned_runs(self) -> int:
+        """The runs the estimate is expected to take in all (a progress bar's total, for
+        its ETA): the budget while adapting or before the RHW is finite; then the runs
+        so far plus the estimation runs its 1/sqrt(n) decay needs to reach the target
+        (at least the minimum), in whole batches, within the budget; once finished, the
+        runs it took."""
+        sampler = self.sampler
+        if self.stopped is not None:
+            return sampler.runs
+        if sampler.adapting or not self.history or not math.isfinite(self.history[-1].rhw):
+            return self.max_runs
+        estimation_runs = sampler.runs - sampler.adaptation_runs
+        needed = max(self.min_estimation_runs,
+                     estimation_runs * (self.history[-1].rhw / self.target_rhw) ** 2)
+        total = (sampler.adaptation_runs
+                 + math.ceil(needed / sampler.batch_size) * sampler.batch_size)
+        return int(min(self.max_runs, max(total, sampler.runs + sampler.batch_size)))
+
     def ask(self) -> np.ndarray | None:
         """The next batch in normal space, or None when the estimate is finished."""
         sampler = self.sampler

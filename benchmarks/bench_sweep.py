@@ -46,6 +46,9 @@ class Clock:
     def advance(self, row: dict) -> None:
         self.arrivals.append(time.perf_counter())
 
+    def set_total(self, total: int) -> None:
+        pass
+
     def stop(self) -> None:
         self.stopped = time.perf_counter()
 

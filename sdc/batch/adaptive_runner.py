@@ -242,6 +242,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
             seeds = seed_rng.integers(0, 2**31 - 1, size=len(z))
             rows = runs.run(batch, phase, _batch_plan(sweep, z, seeds, drawn, width), weights)
             loop.tell(z, _scores(rows))
+            reporter.set_total(loop.planned_runs)  # the ETA from the runs still planned
             drawn, batch = drawn + len(z), batch + 1
             _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
         state = "finished"

@@ -45,6 +45,10 @@ class RichReporter:
         self._progress.update(self._task, advance=1, collisions=counts["collisions"],
                               failed=counts["failed"], rate=f"{rate:.1f} runs/s")
 
+    def set_total(self, total: int) -> None:
+        """The runs now planned in all: the bar's length, and so its ETA."""
+        self._progress.update(self._task, total=total)
+
     def stop(self) -> None:
         if self._progress is not None:
             self._progress.stop()
@@ -57,6 +61,9 @@ class QuietReporter:
         pass
 
     def advance(self, row: dict) -> None:
+        pass
+
+    def set_total(self, total: int) -> None:
         pass
 
     def stop(self) -> None:
