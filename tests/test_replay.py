@@ -146,6 +146,14 @@ def test_html_page_steps_on_click_in_headless_chromium(sweep_dir, tmp_path):
         page.on("pageerror", lambda e: problems.append(str(e)))
         page.goto(page_file.as_uri())
         assert page.get_attribute("body", "data-step") == "0"
+        # a scale bar, labelled strip charts, a time axis in round steps
+        assert page.get_attribute("#scene", "data-scale-bar-m") == "10"
+        assert page.get_attribute("#strip", "data-panels") == \
+            "speed [m/s]|lane offset [m]|central range [m] (\u2264 20)"
+        assert page.get_attribute("#strip", "data-tick-s") in ("1", "2")  # a 12 s run
+        page.screenshot(path=str(tmp_path / "page.png"))
+        shot = np.asarray(Image.open(tmp_path / "page.png").convert("L"), float)
+        assert shot.std() > 10
         page.click("#next")
         page.click("#next")
         assert page.get_attribute("body", "data-step") == "6"
