@@ -6,6 +6,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from analysis.report import COLLISION_TITLE, VERDICT_TITLE
 from scenarios import CATALOG_DIR
 from scenarios.toml_io import dumps_plain
 from sdc.cli import main
@@ -119,8 +120,12 @@ def test_demo_sweeps_reports_and_shows_a_finished_demo_again(tmp_path):
     args = ["demo", "--out", str(out), "--samples", "3", "--workers", "2"]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
-    rows = {}  # the headline's (the first); the rates where a stop was possible follow
-    for line in result.output.splitlines():
+    lines = result.output.splitlines()
+    at = lines.index(VERDICT_TITLE) + 2  # the verdict table's rows, ranked
+    verdicts = {line.split()[0]: line.split() for line in lines[at:at + 3]}
+    assert verdicts["lane-keep"][1:4] == ["3", "0", "(0.0%)"]  # never completes
+    rows = {}  # the collision table's (the first after its title); stop-possible rows follow
+    for line in lines[lines.index(COLLISION_TITLE) + 1:]:
         if len(line.split()) > 1 and line.split()[1].isdigit():
             rows.setdefault(line.split()[0], line.split())
     assert rows["seed"][1] == "3" and rows["lane-keep"][1:4] == ["3", "3", "100.0%"]

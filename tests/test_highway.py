@@ -79,7 +79,7 @@ def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
 
 
 def test_a_sweep_over_both_backends_reports_them_side_by_side(tmp_path):
-    from analysis.report import write_report
+    from analysis.report import COLLISION_TITLE, write_report
     from scenarios.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter
@@ -103,6 +103,7 @@ controllers = ["seed", "lane-keep"]
     for backend in by_backend:  # no traffic: the two simulators agree exactly
         assert by_backend[backend]["seed"]["collisions"] == 1  # the 9 m/s run
         assert by_backend[backend]["lane-keep"]["collisions"] == 2
-    assert report.terminal[0].split()[:2] == ["controller", "backend"]
-    assert report.terminal[1].split()[:2] == ["seed", "sumo"]
-    assert report.terminal[2].split()[:2] == ["seed", "highway"]
+    head = report.terminal.index(COLLISION_TITLE) + 1
+    assert report.terminal[head].split()[:2] == ["controller", "backend"]
+    assert report.terminal[head + 1].split()[:2] == ["seed", "sumo"]
+    assert report.terminal[head + 2].split()[:2] == ["seed", "highway"]
