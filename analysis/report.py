@@ -37,6 +37,7 @@ from analysis.verdicts import (
     NO_OUTCOME,
     RARELY_COMPLETES,
     outcomes_recorded,
+    percent,
     shared_samples,
     verdict_sentence,
     verdict_summary,
@@ -158,14 +159,10 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
     }
 
 
-def _pct(value) -> str:
-    return "-" if value is None else f"{100 * value:.1f}%"
-
-
 def _rate_row(keys: list[str], numbers: dict, method: Method) -> list[str]:
     low, high = interval(numbers, method)
     return [*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
-            _pct(numbers["collision_rate"]), f"{_pct(low)} - {_pct(high)}",
+            percent(numbers["collision_rate"]), f"{percent(low)} - {percent(high)}",
             str(numbers["n_error"]), str(numbers["n_timeout"])]
 
 
@@ -197,9 +194,9 @@ def verdict_rows(summary: dict) -> list[list[str]]:
         done = outcomes[COMPLETED]
         lost = numbers["median_time_lost_s"]
         rows.append([controller, str(numbers["runs"]),
-                     f"{done['runs']} ({_pct(done['rate'])})",
-                     f"{_pct(done['low'])} - {_pct(done['high'])}",
-                     *(f"{outcomes[o]['runs']} ({_pct(outcomes[o]['rate'])})"
+                     f"{done['runs']} ({percent(done['rate'])})",
+                     f"{percent(done['low'])} - {percent(done['high'])}",
+                     *(f"{outcomes[o]['runs']} ({percent(outcomes[o]['rate'])})"
                        for o in ("collided", "stuck", "unfinished", NO_OUTCOME)),
                      "-" if lost is None else f"{lost:.1f} s"])
     return rows
@@ -268,7 +265,7 @@ def _envelope(envelope: dict, completes_rarely: bool) -> str:
     else:
         counts = (f"{stopped['collisions']} of {stopped['n_ok']} ok runs collided"
                   + (f", {stopped['n_failed']} runs without an outcome" if stopped["n_failed"]
-                     else "") + f"; 95% up to {_pct(stopped['high'])}")
+                     else "") + f"; 95% up to {percent(stopped['high'])}")
         why = {"above": f"exceeds {limit} in {stopped['group']} ({counts})",
                "too_few": f"cannot be shown at or below {limit} in {stopped['group']}: too "
                           f"few runs there ({counts})",
@@ -301,7 +298,7 @@ def findings(summary: dict) -> list[str]:
 
 
 def gate_line(gate: dict) -> str:
-    bounds = ", ".join(f"{c} {_pct(high)}" for c, high in gate["upper_bounds"].items())
+    bounds = ", ".join(f"{c} {percent(high)}" for c, high in gate["upper_bounds"].items())
     verdict = ("FAILED: " + ", ".join(gate["failed"]) if gate["failed"] else "passed")
     return (f"--fail-above {gate['rate']:g}: {verdict} (upper 95% bounds of the collision "
             f"rates, errors and timeouts counted as collisions: {bounds})")
@@ -364,12 +361,6 @@ def _look_at_table(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str
                     f"{html.escape(replay_command(sweep_dir, row['run_id']))}</code></td></tr>")
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     return f'<table id="look-at"><tr>{header}</tr>{"".join(body)}</table>'
-
-
-def _outcome(row) -> str:
-    if row.status != "ok":
-        return f"{row.status}: {row.error}"
-    return f"collision with {row.collision_with} at {row.collision_time_s:.2f} s"
 
 
 def _markdown_table(rows: list[list[str]]) -> list[str]:
@@ -475,8 +466,9 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
         table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
                   "failed"]]
         table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
-                   _pct(_finite(r["collision_rate"])), f"{_pct(r['low'])} - {_pct(r['high'])}",
-                   str(r["n_failed"])] for r in rows]
+                   percent(_finite(r["collision_rate"])),
+                   f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"])]
+                  for r in rows]
         parts.append(f"<details><summary>By {html.escape(column)}</summary>"
                      f"{_table_html(table)}</details>")
     bad = ranked_runs(results)
@@ -496,15 +488,16 @@ def junit_xml(results: pd.DataFrame, name: str) -> str:
     """One test case per run: a collision is a failure, an error or timeout an error."""
     suite = ElementTree.Element("testsuite", name=name, tests=str(len(results)))
     n_failures = n_errors = 0
-    for row in results.itertuples():
-        case = ElementTree.SubElement(suite, "testcase", classname=f"{name}.{row.controller}",
-                                      name=row.run_id, time=f"{_finite(row.wall_time_s) or 0:.3f}")
-        if row.status != "ok":
+    for row in results.to_dict("records"):
+        case = ElementTree.SubElement(suite, "testcase", classname=f"{name}.{row['controller']}",
+                                      name=row["run_id"],
+                                      time=f"{_finite(row['wall_time_s']) or 0:.3f}")
+        if row["status"] != "ok":
             n_errors += 1
-            ElementTree.SubElement(case, "error", message=_outcome(row), type=row.status)
-        elif row.collision:
+            ElementTree.SubElement(case, "error", message=_row_outcome(row), type=row["status"])
+        elif row["collision"]:
             n_failures += 1
-            ElementTree.SubElement(case, "failure", message=_outcome(row), type="collision")
+            ElementTree.SubElement(case, "failure", message=_row_outcome(row), type="collision")
     suite.set("failures", str(n_failures))
     suite.set("errors", str(n_errors))
     return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
@@ -567,18 +560,18 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
     title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
     bad = failures(results)
-    listed = bad.head(MAX_LISTED_FAILURES)
+    listed = bad.head(MAX_LISTED_FAILURES).to_dict("records")
     md = [f"# {title}", "", *lines, "", "## Failure modes", "", *_markdown_table(modes), "",
           "## Runs to look at", ""]
-    md += [f"- `{row.run_id}` (batch {row.batch}): {_outcome(row)} — "
-           f"`{replay_command(sweep_dir, row.run_id)}`" for row in listed.itertuples()]
+    md += [f"- `{row['run_id']}` (batch {row['batch']}): {_row_outcome(row)} — "
+           f"`{replay_command(sweep_dir, row['run_id'])}`" for row in listed]
     parts = [f"<h1>{html.escape(title)}</h1>",
              "".join(f"<p>{html.escape(line)}</p>" for line in lines),
              "<h2>Failure modes</h2>", _table_html(modes)]
     parts += [_figure_html(t, png) for t, png in images]
     table = [["run", "batch", "outcome", "replay"]]
-    table += [[row.run_id, str(row.batch), _outcome(row), replay_command(sweep_dir, row.run_id)]
-              for row in listed.itertuples()]
+    table += [[row["run_id"], str(row["batch"]), _row_outcome(row),
+               replay_command(sweep_dir, row["run_id"])] for row in listed]
     parts += [f"<h2>Runs to look at ({len(bad)})</h2>", _table_html(table)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"

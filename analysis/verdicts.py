@@ -89,7 +89,7 @@ def verdict_sentence(controller: str, summary: dict) -> str:
     rest = ", ".join(f"{name} {outcomes[name]['runs']}"
                      for name in (*OUTCOMES[1:], NO_OUTCOME) if outcomes[name]["runs"])
     text = (f"{controller}: completed without collision in {done['runs']} of {n} runs "
-            f"({_pct(done['rate'])}, 95% {_pct(done['low'])} - {_pct(done['high'])})")
+            f"({percent(done['rate'])}, 95% {percent(done['low'])} - {percent(done['high'])})")
     text += f"; {rest}" if rest else ""
     if n == 0 or (done["rate"] or 0.0) < RARELY_COMPLETES:
         text += (f". It completes fewer than {RARELY_COMPLETES:.0%} of its runs: not a safe "
@@ -97,5 +97,6 @@ def verdict_sentence(controller: str, summary: dict) -> str:
     return text
 
 
-def _pct(value) -> str:
+def percent(value: float | None) -> str:
+    """A rate as people read it: ``12.5%``, ``-`` when there is none."""
     return "-" if value is None else f"{100 * value:.1f}%"
