@@ -9,12 +9,6 @@ from scenarios import CATALOG_DIR
 from scenarios.toml_io import read_toml
 
 
-def pytest_collection_modifyitems(items):
-    """The tests marked ``heavy`` first, the rest in their order: with ``-n 2`` the longest
-    then run beside many short ones, instead of one of them ending the run alone."""
-    items.sort(key=lambda item: item.get_closest_marker("heavy") is None)
-
-
 @pytest.fixture
 def lesson_plain() -> dict:
     """The seed-lesson scenario as a plain mapping, to modify per test."""

@@ -129,7 +129,6 @@ def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     assert "Runs drawn over" in (out / "report.html").read_text()
 
 
-@pytest.mark.heavy
 def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path):
     sweep = write(tmp_path, "toy", TOY)
     args = ["--target-rhw", 0.15, "--max-runs", 800, "--batch-size", 100, "--workers", 2,
@@ -250,7 +249,6 @@ def _truth() -> dict:
 
 
 @pytest.mark.slow
-@pytest.mark.heavy
 def test_the_estimate_on_seed_rare_covers_its_truth_with_20x_fewer_runs(tmp_path):
     """About 1600 runs, 2 minutes on 2 cores: each lane width is its own network."""
     truth = _truth()

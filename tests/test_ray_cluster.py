@@ -198,7 +198,6 @@ class Cluster:
 
 
 @pytest.mark.skipif(not _unshare_works(), reason="needs mount namespaces (unshare -m)")
-@pytest.mark.heavy
 def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
         tmp_path, monkeypatch):
     # the cluster's authentication is this test's: a local Ray started earlier in this

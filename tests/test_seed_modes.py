@@ -152,7 +152,6 @@ def truth_region(rows) -> np.ndarray:
 
 
 @pytest.mark.slow
-@pytest.mark.heavy
 def test_search_finds_every_mode_in_four_seeds_of_five(tmp_path):
     """The three regions (the gap score warns of the speed one only) within 600 runs,
     each a mode of search.json with a replay command. About 20 s a seed on 2 cores;
@@ -184,7 +183,6 @@ def test_search_finds_every_mode_in_four_seeds_of_five(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.heavy
 def test_the_estimate_covers_the_truth_and_gives_each_region_its_share(tmp_path):
     """The family's own seed, target RHW 0.3: about 3500 runs, a minute on 2 cores.
     Measured over sweep seeds 1-10: see the closing figures in the README."""
