@@ -172,8 +172,8 @@ def coverage_lines(summary: dict) -> list[str]:
     if cov["partial"]:
         planned = "?" if cov["runs_planned"] is None else cov["runs_planned"]
         missing = "" if cov["runs_missing"] is None else f", {cov['runs_missing']} missing"
-        lines.append(f"PARTIAL sweep ({cov['sweep_status'] or 'status unknown'}): "
-                     f"{cov['runs']} of {planned} planned runs{missing}.")
+        lines.append(f"PARTIAL sweep: {cov['runs']} of {planned} planned runs{missing} "
+                     f"(sweep status: {cov['sweep_status'] or 'unknown'}).")
     if cov["samples_compared"] < cov["samples"]:
         lines.append(f"Controllers are compared on the {cov['samples_compared']} samples every "
                      f"one of them ran, of {cov['samples']} with a run "

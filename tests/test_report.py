@@ -318,7 +318,8 @@ def test_a_partial_sweep_says_so_and_compares_only_shared_samples(small_sweep, t
     cov = report.summary["coverage"]
     assert (cov["runs_planned"], cov["runs"], cov["runs_missing"]) == (16, 14, 2)
     assert (cov["samples"], cov["samples_compared"], cov["runs_left_out"]) == (8, 6, 2)
-    assert report.terminal[0] == "PARTIAL sweep (interrupted): 14 of 16 planned runs, 2 missing."
+    assert report.terminal[0] == \
+        "PARTIAL sweep: 14 of 16 planned runs, 2 missing (sweep status: interrupted)."
     assert report.terminal[1].startswith("Controllers are compared on the 6 samples every one")
     # every table counts the 6 shared samples only: seed's 2 extra runs are left out
     assert report.summary["by_controller"]["seed"]["n_ok"] == 2
