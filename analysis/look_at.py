@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from analysis.run_outcome import COMPLETED, STUCK, UNFINISHED
+from analysis.run_outcome import STUCK, UNFINISHED
+from analysis.verdicts import completed_runs
 
 #: the classes, in the order they are listed
 RANK_CLASSES = ("no outcome (error or timeout)", "collided where braking alone could stop",
@@ -39,8 +40,7 @@ def ranked_runs(results: pd.DataFrame) -> pd.DataFrame:
     """The runs that did not complete without a collision, ranked (:data:`RANKING`),
     with ``why`` (their class) and ``others_completed`` (how many other controllers
     completed the same sample)."""
-    done = ((results.status == "ok") & (results.outcome == COMPLETED)
-            if "outcome" in results else pd.Series(False, index=results.index))
+    done = completed_runs(results)
     completed_per_sample = done.groupby(results["sample"]).transform("sum")
     ranked = results.assign(_class=_rank_class(results),
                             others_completed=completed_per_sample - done.astype(int))

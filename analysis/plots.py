@@ -13,6 +13,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from analysis.stats import Method, group_levels, group_values, rates_by
+from analysis.verdicts import completed_runs
 
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 
@@ -123,7 +124,7 @@ def outcome_bars(results: pd.DataFrame) -> bytes:
 def separating_parameters(results: pd.DataFrame, columns: list[str]) -> list[str]:
     """The (up to two) numeric ``columns`` that separate runs that completed from the
     rest best: the largest |AUC - 1/2| of the value between the two groups."""
-    done = run_outcomes(results) == "completed"
+    done = completed_runs(results)
     scores = {}
     for column in columns:
         values = results[column]

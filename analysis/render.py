@@ -23,7 +23,7 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 
 from analysis.metrics import central_range_m
-from analysis.run_outcome import STUCK_SPEED_MPS
+from analysis.run_outcome import rest_step
 from analysis.trace_file import Trace
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
@@ -207,8 +207,7 @@ def decisive_step(scene: Scene, outcome: str | None) -> int:
     (the shortest central range) for one that completed."""
     last = len(scene.t_s) - 1
     if outcome == "stuck":
-        moving = np.flatnonzero(scene.speed_mps >= STUCK_SPEED_MPS)
-        return min(last, int(moving[-1]) + 1) if len(moving) else 0
+        return min(last, rest_step(scene.speed_mps))
     if outcome == "completed" and np.isfinite(scene.central_range_m).any():
         return int(np.argmin(scene.central_range_m))
     return last

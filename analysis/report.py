@@ -35,7 +35,7 @@ from analysis.stats import (
 )
 from analysis.verdicts import (
     NO_OUTCOME,
-    RARELY_COMPLETES,
+    completes_rarely,
     outcomes_recorded,
     percent,
     shared_samples,
@@ -121,11 +121,11 @@ def gate(results: pd.DataFrame, controllers: list[str], rate: float, method: Met
             "failed": [c for c, high in bounds.items() if high > rate]}
 
 
-def build_summary(results: pd.DataFrame, manifest: dict, by: list[str],
-                  method: Method, fail_above: float | None = None) -> dict:
-    """Everything the report says. Controllers are compared on the samples every one
-    of them ran (all of them, unless the sweep is partial or lost runs)."""
-    shared = shared_samples(results)
+def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,
+                  shared: pd.Index, fail_above: float | None = None) -> dict:
+    """Everything the report says. Controllers are compared on the ``shared`` samples,
+    those every one of them ran (:func:`analysis.verdicts.shared_samples`: all of them,
+    unless the sweep is partial or lost runs)."""
     counted = results[results["sample"].isin(shared)]
     controllers = list(dict.fromkeys(results.controller))
     grouped = {}
@@ -290,7 +290,7 @@ def findings(summary: dict) -> list[str]:
     lines += [_paired(pair, ", where a stop was possible,")
               for pair in summary["stop_possible"].get("paired", [])]
     rare = {c for c, numbers in verdicts.get("by_controller", {}).items()
-            if (numbers["outcomes"][COMPLETED]["rate"] or 0.0) < RARELY_COMPLETES}
+            if completes_rarely(numbers)}
     lines += [_envelope(e, e["controller"] in rare) for e in summary["envelope"]]
     if summary["gate"] is not None:
         lines.append(gate_line(summary["gate"]))
@@ -532,8 +532,9 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
                               "gate (its runs were drawn toward failure); gate on a sweep")
         return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
     by = [by_column(results, column) for column in by] or varying_parameters(results)
-    summary = build_summary(results, manifest, by, method, fail_above)
-    counted = results[results["sample"].isin(shared_samples(results))]
+    shared = shared_samples(results)
+    summary = build_summary(results, manifest, by, method, shared, fail_above)
+    counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(html_page(summary, results, sweep_dir, figures(counted, by, method)))
     summary_path = sweep_dir / "summary.json"

@@ -25,11 +25,17 @@ STUCK_SPEED_MPS = 0.1
 STUCK_HOLD_S = 3.0
 
 
+def rest_step(speed_mps: np.ndarray) -> int:
+    """The step from which the car stood still (under :data:`STUCK_SPEED_MPS`) to the
+    end of the trace; ``len(speed_mps)`` when it was moving at its last step."""
+    moving = np.flatnonzero(np.asarray(speed_mps) >= STUCK_SPEED_MPS)
+    return 0 if len(moving) == 0 else int(moving[-1]) + 1
+
+
 def still_at_end_s(t_s: np.ndarray, speed_mps: np.ndarray) -> float:
     """How long [s] the car had stood still (under :data:`STUCK_SPEED_MPS`) when the
     trace ended; 0 when it was moving at its last step."""
-    moving = np.flatnonzero(np.asarray(speed_mps) >= STUCK_SPEED_MPS)
-    since = 0 if len(moving) == 0 else int(moving[-1]) + 1  # still from this step on
+    since = rest_step(speed_mps)
     return float(t_s[-1] - t_s[since]) if since < len(t_s) else 0.0
 
 

@@ -58,12 +58,19 @@ def outcome_summary(rows: pd.DataFrame) -> dict:
     }
 
 
+def completed_runs(results: pd.DataFrame) -> pd.Series:
+    """Per run: did it complete without a collision (an error or timeout did not;
+    none did in results from before the ``outcome`` column)."""
+    if "outcome" not in results.columns:
+        return pd.Series(False, index=results.index)
+    return (results.status == "ok") & (results.outcome == COMPLETED)
+
+
 def completed_flags(results: pd.DataFrame) -> pd.DataFrame:
-    """Per sample (rows) and controller (columns): did the run complete without a
-    collision (an error or timeout did not); NaN where the controller has no run."""
-    done = results.assign(_done=(results.status == "ok") & (results.outcome == COMPLETED))
-    return done.pivot_table(index="sample", columns="controller", values="_done",
-                            aggfunc="first")
+    """Per sample (rows) and controller (columns): :func:`completed_runs`; NaN where
+    the controller has no run."""
+    return results.assign(_done=completed_runs(results)).pivot_table(
+        index="sample", columns="controller", values="_done", aggfunc="first")
 
 
 def verdict_summary(results: pd.DataFrame) -> dict:
@@ -82,6 +89,12 @@ def verdict_summary(results: pd.DataFrame) -> dict:
             "paired": [paired_test(flags, a, b) for a, b in itertools.combinations(ranked, 2)]}
 
 
+def completes_rarely(summary: dict) -> bool:
+    """Did the controller of an :func:`outcome_summary` complete fewer than
+    :data:`RARELY_COMPLETES` of its runs (or have none)?"""
+    return (summary["outcomes"][COMPLETED]["rate"] or 0.0) < RARELY_COMPLETES
+
+
 def verdict_sentence(controller: str, summary: dict) -> str:
     """What a controller's runs say, led by how many completed without collision."""
     outcomes, n = summary["outcomes"], summary["runs"]
@@ -91,7 +104,7 @@ def verdict_sentence(controller: str, summary: dict) -> str:
     text = (f"{controller}: completed without collision in {done['runs']} of {n} runs "
             f"({percent(done['rate'])}, 95% {percent(done['low'])} - {percent(done['high'])})")
     text += f"; {rest}" if rest else ""
-    if n == 0 or (done["rate"] or 0.0) < RARELY_COMPLETES:
+    if completes_rarely(summary):
         text += (f". It completes fewer than {RARELY_COMPLETES:.0%} of its runs: not a safe "
                  "controller, whatever its collision rate")
     return text

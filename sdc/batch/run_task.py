@@ -11,6 +11,7 @@ import traceback
 from pathlib import Path
 from typing import Literal
 
+from analysis.run_outcome import COMPLETED
 from scenarios.scenario_spec import ScenarioSpec
 from sdc.batch.job_files import JobFile
 from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row
@@ -75,7 +76,7 @@ def execute(task: RunTask) -> dict:
     except Exception as e:  # the run's own failure is an outcome row, not a crash
         return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
     wanted = task.traces == "all" or (task.traces == "failures"
-                                      and episode.row["outcome"] != "completed")
+                                      and episode.row["outcome"] != COMPLETED)
     if task.trace_path is not None and wanted:
         if task.recorded_spec is not None:  # the driver's paths, not a worker's copies
             _record_driver_paths(episode.metadata, task.recorded_spec)
