@@ -62,8 +62,12 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
       own lane's centre (steps where the lane was sensed).
     - ``min_gap_obstacle_m``: the smallest distance between the ego's body box and
       any obstacle box (0 when they touch).
-    - ``min_ttc_s``: the smallest time-to-collision with anything in the ego's path
-      (the car's ``sdc.car.geometry.time_to_collision_s``); ``None`` when nothing was.
+    - ``min_ttc_s``: the smallest time to collision with an obstacle or a vehicle,
+      measured in the road frame (``sdc.car.road_frame``); ``None`` when nothing was
+      ever on a course to touch the ego.
+    - ``max_drac_mps2``: the largest deceleration the ego needed to avoid running into
+      a leader ahead of it in the road frame (0 when it never closed in on one).
+    - ``min_headway_s``: the smallest time headway to a leader; ``None`` without one.
     """
     avoiding = _avoiding(phase)
     started = bool(avoiding.any())
@@ -82,4 +86,6 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
                                                      where=np.isfinite(offsets))),
         "min_gap_obstacle_m": _nan_to_none(np.min(gaps)) if gaps.size else None,
         "min_ttc_s": _nan_to_none(np.min(floats["ttc_s"], initial=np.inf)),
+        "max_drac_mps2": float(np.max(floats["drac_mps2"], initial=0.0)),
+        "min_headway_s": _nan_to_none(np.min(floats["headway_s"], initial=np.inf)),
     }

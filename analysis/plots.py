@@ -167,18 +167,22 @@ def failure_map(results: pd.DataFrame, x: str, y: str | None) -> bytes:
 
 
 def distributions(results: pd.DataFrame) -> bytes:
-    """Histograms of the minimum gap to the obstacle and the minimum TTC, per controller."""
+    """Histograms of the minimum gap to the obstacle, the minimum TTC and (results
+    that have it) the maximum DRAC, per controller."""
     ok = results[results.status == "ok"]
-    fig = Figure(figsize=(10, 3.8))
-    axes = fig.subplots(1, 2)
-    for ax, column, unit in ((axes[0], "min_gap_obstacle_m", "m"), (axes[1], "min_ttc_s", "s")):
+    panels = [("min_gap_obstacle_m", "m"), ("min_ttc_s", "s"), ("max_drac_mps2", "m/s^2")]
+    panels = [(column, unit) for column, unit in panels if column in ok.columns]
+    fig = Figure(figsize=(5 * len(panels), 3.8))
+    axes = fig.subplots(1, len(panels))
+    for ax, (column, unit) in zip(axes, panels, strict=True):
         values = ok[column].dropna()
         bins = np.linspace(0, max(float(values.max()), 1.0), 25) if len(values) else 10
         for controller, rows in ok.groupby("controller", sort=False):
             ax.hist(rows[column].dropna(), bins=bins, alpha=0.5, label=controller)
         ax.set(xlabel=f"{column} [{unit}]", ylabel="runs")
         ax.legend()
-    fig.suptitle("Safety margins (ok runs; TTC missing where nothing was in the path)")
+    fig.suptitle("Safety margins (ok runs; TTC missing where nothing was on a course to touch,"
+                 " DRAC 0 where no leader was closed in on)")
     return _png(fig)
 
 

@@ -22,6 +22,7 @@ from analysis import plots
 from analysis.look_at import MAX_THUMBNAILS, RANKING, params_text, ranked_runs, thumbnail
 from analysis.plain_json import json_plain
 from analysis.run_outcome import COMPLETED
+from analysis.safety import REACTION_TIME_S
 from analysis.stats import (
     Method,
     by_controller,
@@ -231,7 +232,8 @@ def stop_title(summary: dict) -> str:
     if not stop["recorded"]:
         return ("where braking alone could stop in time: not recorded "
                 "(results from before the stop_possible column)")
-    return (f"where braking alone could stop in time (v^2 / 2a <= gap), "
+    return (f"where braking alone could stop in time (v^2 / 2a <= gap, a = min(max "
+            f"decel, mu g), braking after {REACTION_TIME_S:g} s), "
             f"{stop['samples_stop_possible']} of {stop['samples']} samples run:")
 
 
@@ -413,7 +415,8 @@ def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[
         for controller in dict.fromkeys(results.controller):
             out.append((f"Collision rate over {numeric[0]} and {numeric[1]}, {controller}",
                         plots.rate_heatmap(results, numeric[0], numeric[1], controller)))
-    out.append(("Minimum gap and minimum TTC", plots.distributions(results)))
+    out.append(("Safety margins: minimum gap, minimum TTC, maximum DRAC",
+                plots.distributions(results)))
     out.append(("What was hit", plots.collision_breakdown(results)))
     return out
 

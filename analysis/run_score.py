@@ -33,8 +33,10 @@ def run_score(row: Mapping[str, Any], kind: ScoreKind = "gap") -> float:
     """The score of a result row (a dict with the result columns).
 
     ``gap``: the smallest of the ego's closest approach to an obstacle and a body
-    corner's to a road edge [m]. ``ttc``: the smallest time to reach anything in the
-    ego's path [s]. Infinite when the run never came near anything measurable.
+    corner's to a road edge [m]. ``ttc``: the run's ``min_ttc_s``, the smallest time
+    to collision with an obstacle or a vehicle measured along the road
+    (``sdc.car.road_frame``) [s]. Infinite when the run never came near anything
+    measurable.
     """
     if row["status"] != "ok" or row["collision"]:
         return 0.0

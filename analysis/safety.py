@@ -62,9 +62,25 @@ def lane_scale(spec: ScenarioSpec, road: RoadGeometry) -> float:
     return 1 - road.lane_center_d_m(spec.ego.lane) / spec.road.curve_radius_m
 
 
-def stop_possible(speed_mps: float, max_decel_mps2: float, gap_m: float | None) -> bool | None:
-    """Can braking alone stop the car within ``gap_m``: ``speed^2 / (2 decel) <= gap``
-    (None when there is no gap: nothing in the path)."""
+#: the time between seeing the obstacle and full braking that ``stop_possible`` allows
+#: for [s]: 0, the car brakes from its first step (the run's controllers decide at every
+#: step; a human driver needs about 1 s)
+REACTION_TIME_S = 0.0
+
+
+def stopping_distance_m(speed_mps: float, decel_mps2: float,
+                        reaction_s: float = REACTION_TIME_S) -> float:
+    """How far the car travels from ``speed_mps`` to rest: ``reaction_s`` at that
+    speed, then ``speed^2 / (2 decel)`` braking at ``decel_mps2`` [m]."""
+    return speed_mps * reaction_s + speed_mps**2 / (2 * decel_mps2)
+
+
+def stop_possible(speed_mps: float, decel_mps2: float, gap_m: float | None,
+                  reaction_s: float = REACTION_TIME_S) -> bool | None:
+    """Can braking alone stop the car within ``gap_m``: its
+    :func:`stopping_distance_m` at ``decel_mps2`` (the deceleration it can reach on
+    the road: ``VehicleModel.braking_decel_mps2`` of the scenario's friction) is at
+    most the gap (None when there is no gap: nothing in the path)."""
     if gap_m is None:
         return None
-    return speed_mps**2 / (2 * max_decel_mps2) <= gap_m
+    return stopping_distance_m(speed_mps, decel_mps2, reaction_s) <= gap_m

@@ -24,7 +24,8 @@ from scenarios.scenario_spec import ScenarioSpec
 #: scalar float columns, in file order
 FLOAT_COLUMNS = (
     "t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
-    "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s",
+    "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s", "drac_mps2",
+    "headway_s",
 )
 #: list-of-float32 columns: the range image and the traffic boxes (N x 5, flattened)
 LIST_COLUMNS = ("lidar", "traffic")

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+GRAVITY_MPS2 = 9.81
+
 #: kind -> (length_m, width_m) of a stationary obstacle
 OBSTACLE_SIZES_M: dict[str, tuple[float, float]] = {
     "car": (4.5, 1.8),
@@ -33,6 +35,12 @@ class VehicleModel:
     max_steer_rate_radps: float
     max_accel_mps2: float
     max_decel_mps2: float
+
+    def braking_decel_mps2(self, friction_mu: float) -> float:
+        """The hardest deceleration the car reaches on a road of friction coefficient
+        ``friction_mu``: its brakes' ``max_decel_mps2`` or the tyres' ``mu * g``,
+        whichever is less [m/s^2]."""
+        return min(self.max_decel_mps2, friction_mu * GRAVITY_MPS2)
 
     @property
     def center_ahead_of_rear_axle_m(self) -> float:

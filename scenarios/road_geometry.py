@@ -38,8 +38,13 @@ def centre_line_xy(road: RoadSpec) -> np.ndarray:
 class RoadGeometry:
     """A one-way road along a polyline centre line."""
 
-    def __init__(self, center_xy: np.ndarray, lanes: int, lane_width_m: float):
+    def __init__(self, center_xy: np.ndarray, lanes: int, lane_width_m: float,
+                 curvature_1pm: float = 0.0):
         self.center_xy = np.asarray(center_xy, dtype=float)
+        #: the centre line's curvature, positive turning left [1/m]: a lane at offset
+        #: ``d`` is ``1 - curvature * d`` times as long as the centre line (0: straight,
+        #: or a polyline whose lanes are measured on their own)
+        self.curvature_1pm = curvature_1pm
         self.lanes = lanes
         self.lane_width_m = lane_width_m
         delta = np.diff(self.center_xy, axis=0)
@@ -54,7 +59,8 @@ class RoadGeometry:
 
     @classmethod
     def from_spec(cls, road: RoadSpec) -> RoadGeometry:
-        return cls(centre_line_xy(road), road.lanes, road.lane_width_m)
+        curvature_1pm = 1 / road.curve_radius_m if road.kind == "curve" else 0.0
+        return cls(centre_line_xy(road), road.lanes, road.lane_width_m, curvature_1pm)
 
     @property
     def half_width_m(self) -> float:

@@ -16,12 +16,16 @@ from scenarios.scenario_spec import ScenarioSpec
 NO_BOXES = np.zeros((0, 5))
 #: traffic is reported within the lidar's range plus this, from the ego's body centre [m]
 SENSING_MARGIN_M = 25.0
+#: and at least this far, for the time to collision with traffic closing in from beyond
+#: the lidar's range: 15 s at a closing speed of 10 m/s [m]
+CONFLICT_REACH_M = 150.0
 
 
 def sensing_radius_m(spec: ScenarioSpec) -> float:
     """How far from the ego's centre a world reports traffic: nothing farther can be
-    seen by the lidar, touched, or be in the ego's path within its range."""
-    return spec.lidar.max_range_m + SENSING_MARGIN_M
+    seen by the lidar or touched, and the safety measures (time to collision, DRAC,
+    headway) count traffic up to :data:`CONFLICT_REACH_M` away."""
+    return max(spec.lidar.max_range_m + SENSING_MARGIN_M, CONFLICT_REACH_M)
 
 
 def within_m(boxes: np.ndarray, center_xy: np.ndarray, radius_m: float) -> np.ndarray:

@@ -138,9 +138,12 @@ class SumoWorld:
     backend = "sumo"
 
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
-                 gui: bool = False):
+                 gui: bool = False, sumo_options: tuple[str, ...] = ()):
+        """``sumo_options``: more of SUMO's command-line options, after ours (its
+        outputs and devices, for example ``--device.ssm.*``)."""
         self.spec = spec
         self.gui = gui
+        self.sumo_options = tuple(sumo_options)
         self.road = road
         self.cache_dir = cache_dir
         self._obstacle_boxes = obstacle_boxes(spec, road)
@@ -180,6 +183,7 @@ class SumoWorld:
             "--seed", str(self.spec.scenario.seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
             "--no-step-log", "true", "--no-warnings", "true",
+            *self.sumo_options,
         ])
         self._sumo = sim
         for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
@@ -190,7 +194,7 @@ class SumoWorld:
         model = VEHICLE_MODELS[self.spec.vehicle.model]
         _, lane, front_m = _sumo_place(self.road, ego.lane, ego.start_m + model.length_m / 2)
         sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now", departLane=str(lane),
-                        departPos=f"{front_m:.6f}", departSpeed="0")
+                        departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
         # only the vehicles around the ego are read, whatever the size of the network

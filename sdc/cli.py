@@ -71,6 +71,8 @@ def summary_lines(name: str, row: dict) -> list[str]:
         f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
         f"min TTC {_fmt(row['min_ttc_s'], ' s')}, "
         f"closest to road edge {_fmt(row['min_road_edge_gap_m'], ' m')}",
+        f"  max DRAC {_fmt(row['max_drac_mps2'], ' m/s^2')}, "
+        f"min headway {_fmt(row['min_headway_s'], ' s')}",
         f"  trace sha256 {row['trace_sha256']}",
     ]
 
@@ -408,7 +410,8 @@ def _executor_options(command):
         click.option("--score", type=click.Choice(["gap", "ttc"]), default="gap",
                      show_default=True,
                      help="What guides the sampling: the closest approach to an obstacle or "
-                          "road edge [m], or the smallest time to collision [s]."),
+                          "road edge [m], or the run's min_ttc_s, the smallest time to "
+                          "collision measured along the road [s]."),
         click.option("--quiet", is_flag=True, help="No progress bar; only the final summary."),
     ]
     for option in reversed(options):

@@ -201,7 +201,8 @@ def _trace_file(path: Path) -> None:
     n = 5
     floats = {name: np.linspace(0.0, 1.0, n) for name in
               ("t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
-               "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s")}
+               "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s",
+               "drac_mps2", "headway_s")}
     spec = load_spec(LESSON)
     metadata = {"spec": spec.to_plain(), "road": RoadGeometry.from_spec(spec.road).to_plain(),
                 "vehicle": {"length_m": 4.9, "width_m": 1.9,

@@ -15,11 +15,12 @@ from sdc.car.geometry import (
     box_edges,
     box_gap_m,
     boxes_overlap,
+    first_contact_s,
+    leader_measures,
     one_box_corners,
     point_segment_distance,
     ray_box_ranges,
     ray_segment_ranges,
-    time_to_collision_s,
 )
 
 pytestmark = pytest.mark.filterwarnings("error")  # numpy RuntimeWarnings fail the tests
@@ -394,22 +395,135 @@ def box(cx, cy, yaw=0.0, length=4.0, width=2.0):
     return np.array([[cx, cy, yaw, length, width]])
 
 
+def ahead_at(speeds_mps) -> np.ndarray:
+    """Velocities of boxes moving along +x."""
+    return np.column_stack([np.atleast_1d(speeds_mps), np.zeros(np.size(speeds_mps))])
+
+
+def ttc(boxes, speed_mps=8.0, velocities=None) -> float:
+    velocities = ahead_at(np.zeros(len(boxes))) if velocities is None else velocities
+    return float(np.min(first_contact_s(EGO, np.array([speed_mps, 0.0]), boxes, velocities),
+                        initial=np.inf))
+
+
 def test_ttc_is_gap_over_closing_speed_for_an_object_ahead():
     # front at x = 2, the stopped car's rear at 20 - 2 = 18: 16 m at 8 m/s
-    assert time_to_collision_s(EGO, 8.0, box(20.0, 0.0), np.array([0.0])) == pytest.approx(2.0)
+    assert ttc(box(20.0, 0.0)) == pytest.approx(2.0)
     # a car ahead at 6 m/s: closing at 2 m/s
-    assert time_to_collision_s(EGO, 8.0, box(20.0, 0.5), np.array([6.0])) == pytest.approx(8.0)
+    assert ttc(box(20.0, 0.5), velocities=ahead_at(6.0)) == pytest.approx(8.0)
 
 
 def test_ttc_ignores_what_is_beside_behind_or_faster():
-    assert time_to_collision_s(EGO, 8.0, box(20.0, 2.1), np.array([0.0])) == math.inf  # beside
-    assert time_to_collision_s(EGO, 8.0, box(-20.0, 0.0), np.array([0.0])) == math.inf  # behind
-    assert time_to_collision_s(EGO, 8.0, box(20.0, 0.0), np.array([9.0])) == math.inf  # pulls away
-    assert time_to_collision_s(EGO, 8.0, np.zeros((0, 5)), np.zeros(0)) == math.inf
+    assert ttc(box(20.0, 2.1)) == math.inf  # beside: 0.1 m of clearance all the way
+    assert ttc(box(-20.0, 0.0)) == math.inf  # behind, standing still
+    assert ttc(box(20.0, 0.0), velocities=ahead_at(9.0)) == math.inf  # pulls away
+    assert ttc(np.zeros((0, 5))) == math.inf
 
 
-def test_ttc_uses_the_nearest_threat_and_zero_on_contact():
+def test_ttc_sees_a_faster_car_from_behind_and_a_crossing_one():
+    # 12 m behind (rear at -2, its front at -10), 10 m/s against 8: 8 m at 2 m/s
+    assert ttc(box(-12.0, 0.0), velocities=ahead_at(10.0)) == pytest.approx(4.0)
+    # crossing from the right at 5 m/s: its front (y = -10) enters the path's band
+    # (y >= -1) after 1.8 s, but the ego's front (x = 2) reaches its near side (x = 19)
+    # only after 17 / 8 s, when the crossing car spans y = -3.4 .. 0.6, across the path
+    crossing = box(20.0, -12.0, yaw=math.pi / 2, length=4.0, width=2.0)
+    assert ttc(crossing, velocities=np.array([[0.0, 5.0]])) == pytest.approx(17 / 8)
+
+
+def test_ttc_uses_the_nearest_threat_and_zero_only_on_contact():
     boxes = np.vstack([box(40.0, 0.0), box(12.0, -1.2, yaw=math.pi / 2, length=0.6, width=0.6)])
     # the barrel overlaps the corridor (1.2 < 1 + 0.3); its near side at 11.7, the front at 2
-    assert time_to_collision_s(EGO, 5.0, boxes, np.zeros(2)) == pytest.approx(9.7 / 5)
-    assert time_to_collision_s(EGO, 5.0, box(3.5, 0.0), np.array([0.0])) == 0.0
+    assert ttc(boxes, 5.0) == pytest.approx(9.7 / 5)
+    assert ttc(box(3.5, 0.0), 5.0) == 0.0
+    assert ttc(box(4.0, 0.0), 0.0) == 0.0  # touching counts, standing still
+
+
+def test_a_box_rotated_beside_the_path_is_not_touching():
+    """The old in-path test took a rotated box's axis-aligned extent in the ego's
+    frame: a truck turned 15 degrees, 1.24 m clear of the ego's side, reached 2.76 m
+    to its side of centre, into the path, and overlapped the ego's front: TTC 0."""
+    truck = np.array([6.0, 5.0, math.radians(15), 12.0, 2.5])
+    assert box_gap_m(EGO, truck[None])[0] == pytest.approx(1.24, abs=0.005)
+    assert first_contact_s(EGO, np.array([8.0, 0.0]), truck[None], ahead_at(8.0))[0] == math.inf
+    assert first_contact_s(EGO, np.array([8.0, 0.0]), truck[None], ahead_at(0.0))[0] == math.inf
+
+
+def brute_first_contact_s(a, va, b, vb, horizon_s, dt_s) -> float:
+    """The first of the times 0, dt, 2 dt, ... up to horizon at which the boxes overlap."""
+    times = np.arange(0.0, horizon_s, dt_s)
+    for t in times:
+        moved_a = a.copy()
+        moved_a[:2] += t * va
+        moved_b = b.copy()
+        moved_b[:2] += t * vb
+        if boxes_overlap(moved_a, moved_b[None])[0]:
+            return float(t)
+    return math.inf
+
+
+velocity_st = st.tuples(st.floats(-20, 20), st.floats(-20, 20)).map(np.array)
+
+
+@settings(max_examples=300, deadline=None)
+@given(a=box_st, b=box_st, va=velocity_st, vb=velocity_st,
+       offset=st.tuples(st.floats(-30, 30), st.floats(-30, 30)))
+def test_first_contact_against_a_brute_force_sweep_of_small_time_steps(a, b, va, vb, offset):
+    """Oriented boxes of any angle at constant velocities: the exact first contact is
+    never after the first small time step at which they overlap, they do not overlap
+    at any step before it, and they touch at it (their gap is nil there)."""
+    a, b = np.array(a), np.array(b)
+    b[:2] = a[:2] + np.array(offset)  # near enough to meet often
+    dt_s, horizon_s = 0.002, 4.0
+    t = first_contact_s(a, va, b[None], vb[None])[0]
+    brute = brute_first_contact_s(a, va, b, vb, horizon_s, dt_s)
+    if brute < math.inf:
+        assert t <= brute + 1e-9
+    assert (t == 0.0) == bool(boxes_overlap(a, b[None])[0])  # 0 exactly on contact
+    if t < horizon_s:
+        before = np.arange(0.0, t - 1e-6, dt_s)
+        for when in before[-3:]:  # the last steps before it are clear
+            moved_a, moved_b = a.copy(), b.copy()
+            moved_a[:2] += when * va
+            moved_b[:2] += when * vb
+            assert not boxes_overlap(moved_a, moved_b[None])[0]
+        moved_a, moved_b = a.copy(), b.copy()
+        moved_a[:2] += t * va
+        moved_b[:2] += t * vb
+        assert box_gap_m(moved_a, moved_b[None])[0] < 1e-6  # they touch at t
+
+
+@settings(max_examples=300, deadline=None)
+@given(a=box_st, others=st.lists(box_st, min_size=1, max_size=6),
+       speed=st.floats(0.0, 30.0))
+def test_no_zero_ttc_without_overlap_over_random_rotated_boxes(a, others, speed):
+    a, others = np.array(a), np.array(others, float)
+    others[:, :2] = a[:2] + (others[:, :2] - a[:2]) * 0.2  # crowd them around the box
+    velocities = np.column_stack([np.cos(others[:, 2]), np.sin(others[:, 2])]) * 5.0
+    times = first_contact_s(a, speed * np.array([math.cos(a[2]), math.sin(a[2])]), others,
+                            velocities)
+    np.testing.assert_array_equal(times == 0.0, boxes_overlap(a, others))
+
+
+def test_leader_measures_follow_ssm_definitions():
+    """Of a leader in the path ahead: TTC = gap / closing, DRAC = closing^2 / (2 gap),
+    headway = gap / speed."""
+    ego_v = np.array([10.0, 0.0])
+    leader = box(24.0, 0.3)  # gap 24 - 2 - 2 = 20 m
+    ttc_s, drac, headway = leader_measures(EGO, ego_v, leader, ahead_at(6.0))
+    assert ttc_s == pytest.approx(5.0) and drac == pytest.approx(4.0**2 / 40)
+    assert headway == pytest.approx(2.0)
+    assert leader_measures(EGO, ego_v, leader, ahead_at(12.0)) == (math.inf, 0.0,
+                                                                   pytest.approx(2.0))
+    beside = box(24.0, 2.1)
+    assert leader_measures(EGO, ego_v, beside, ahead_at(0.0)) == (math.inf, 0.0, math.inf)
+    behind = box(-24.0, 0.0)
+    assert leader_measures(EGO, ego_v, behind, ahead_at(20.0)) == (math.inf, 0.0, math.inf)
+    # the nearer leader sets the headway, the faster-closed-on one the DRAC and TTC
+    both = np.vstack([box(14.0, 0.0), box(44.0, 0.0)])  # gaps 10 and 40 m
+    ttc_s, drac, headway = leader_measures(EGO, ego_v, both, ahead_at([10.0, 0.0]))
+    assert ttc_s == pytest.approx(4.0) and drac == pytest.approx(100 / 80)
+    assert headway == pytest.approx(1.0)
+    stopped = leader_measures(EGO, np.zeros(2), box(14.0, 0.0), ahead_at(0.0))
+    assert stopped == (math.inf, 0.0, math.inf)
+    # no gap left: headway 0, and contact is first_contact_s's to say
+    assert leader_measures(EGO, ego_v, box(3.9, 0.0), ahead_at(0.0)) == (math.inf, 0.0, 0.0)

@@ -100,50 +100,75 @@ def test_no_boxes_and_no_segments_see_nothing():
     ranges = kernels.lidar_ranges_m(np.zeros(2), 0.0, np.linspace(-1, 1, 5), np.zeros((0, 5)),
                                     np.zeros((0, 4)), 80.0)
     assert np.isinf(ranges).all() and ranges.shape == (5,)
-    assert kernels.contacts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), 5.0, np.zeros((0, 5)),
-                            np.zeros((0, 5)), np.zeros(0)) == (-1, -1, np.inf, np.inf)
+    assert kernels.contacts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), np.zeros((0, 5)),
+                            np.zeros((0, 5))) == (-1, -1, np.inf)
+    assert kernels.conflicts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), np.array([5.0, 0.0]),
+                             np.zeros((0, 5)), np.zeros((0, 2))) == (np.inf, 0.0, np.inf)
 
 
-def both_contacts(ego, speed, obstacles, traffic, speeds):
+def both_contacts(ego, obstacles, traffic):
     """The contacts of the numpy twin and of the compiled code, the same arguments to both."""
-    box, *others = (np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic, speeds))
-    return [contacts(box, speed, *others) for contacts in (kernels.contacts_numpy,
-                                                          compiled.contacts)]
+    args = [np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic)]
+    return [contacts(*args) for contacts in (kernels.contacts_numpy, compiled.contacts)]
+
+
+def both_conflicts(ego, velocity, boxes, velocities):
+    """The conflicts of the numpy twin and of the compiled code."""
+    args = [np.ascontiguousarray(a, float) for a in (ego, velocity, boxes, velocities)]
+    return [conflicts(*args) for conflicts in (kernels.conflicts_numpy, compiled.conflicts)]
+
+
+velocity_st = st.tuples(st.floats(-40.0, 40.0), st.floats(-40.0, 40.0))
 
 
 @needs_compiled
 @PROPS
-@given(ego=box_st, obstacles=st.lists(box_st, max_size=4), traffic=st.lists(box_st, max_size=6),
-       speed=st.floats(0.0, 40.0),
-       speeds=st.lists(st.floats(0.0, 40.0), min_size=6, max_size=6))
-def test_the_numpy_contacts_equal_the_compiled_ones(ego, obstacles, traffic, speed, speeds):
-    """First overlaps (boxes_overlap), obstacle gap (box_gap_m) and time to collision
-    (time_to_collision_s) of the numpy twin equal the compiled answers bit for bit."""
+@given(ego=box_st, obstacles=st.lists(box_st, max_size=4), traffic=st.lists(box_st, max_size=6))
+def test_the_numpy_contacts_equal_the_compiled_ones(ego, obstacles, traffic):
+    """First overlaps (boxes_overlap) and obstacle gap (box_gap_m) of the numpy twin
+    equal the compiled answers bit for bit."""
     obstacles, traffic = (np.array(b, float).reshape(-1, 5) for b in (obstacles, traffic))
-    twin, fast = both_contacts(np.array(ego), speed, obstacles, traffic,
-                               np.array(speeds[: len(traffic)]))
+    twin, fast = both_contacts(np.array(ego), obstacles, traffic)
     assert same_bits(twin, fast)
 
 
 @needs_compiled
-def test_the_numpy_contacts_on_near_misses_and_overlaps():
+@PROPS
+@given(ego=box_st, velocity=velocity_st, boxes=st.lists(box_st, max_size=6),
+       velocities=st.lists(velocity_st, min_size=6, max_size=6))
+def test_the_numpy_conflicts_equal_the_compiled_ones(ego, velocity, boxes, velocities):
+    """Time to collision (first_contact_s), DRAC and headway (leader_measures) of the
+    numpy twin equal the compiled answers bit for bit."""
+    boxes = np.array(boxes, float).reshape(-1, 5)
+    twin, fast = both_conflicts(np.array(ego), np.array(velocity), boxes,
+                                np.array(velocities[: len(boxes)]).reshape(-1, 2))
+    assert same_bits(twin, fast)
+
+
+@needs_compiled
+def test_the_numpy_kernels_on_near_misses_overlaps_and_leaders():
     rng = np.random.default_rng(2)
     ego = np.array([0.0, 0.0, 0.3, 4.85, 1.93])
     others = np.column_stack([rng.uniform(-8, 8, (500, 2)), rng.uniform(-3, 3, 500),
                               rng.uniform(0.5, 6, 500), rng.uniform(0.5, 2.5, 500)])
-    speeds = rng.uniform(0, 20, 500)
-    met = {"overlap": 0, "gap": 0, "ttc": 0}
+    velocities = rng.uniform(-20, 20, (500, 2))
+    met = {"overlap": 0, "gap": 0, "ttc": 0, "drac": 0, "headway": 0}
     for k in range(0, 500, 5):
-        twin, fast = both_contacts(ego, 6.0, others[k: k + 2], others[k + 2: k + 5],
-                                   speeds[k + 2: k + 5])
+        twin, fast = both_contacts(ego, others[k: k + 2], others[k + 2: k + 5])
         assert same_bits(twin, fast)
         met["overlap" if twin[2] == 0 else "gap"] += 1
-        met["ttc"] += 0 < twin[3] < np.inf
+        twin, fast = both_conflicts(ego, np.array([6.0, 0.5]), others[k: k + 5],
+                                    velocities[k: k + 5])
+        assert same_bits(twin, fast)
+        met["ttc"] += 0 < twin[0] < np.inf
+        met["drac"] += twin[1] > 0
+        met["headway"] += 0 < twin[2] < np.inf
     assert min(met.values()) > 10  # each kind was met
 
 
 @needs_compiled
 def test_a_wrong_array_is_refused_with_its_name():
     with pytest.raises(TypeError, match="traffic"):
-        compiled.contacts(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros(4, np.float32),
-                          np.zeros(0))
+        compiled.contacts(np.zeros(5), np.zeros((0, 5)), np.zeros(4, np.float32))
+    with pytest.raises(TypeError, match="velocities"):
+        compiled.conflicts(np.zeros(5), np.zeros(2), np.zeros((1, 5)), np.zeros(3))

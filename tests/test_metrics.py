@@ -20,8 +20,13 @@ def test_return_needs_two_seconds_inside_half_a_metre_after_the_maneuver():
 
 def test_no_maneuver_means_no_return_and_all_nan_offsets_give_none():
     floats = {"t_s": np.arange(3.0), "lane_offset_m": np.full(3, np.nan),
-              "obstacle_gap_m": np.full(3, 7.0), "ttc_s": np.array([np.inf, 4.0, 2.5])}
+              "obstacle_gap_m": np.full(3, 7.0), "ttc_s": np.array([np.inf, 4.0, 2.5]),
+              "drac_mps2": np.array([0.0, 1.5, 0.5]), "headway_s": np.array([np.inf, 3.0, 2.0])}
     metrics = trace_metrics(floats, ["lane_keep"] * 3, [np.full(180, np.inf)] * 3, 11)
     assert metrics["maneuver_started"] is False and metrics["returned_to_lane"] is False
     assert metrics["max_abs_lane_offset_m"] is None and metrics["min_gap_obstacle_m"] == 7.0
     assert metrics["min_ttc_s"] == 2.5
+    assert metrics["max_drac_mps2"] == 1.5 and metrics["min_headway_s"] == 2.0
+    floats.update(drac_mps2=np.zeros(3), headway_s=np.full(3, np.inf))  # never a leader
+    metrics = trace_metrics(floats, ["lane_keep"] * 3, [np.full(180, np.inf)] * 3, 11)
+    assert metrics["max_drac_mps2"] == 0.0 and metrics["min_headway_s"] is None

@@ -68,7 +68,7 @@ def test_collision_finds_a_kerb_but_not_the_opposite_lanes_or_a_junction(town):
 
     def hit(cx, cy, yaw):
         return collision_with(np.array([cx, cy, yaw, 4.85, 1.93]),
-                              Contacts(-1, -1, math.inf, math.inf), road)
+                              Contacts(-1, -1, math.inf), road)
 
     assert hit(75.0, 150.0 - 1.6, 0.0) is None  # in a lane
     assert hit(75.0, 150.0, 0.0) is None  # astride the two directions

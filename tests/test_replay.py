@@ -42,7 +42,8 @@ RUN = "00000-seed"  # 3.74 m/s, no traffic: the lesson's maneuver, about 190 ste
 def fake_trace(n: int = 6) -> Trace:
     floats = {name: np.arange(n, dtype=float) for name in
               ("t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
-               "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s")}
+               "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s",
+               "drac_mps2", "headway_s")}
     floats["lane_offset_m"][:] = np.nan
     return Trace(floats, ["lane_keep"] * n, [np.full(4, np.inf, np.float32)] * n,
                  [np.zeros(5, np.float32)] * n)

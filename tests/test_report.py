@@ -113,7 +113,8 @@ def test_report_rates_where_a_stop_was_possible(small_sweep, tmp_path):
     assert stop["by_controller"]["lane-keep"]["collisions"] == 3  # it never brakes
     assert stop["paired"][0]["pairs"] == 3
 
-    title = "where braking alone could stop in time (v^2 / 2a <= gap), 3 of 4 samples run:"
+    title = ("where braking alone could stop in time (v^2 / 2a <= gap, a = min(max decel, "
+             "mu g), braking after 0 s), 3 of 4 samples run:")
     assert report.terminal[0] == VERDICT_TITLE
     head = report.terminal.index(COLLISION_TITLE) + 1
     assert report.terminal[head].split()[:3] == ["controller", "ok", "runs"]

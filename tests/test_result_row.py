@@ -45,7 +45,8 @@ SWEEP = SweepColumns(run_index=3, sample=1, params={"ego.speed_mps": 4.5, "road.
 
 def _metrics() -> dict:
     floats = {"t_s": np.arange(3.0), "lane_offset_m": np.array([0.1, -0.3, 0.2]),
-              "obstacle_gap_m": np.full(3, 7.0), "ttc_s": np.array([np.inf, 4.0, 2.5])}
+              "obstacle_gap_m": np.full(3, 7.0), "ttc_s": np.array([np.inf, 4.0, 2.5]),
+              "drac_mps2": np.array([0.0, 1.5, 0.5]), "headway_s": np.array([np.inf, 3.0, 2.0])}
     return trace_metrics(floats, ["lane_keep"] * 3, [np.full(180, np.inf)] * 3, 11)
 
 

@@ -114,3 +114,37 @@ def test_the_gap_follows_where_the_road_places_an_obstacle(lesson_plain):
     spec = ScenarioSpec.from_plain(lesson_plain)
     road = MovesAhead(RoadGeometry.from_spec(spec.road).center_xy, 3, 3.5)
     assert _gap(spec, road) == pytest.approx(_gap(spec) + 5.0)
+
+
+class FullBrake:
+    phase = "brake"
+
+    def step(self, obs):
+        from sdc.car.vehicle import Command
+
+        return Command(0.0, -100.0)
+
+
+@pytest.mark.parametrize("friction_mu", [0.1, 0.9])
+def test_stop_possible_uses_the_road_s_grip_and_braking_agrees(lesson_plain, friction_mu):
+    """A barrel 45 m ahead of the front bumper at 15 m/s: on a dry road (mu = 0.9) the
+    brakes stop the car in 14 m; on ice (mu = 0.1) braking takes 115 m, so a stop is
+    not possible, and a real run braking fully from the first step hits the barrel."""
+    from scenarios.world_backends import make_road, make_world
+    from sdc.run.episode import Simulation
+
+    lesson_plain["vehicle"] = {"friction_mu": friction_mu}
+    spec = _spec(lesson_plain, [{"position_m": 10 + 2.425 + 45 + 0.3}], speed_mps=15.0)
+    assert _gap(spec) == pytest.approx(45.0)
+    decel = X5.braking_decel_mps2(friction_mu)
+    assert stop_possible(15.0, decel, 45.0) is (friction_mu == 0.9)
+    road = make_road(spec)
+    with make_world(spec, road) as world:
+        sim = Simulation(spec, world)
+        sim.start()
+        end = None
+        while end is None:
+            end = sim.control(FullBrake())
+        row = sim.finish(end).row
+    assert row["stop_possible"] is (friction_mu == 0.9)
+    assert row["collision"] is (friction_mu == 0.1)

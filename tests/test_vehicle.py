@@ -65,3 +65,44 @@ def test_speed_never_negative_and_accel_is_limited():
     assert state.speed_mps == 0.0
     state = vehicle.step(VehicleState(0, 0, 0, 0, 0), Command(0.0, 100.0), 1.0)
     assert state.speed_mps == LESSON.max_accel_mps2
+
+
+def stopping_distance_m(friction_mu: float, speed_mps: float = 15.0, dt_s: float = 0.064):
+    """Distance from full braking at speed_mps to rest, in the model's own steps."""
+    vehicle = Vehicle(LESSON, friction_mu)
+    state = VehicleState(0, 0, 0, speed_mps, 0)
+    while state.speed_mps > 0:
+        state = vehicle.step(state, Command(0.0, -100.0), dt_s)
+    return state.x_m
+
+
+def test_braking_is_limited_by_the_road_s_grip():
+    """On ice (mu = 0.1) full braking from 15 m/s takes v^2 / (2 mu g) = 114.7 m, not
+    the brakes' 14 m; on a dry road (mu = 0.9, mu g = 8.8) the brakes' 8 m/s^2 rule."""
+    ice_m = stopping_distance_m(0.1)
+    assert ice_m == pytest.approx(15.0**2 / (2 * 0.1 * GRAVITY_MPS2), rel=0.02)
+    # (within a step: the last step covers v dt / 2 as the car comes to rest in it)
+    assert stopping_distance_m(0.9) == pytest.approx(15.0**2 / (2 * 8.0), rel=1e-3)
+    assert LESSON.braking_decel_mps2(0.1) == pytest.approx(0.981)
+    assert LESSON.braking_decel_mps2(0.9) == 8.0
+
+
+def test_the_friction_circle_shares_grip_between_braking_and_turning():
+    vehicle = Vehicle(LESSON, 0.9)
+    grip = 0.9 * GRAVITY_MPS2
+    speed = 20.0
+    cruising = vehicle.curvature_1pm(0.5, speed)
+    braking = vehicle.curvature_1pm(0.5, speed, -8.0)
+    assert cruising == pytest.approx(grip / speed**2)
+    assert braking == pytest.approx(math.sqrt(grip**2 - 64.0) / speed**2)  # 3.7 of 8.8 m/s^2
+    assert vehicle.curvature_1pm(0.5, speed, -grip) == 0.0  # no grip left to turn
+    # a step braking hard while steering: lateral^2 + longitudinal^2 within (mu g)^2
+    state = VehicleState(0, 0, 0, speed, 0.5)
+    after = vehicle.step(state, Command(0.5, -8.0), 0.064)
+    mean_speed = (speed + after.speed_mps) / 2
+    lateral = mean_speed * after.yaw_rad / 0.064
+    assert lateral**2 + 8.0**2 <= grip**2 * (1 + 1e-9)
+    # on ice a car at the grip's limit slides straight on while braking fully
+    ice = Vehicle(LESSON, 0.1)
+    after = ice.step(VehicleState(0, 0, 0, speed, 0.5), Command(0.5, -8.0), 0.064)
+    assert after.yaw_rad == 0.0 and after.speed_mps == pytest.approx(speed - 0.981 * 0.064)

@@ -1,7 +1,7 @@
 /*
- * Compiled kernels for the per-step hot path: the lidar scan, and the ego's
- * contacts (overlaps, gap to the obstacles, time to collision). Each is the exact
- * counterpart of numpy functions in sdc/car/geometry.py (same formulas, same order
+ * Compiled kernels for the per-step hot path: the lidar scan, the ego's contacts
+ * (overlaps, gap to the obstacles) and its conflicts (time to collision, DRAC,
+ * headway). Each is the exact counterpart of numpy functions in sdc/car/geometry.py (same formulas, same order
  * of operations, no fused multiply-adds): their composition in
  * sdc/car/geometry_kernels.py runs where this is not built, and the tests hold the
  * two to the same bits.
@@ -186,65 +186,64 @@ static double outline_gap(const double *a, const double *b) {
     return best;
 }
 
-/* constant-velocity time to collision of box a (speed along its heading) with box
- * b (speed_b along b's heading): inf unless b is in a's lateral corridor ahead and
- * they close or already touch (time_to_collision_s of sdc/car/geometry.py) */
-static double time_to_collision(const double *a, double cos_yaw, double sin_yaw, double speed,
-                                const double *b, double speed_b) {
-    double dx = b[0] - a[0], dy = b[1] - a[1];
-    double ahead = dx * cos_yaw + dy * sin_yaw;
-    double lateral = -dx * sin_yaw + dy * cos_yaw;
-    double rel_yaw = b[2] - a[2];
-    double half_len = b[3] / 2, half_wid = b[4] / 2;
-    double extent_x = fabs(half_len * cos(rel_yaw)) + fabs(half_wid * sin(rel_yaw));
-    double extent_y = fabs(half_len * sin(rel_yaw)) + fabs(half_wid * cos(rel_yaw));
-    double gap = ahead - extent_x - a[3] / 2;
-    int in_path = fabs(lateral) < extent_y + a[4] / 2 && ahead + extent_x > a[3] / 2;
-    double closing = speed - speed_b * cos(rel_yaw);
-    if (!in_path || !(gap <= 0.0 || closing > 0.0)) return INFINITY;
-    return gap <= 0.0 ? 0.0 : gap / closing;
+/* half extents of box b along its frame's x and y axes (_extents_m of sdc/car/geometry.py) */
+static inline void extents(const double *b, double *ext_x, double *ext_y) {
+    double c = cos(b[2]), s = sin(b[2]), half_len = 0.5 * b[3], half_wid = 0.5 * b[4];
+    *ext_x = fabs(half_len * c) + fabs(half_wid * s);
+    *ext_y = fabs(half_len * s) + fabs(half_wid * c);
 }
 
-/* contacts(box, speed, obstacles, traffic, traffic_speeds): what the ego's box meets
- * this step, as (index of the first obstacle it overlaps or -1, the same for the
- * traffic, its outline gap to the nearest obstacle or inf, its time to collision
- * with any of them, the obstacles standing still). Overlaps are boxes_overlap and
- * gaps box_gap_m of sdc/car/geometry.py; the time is its time_to_collision_s
- * over the obstacles, then the traffic. */
+/* when boxes a and b, moving at constant velocities without turning, first touch:
+ * the latest entry of the four side axes' slabs in time, inf if it comes after the
+ * earliest exit or the exit is past (first_contact_s of sdc/car/geometry.py) */
+static double first_contact(const double *a, const double *va, const double *b,
+                            const double *vb) {
+    double ca = cos(a[2]), sa = sin(a[2]), cb = cos(b[2]), sb = sin(b[2]);
+    double axes[4][2] = {{ca, sa}, {-sa, ca}, {cb, sb}, {-sb, cb}};
+    double px = b[0] - a[0], py = b[1] - a[1], wx = vb[0] - va[0], wy = vb[1] - va[1];
+    double t_in = 0.0, t_out = 0.0;
+    for (int j = 0; j < 4; j++) {
+        double nx = axes[j][0], ny = axes[j][1];
+        double ra = fabs(nx * ca + ny * sa) * (0.5 * a[3]) + fabs(nx * -sa + ny * ca) * (0.5 * a[4]);
+        double rb = fabs(nx * cb + ny * sb) * (0.5 * b[3]) + fabs(nx * -sb + ny * cb) * (0.5 * b[4]);
+        double axis_in, axis_out;
+        slab(nx * px + ny * py, nx * wx + ny * wy, ra + rb, &axis_in, &axis_out);
+        t_in = j ? np_max(t_in, axis_in) : axis_in;
+        t_out = j ? np_min(t_out, axis_out) : axis_out;
+    }
+    if (!(t_in <= t_out && t_out >= 0.0)) return INFINITY;
+    return t_in > 0.0 ? t_in : 0.0;
+}
+
+/* contacts(box, obstacles, traffic): what the ego's box meets this step, as (index of
+ * the first obstacle it overlaps or -1, the same for the traffic, its outline gap to
+ * the nearest obstacle or inf). Overlaps are boxes_overlap and gaps box_gap_m of
+ * sdc/car/geometry.py. */
 static PyObject *contacts(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *o_obj, *t_obj, *v_obj;
-    double speed;
-    if (!PyArg_ParseTuple(args, "OdOOO", &a_obj, &speed, &o_obj, &t_obj, &v_obj)) return NULL;
-    Py_buffer av, ov, tv, vv;
-    Py_ssize_t n_a, n_o, n_t, n_v;
+    PyObject *a_obj, *o_obj, *t_obj;
+    if (!PyArg_ParseTuple(args, "OOO", &a_obj, &o_obj, &t_obj)) return NULL;
+    Py_buffer av, ov, tv;
+    Py_ssize_t n_a, n_o, n_t;
     PyObject *result = NULL;
     if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
     if (get_doubles(o_obj, &ov, 0, 5, &n_o, "obstacles") < 0) goto fail_a;
     if (get_doubles(t_obj, &tv, 0, 5, &n_t, "traffic") < 0) goto fail_o;
-    if (get_doubles(v_obj, &vv, 0, 1, &n_v, "traffic_speeds") < 0) goto fail_t;
-    if (n_a != 1 || n_v != n_t) {
-        PyErr_SetString(PyExc_ValueError, "one box, and a speed per traffic box");
-        goto fail_v;
+    if (n_a != 1) {
+        PyErr_SetString(PyExc_ValueError, "box: one box");
+        goto fail_t;
     }
-    const double *a = av.buf, *obstacles = ov.buf, *traffic = tv.buf, *speeds = vv.buf;
-    double cos_yaw = cos(a[2]), sin_yaw = sin(a[2]);
+    const double *a = av.buf, *obstacles = ov.buf, *traffic = tv.buf;
     long hit_obstacle = -1, hit_traffic = -1;
-    double gap = INFINITY, ttc = INFINITY;
+    double gap = INFINITY;
     for (Py_ssize_t k = 0; k < n_o; k++) {
         const double *b = obstacles + 5 * k;
         int touching = overlaps(a, b);
         if (touching && hit_obstacle < 0) hit_obstacle = (long)k;
         gap = np_min(gap, touching ? 0.0 : outline_gap(a, b));
-        ttc = np_min(ttc, time_to_collision(a, cos_yaw, sin_yaw, speed, b, 0.0));
     }
-    for (Py_ssize_t k = 0; k < n_t; k++) {
-        const double *b = traffic + 5 * k;
-        if (hit_traffic < 0 && overlaps(a, b)) hit_traffic = (long)k;
-        ttc = np_min(ttc, time_to_collision(a, cos_yaw, sin_yaw, speed, b, speeds[k]));
-    }
-    result = Py_BuildValue("lldd", hit_obstacle, hit_traffic, gap, ttc);
-fail_v:
-    PyBuffer_Release(&vv);
+    for (Py_ssize_t k = 0; k < n_t && hit_traffic < 0; k++)
+        if (overlaps(a, traffic + 5 * k)) hit_traffic = (long)k;
+    result = Py_BuildValue("lld", hit_obstacle, hit_traffic, gap);
 fail_t:
     PyBuffer_Release(&tv);
 fail_o:
@@ -254,9 +253,58 @@ fail_a:
     return result;
 }
 
+/* conflicts(box, velocity, boxes, velocities): (the time to collision: the lesser of
+ * the earliest first_contact of the box with any of the boxes and the earliest time
+ * to reach a leader along x; the largest DRAC; the smallest time headway of the box
+ * following them along x): first_contact_s and leader_measures of
+ * sdc/car/geometry.py */
+static PyObject *conflicts(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *va_obj, *b_obj, *vb_obj;
+    if (!PyArg_ParseTuple(args, "OOOO", &a_obj, &va_obj, &b_obj, &vb_obj)) return NULL;
+    Py_buffer av, vav, bv, vbv;
+    Py_ssize_t n_a, n_va, n_b, n_vb;
+    PyObject *result = NULL;
+    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
+    if (get_doubles(va_obj, &vav, 0, 2, &n_va, "velocity") < 0) goto fail_a;
+    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_va;
+    if (get_doubles(vb_obj, &vbv, 0, 2, &n_vb, "velocities") < 0) goto fail_b;
+    if (n_a != 1 || n_va != 1 || n_vb != n_b) {
+        PyErr_SetString(PyExc_ValueError, "one box and its velocity, a velocity per box");
+        goto fail_vb;
+    }
+    const double *a = av.buf, *va = vav.buf, *boxes = bv.buf, *velocities = vbv.buf;
+    double own_x, own_y, contact = INFINITY, along = INFINITY, drac = 0.0, headway = INFINITY;
+    extents(a, &own_x, &own_y);
+    for (Py_ssize_t k = 0; k < n_b; k++) {
+        const double *b = boxes + 5 * k, *vb = velocities + 2 * k;
+        contact = np_min(contact, first_contact(a, va, b, vb));
+        double ext_x, ext_y;
+        extents(b, &ext_x, &ext_y);
+        double ahead = b[0] - a[0];
+        if (!(fabs(b[1] - a[1]) < ext_y + own_y && ahead > 0.0)) continue;  /* not a leader */
+        double gap = ahead - ext_x - own_x, closing = va[0] - vb[0];
+        if (gap > 0.0 && closing > 0.0) {
+            along = np_min(along, gap / closing);
+            drac = np_max(drac, closing * closing / (2.0 * gap));
+        }
+        headway = np_min(headway, gap > 0.0 ? (va[0] > 0.0 ? gap / va[0] : INFINITY) : 0.0);
+    }
+    result = Py_BuildValue("ddd", contact <= along ? contact : along, drac, headway);
+fail_vb:
+    PyBuffer_Release(&vbv);
+fail_b:
+    PyBuffer_Release(&bv);
+fail_va:
+    PyBuffer_Release(&vav);
+fail_a:
+    PyBuffer_Release(&av);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
-    {"contacts", contacts, METH_VARARGS, "Overlaps, obstacle gap and time to collision."},
+    {"contacts", contacts, METH_VARARGS, "Overlaps and obstacle gap."},
+    {"conflicts", conflicts, METH_VARARGS, "Time to collision, DRAC and time headway."},
     {NULL, NULL, 0, NULL},
 };
 

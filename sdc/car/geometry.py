@@ -204,31 +204,78 @@ def boxes_within_m(point_xy: np.ndarray, boxes: np.ndarray, reach_m: float) -> n
     return centre_m <= reach_m + half_diag_m
 
 
-def time_to_collision_s(ego_box: np.ndarray, ego_speed_mps: float, boxes: np.ndarray,
-                        speeds_mps: np.ndarray) -> float:
-    """Time until the ego reaches the nearest object in its path at constant velocities [s].
+def _extents_m(box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Half extents of boxes along the frame's x and y axes [m]."""
+    c, s = np.cos(box[..., 2]), np.sin(box[..., 2])
+    half_len_m, half_wid_m = 0.5 * box[..., 3], 0.5 * box[..., 4]
+    return (np.abs(half_len_m * c) + np.abs(half_wid_m * s),
+            np.abs(half_len_m * s) + np.abs(half_wid_m * c))
 
-    In the ego's frame (x along its heading), an object is in the path when its
-    lateral extent overlaps the ego's and it lies ahead of the ego's front. The
-    ego closes in at ``ego_speed - speed * cos(relative heading)``; the TTC is
-    the longitudinal gap over that closing speed, ``inf`` when nothing in the
-    path is being closed in on, 0 when an object in the path already touches.
+
+def first_contact_s(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
+                    velocities_mps: np.ndarray) -> np.ndarray:
+    """When one box and each of N boxes first touch, all moving at constant velocities
+    without turning [s]: the exact time for oriented boxes (separating axes swept in
+    time), 0 where they overlap now, ``inf`` where they never touch.
+
+    box: (5,), boxes: (N, 5) ``[cx_m, cy_m, yaw_rad, length_m, width_m]``;
+    velocity_mps: (2,), velocities_mps: (N, 2) ``[vx, vy]`` in the boxes' frame.
+    Two convex bodies in translation overlap exactly while their projections overlap
+    on every one of the four axes of their sides: on each axis that is an interval of
+    time (a slab), and they touch first at the latest entry, if it comes before the
+    earliest exit and the exit is not past.
     """
-    if len(boxes) == 0:
-        return math.inf
-    cx, cy, yaw, length, width = ego_box
-    cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
-    dx, dy = boxes[:, 0] - cx, boxes[:, 1] - cy
-    ahead_m = dx * cos_yaw + dy * sin_yaw
-    lateral_m = -dx * sin_yaw + dy * cos_yaw
-    rel_yaw = boxes[:, 2] - yaw
-    half_len_m, half_wid_m = boxes[:, 3] / 2, boxes[:, 4] / 2
-    extent_x_m = np.abs(half_len_m * np.cos(rel_yaw)) + np.abs(half_wid_m * np.sin(rel_yaw))
-    extent_y_m = np.abs(half_len_m * np.sin(rel_yaw)) + np.abs(half_wid_m * np.cos(rel_yaw))
-    gap_m = ahead_m - extent_x_m - length / 2
-    in_path = (np.abs(lateral_m) < extent_y_m + width / 2) & (ahead_m + extent_x_m > length / 2)
-    closing_mps = ego_speed_mps - speeds_mps * np.cos(rel_yaw)
-    with np.errstate(over="ignore"):  # closing at a crawl: inf, which is right
-        ttc = np.where(gap_m <= 0, 0.0, gap_m / np.where(closing_mps > 0, closing_mps, np.nan))
-    ttc = ttc[in_path & ((gap_m <= 0) | (closing_mps > 0))]
-    return float(ttc.min()) if ttc.size else math.inf
+    a, b = as_boxes(box)[0], as_boxes(boxes)
+    if len(b) == 0:
+        return np.zeros(0)
+    w = np.asarray(velocities_mps, np.float64).reshape(-1, 2) - np.asarray(velocity_mps,
+                                                                           np.float64)
+    ca, sa, cb, sb = math.cos(a[2]), math.sin(a[2]), np.cos(b[:, 2]), np.sin(b[:, 2])
+    px, py = b[:, 0] - a[0], b[:, 1] - a[1]
+    t_in = t_out = None
+    for nx, ny in ((ca, sa), (-sa, ca), (cb, sb), (-sb, cb)):  # the four side axes
+        radius_m = (np.abs(nx * ca + ny * sa) * (0.5 * a[3])
+                    + np.abs(nx * -sa + ny * ca) * (0.5 * a[4])
+                    + (np.abs(nx * cb + ny * sb) * (0.5 * b[:, 3])
+                       + np.abs(nx * -sb + ny * cb) * (0.5 * b[:, 4])))
+        axis_in, axis_out = _slab(nx * px + ny * py, nx * w[:, 0] + ny * w[:, 1], radius_m)
+        t_in = axis_in if t_in is None else _greater(t_in, axis_in)
+        t_out = axis_out if t_out is None else _lesser(t_out, axis_out)
+    touch = (t_in <= t_out) & (t_out >= 0.0)
+    return np.where(touch, np.where(t_in > 0.0, t_in, 0.0), np.inf)
+
+
+def leader_measures(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
+                    velocities_mps: np.ndarray) -> tuple[float, float, float]:
+    """The time to collision along the x axis [s], the deceleration rate to avoid a
+    crash (DRAC) [m/s^2] and the time headway [s] of a box following the boxes ahead
+    of it along x (the road's direction, in the road frame), as SUMO's SSM device
+    measures a follower and its leader along their lane.
+
+    A box leads when its centre is ahead (larger x) and its y extent overlaps the
+    follower's (the extents of the boxes' outlines on the axes). Its gap is the x
+    distance between their facing extents; its closing speed the follower's x
+    velocity minus its own. Over the leaders with a gap (> 0): the time to collision
+    is the smallest ``gap / closing`` of those being closed in on (``inf``: none),
+    DRAC the largest ``closing^2 / (2 gap)`` (0: none), the headway the smallest
+    ``gap / follower's x velocity`` (``inf`` while it does not move ahead); a leader
+    without a gap gives headway 0 and leaves contact to :func:`first_contact_s`.
+    """
+    a, b = as_boxes(box)[0], as_boxes(boxes)
+    if len(b) == 0:
+        return math.inf, 0.0, math.inf
+    v = np.asarray(velocities_mps, np.float64).reshape(-1, 2)
+    vx = float(velocity_mps[0])
+    own_x_m, own_y_m = _extents_m(a)
+    ext_x_m, ext_y_m = _extents_m(b)
+    ahead_m = b[:, 0] - a[0]
+    leads = (np.abs(b[:, 1] - a[1]) < ext_y_m + own_y_m) & (ahead_m > 0.0)
+    gap_m = ahead_m - ext_x_m - own_x_m
+    closing_mps = vx - v[:, 0]
+    closes = leads & (gap_m > 0.0) & (closing_mps > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # the masks pick
+        ttc = np.where(closes, gap_m / closing_mps, np.inf)
+        drac = np.where(closes, closing_mps * closing_mps / (2.0 * gap_m), 0.0)
+        headway = np.where(gap_m > 0.0, gap_m / vx if vx > 0.0 else np.inf, 0.0)
+    return (float(_nearest(ttc)), float(np.max(drac, initial=0.0)),
+            float(np.min(np.where(leads, headway, np.inf), initial=np.inf)))

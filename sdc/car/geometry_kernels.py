@@ -5,8 +5,9 @@ where it was built, else its numpy twins below, chosen once at import
 The twins take the compiled functions' arguments and compose the numpy functions
 of :mod:`sdc.car.geometry`: the lidar scan is :func:`~sdc.car.geometry.ray_box_ranges`
 and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; the contacts are
-:func:`~sdc.car.geometry.boxes_overlap`, :func:`~sdc.car.geometry.box_gap_m` and
-:func:`~sdc.car.geometry.time_to_collision_s`. Both paths agree bit for bit
+:func:`~sdc.car.geometry.boxes_overlap` and :func:`~sdc.car.geometry.box_gap_m`; the
+conflicts :func:`~sdc.car.geometry.first_contact_s` and
+:func:`~sdc.car.geometry.leader_measures`. Both paths agree bit for bit
 (``tests/test_kernels.py``); the compiled one avoids numpy's per-call cost, which
 dominates a step's few small arrays.
 """
@@ -22,9 +23,10 @@ from scenarios.snapshot import NO_BOXES
 from sdc.car.geometry import (
     box_gap_m,
     boxes_overlap,
+    first_contact_s,
+    leader_measures,
     ray_box_ranges,
     ray_segment_ranges,
-    time_to_collision_s,
 )
 
 
@@ -43,15 +45,20 @@ def _first(mask: np.ndarray) -> int:
     return int(np.argmax(mask)) if mask.any() else -1
 
 
-def contacts_numpy(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
-                   traffic_boxes: np.ndarray,
-                   traffic_speeds_mps: np.ndarray) -> tuple[int, int, float, float]:
+def contacts_numpy(box: np.ndarray, obstacle_boxes: np.ndarray,
+                   traffic_boxes: np.ndarray) -> tuple[int, int, float]:
     """The fields of :class:`Contacts`, one numpy question at a time."""
     return (_first(boxes_overlap(box, obstacle_boxes)), _first(boxes_overlap(box, traffic_boxes)),
-            float(np.min(box_gap_m(box, obstacle_boxes), initial=np.inf)),
-            time_to_collision_s(box, speed_mps, np.vstack([obstacle_boxes, traffic_boxes]),
-                                np.concatenate([np.zeros(len(obstacle_boxes)),
-                                                traffic_speeds_mps])))
+            float(np.min(box_gap_m(box, obstacle_boxes), initial=np.inf)))
+
+
+def conflicts_numpy(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
+                    velocities_mps: np.ndarray) -> tuple[float, float, float]:
+    """The fields of :class:`Conflicts`, one numpy question at a time."""
+    contact_s = float(np.min(first_contact_s(box, velocity_mps, boxes, velocities_mps),
+                             initial=np.inf))
+    along_s, drac, headway = leader_measures(box, velocity_mps, boxes, velocities_mps)
+    return (contact_s if contact_s <= along_s else along_s), drac, headway
 
 
 _compiled = compiled_extension("sdc.car._geometry_kernels")
@@ -59,6 +66,7 @@ _compiled = compiled_extension("sdc.car._geometry_kernels")
 KERNELS = NUMPY if _compiled is None else COMPILED
 _scan = scan_numpy if _compiled is None else _compiled.scan
 _contacts = contacts_numpy if _compiled is None else _compiled.contacts
+_conflicts = conflicts_numpy if _compiled is None else _compiled.conflicts
 
 
 def _dense(array: np.ndarray) -> np.ndarray:
@@ -84,12 +92,29 @@ class Contacts(NamedTuple):
     obstacle: int  # index of the first obstacle it overlaps (touching counts), -1: none
     vehicle: int  # the same for the traffic
     obstacle_gap_m: float  # its outline's distance to the nearest obstacle, inf: none
-    ttc_s: float  # constant-velocity time to collision with an obstacle or a vehicle
 
 
-def contacts(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
-             traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray) -> Contacts:
-    """The ego's overlaps, obstacle gap and time to collision in one pass; obstacles
-    stand still, traffic moves at its speeds along its headings."""
-    return Contacts(*_contacts(_dense(box), speed_mps, _dense(obstacle_boxes),
-                               _dense(traffic_boxes), _dense(traffic_speeds_mps)))
+def contacts(box: np.ndarray, obstacle_boxes: np.ndarray, traffic_boxes: np.ndarray) -> Contacts:
+    """The ego's overlaps and obstacle gap in one pass."""
+    return Contacts(*_contacts(_dense(box), _dense(obstacle_boxes), _dense(traffic_boxes)))
+
+
+class Conflicts(NamedTuple):
+    """How close the ego is to a crash with the boxes around it, at constant velocities."""
+
+    ttc_s: float  # time until it first touches any of them, 0: touching, inf: never
+    drac_mps2: float  # deceleration it needs to avoid the leaders ahead of it, 0: none
+    headway_s: float  # gap to the nearest leader over its speed, inf: no leader
+
+
+def conflicts(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
+              velocities_mps: np.ndarray) -> Conflicts:
+    """The ego's :class:`Conflicts` with ``boxes``: boxes ``(N, 5)`` and velocities
+    ``[vx, vy]`` [m/s] in one frame, x along the road. The time to collision is the
+    lesser of the exact first contact of the boxes at constant velocities
+    (:func:`~sdc.car.geometry.first_contact_s`: swerves, crossings, traffic from
+    behind) and the time to reach a leader along x at the closing speed
+    (:func:`~sdc.car.geometry.leader_measures`, as SUMO's SSM device: a car in the
+    ego's lane while the ego weaves in it); DRAC and headway are the leader measures."""
+    return Conflicts(*_conflicts(_dense(box), _dense(velocity_mps), _dense(boxes),
+                                 _dense(velocities_mps)))

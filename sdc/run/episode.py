@@ -27,6 +27,7 @@ from sdc.car.collision import collision_with
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
 from sdc.car.geometry_kernels import contacts
+from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
 from sdc.run.result_row import ok_row
@@ -83,6 +84,7 @@ class Simulation:
         edges = self.road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
         self.lidar = Lidar(spec.lidar, edges, np.random.default_rng(spec.scenario.seed))
         self.lane_sensor = LaneSensor(self.road, spec.ego.lane)
+        self.road_frame = RoadFrame(self.road, self.lane_sensor.lane_d_m)
         self.lane_width_m = self.road.lane_width_m
         self.recorder = TraceRecorder()
         self.step_s = spec.scenario.step_s
@@ -106,8 +108,12 @@ class Simulation:
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
         self.ranges.flags.writeable = False  # a controller sees what the trace records
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
-        self.contacts = contacts(self.box, state.speed_mps, snapshot.obstacle_boxes,
-                                 snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
+        self.contacts = contacts(self.box, snapshot.obstacle_boxes, snapshot.traffic_boxes)
+        self.conflicts = self.road_frame.conflicts(
+            self.box, state.speed_mps, self.contacts,
+            np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes]),
+            np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
+                            snapshot.traffic_speeds_mps]))
 
     def observation(self) -> Observation:
         """What the controller sees at the current step."""
@@ -118,14 +124,14 @@ class Simulation:
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
-        state, lane, contacts = self.state, self.lane, self.contacts
+        state, lane, contacts, conflicts = self.state, self.lane, self.contacts, self.conflicts
         self.recorder.add((  # trace.FLOAT_COLUMNS, in order
             self.k * self.step_s, state.x_m, state.y_m, state.yaw_rad, state.speed_mps,
             state.steer_rad, command.steer_rad,
             lane.offset_m if lane else math.nan,
             lane.heading_error_rad if lane else math.nan,
             lane.s_m if lane else math.nan,
-            contacts.obstacle_gap_m, contacts.ttc_s,
+            contacts.obstacle_gap_m, conflicts.ttc_s, conflicts.drac_mps2, conflicts.headway_s,
         ), phase, self.ranges, self.snapshot.traffic_boxes)
 
     def end_reason(self) -> str | None:
@@ -202,7 +208,9 @@ class Simulation:
             time_lost_s=run_outcome.time_lost_s(t_end, progress_m, spec.ego.speed_mps),
             min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
             stop_gap_m=gap_m,
-            stop_possible=stop_possible(spec.ego.speed_mps, model.max_decel_mps2, gap_m),
+            stop_possible=stop_possible(spec.ego.speed_mps,
+                                        model.braking_decel_mps2(spec.vehicle.friction_mu),
+                                        gap_m),
             sim_time_s=t_end,
             steps=len(trace),
             wall_time_s=time.perf_counter() - self.wall_start,

@@ -69,7 +69,15 @@ COLUMNS: tuple[Column, ...] = (
     Column("min_gap_obstacle_m", pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
     Column("min_ttc_s", pa.float64(), METRIC,
-           "smallest constant-velocity time to reach anything in the ego's path [s]"),
+           "smallest time until the ego's body would touch an obstacle or a vehicle, all "
+           "at constant velocities along the road (sdc.car.road_frame); 0 only on contact, "
+           "None: never on a course to touch [s]"),
+    Column("max_drac_mps2", pa.float64(), METRIC,
+           "largest deceleration the ego needed to avoid a leader ahead of it along the "
+           "road, closing speed^2 / (2 gap); 0: it never closed in on one [m/s^2]"),
+    Column("min_headway_s", pa.float64(), METRIC,
+           "smallest time headway to a leader ahead along the road, gap / ego speed; "
+           "None: no leader [s]"),
     Column("min_road_edge_gap_m", pa.float64(), OUTCOME,
            "closest approach of a body corner to a road edge, negative beyond it [m]"),
     Column("stop_gap_m", pa.float64(), OUTCOME,
@@ -77,8 +85,10 @@ COLUMNS: tuple[Column, ...] = (
            "whose box reaches into the band the body covers along its lane, along the "
            "lane; None: no obstacle in that path [m]"),
     Column("stop_possible", pa.bool_(), OUTCOME,
-           "braking alone could stop the car before it: start speed^2 / (2 * the vehicle "
-           "model's max_decel_mps2) <= stop_gap_m; None: no obstacle in the path"),
+           "braking alone could stop the car before it: start speed^2 / (2 * min(the "
+           "vehicle model's max_decel_mps2, friction_mu * g)) <= stop_gap_m, braking from "
+           "the first step (analysis.safety.REACTION_TIME_S = 0); None: no obstacle in the "
+           "path"),
     Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
     Column("detection_range_m", pa.float64(), METRIC,
            "shortest central lidar range as the maneuver started [m]"),
