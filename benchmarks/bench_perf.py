@@ -162,7 +162,8 @@ def world_loop_ms(spec: ScenarioSpec, sense: bool = False) -> float:
     (``SumoWorld.step``: push the ego, driving straight on, step SUMO, read the
     traffic around it), without sensing or control. With ``sense``, also the
     compiled calls of sensing, back to back: the lidar scan, the lane sensor's two
-    road lookups and the contacts (still no controller, trace row or end checks);
+    road lookups, the contacts and the conflicts along the road (still no controller,
+    trace row or end checks);
     however much of the loop were compiled, a step costs at least this."""
     road = make_road(spec)
     with make_world(spec, road) as world:
@@ -183,8 +184,10 @@ def world_loop_ms(spec: ScenarioSpec, sense: bool = False) -> float:
                                box[2], snapshot.obstacle_boxes, snapshot.traffic_boxes)
                 road.locate(box[0], box[1])
                 road.locate(box[0] + look_ahead_m * cos_yaw, box[1] + look_ahead_m * sin_yaw)
-                contacts(box, spec.ego.speed_mps, snapshot.obstacle_boxes,
-                         snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
+                touching = contacts(box, snapshot.obstacle_boxes, snapshot.traffic_boxes)
+                sim.road_frame.conflicts(box, spec.ego.speed_mps, touching,
+                                         snapshot.obstacle_boxes, snapshot.traffic_boxes,
+                                         snapshot.traffic_speeds_mps)
             steps_s.append(time.perf_counter() - start)
     return 1e3 * float(np.median(steps_s))
 

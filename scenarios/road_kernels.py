@@ -5,6 +5,8 @@ was built, else their numpy twins below, chosen once at import
 - :func:`frenet`: road coordinates ``(s, d)`` of points on a polyline and their
   distance to the nearer road edge (:meth:`scenarios.road_geometry.RoadGeometry.to_frenet`);
 - :func:`locate`: the same of one point, in plain floats;
+- :func:`place`: boxes and their velocities in the road frame of a lane
+  (:meth:`scenarios.road_geometry.RoadGeometry.place_in_road_frame`);
 - :func:`traffic`: SUMO's context subscription results as traffic boxes and speeds
   (:meth:`scenarios.sumo_world.SumoWorld._traffic`).
 
@@ -27,6 +29,12 @@ def _project(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray, lengths
              start_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(s, d)`` of (K, 2) points: each on its nearest segment (the first of equals),
     the first segment extended backwards and the last one forwards."""
+    return _project_on_segments(xy, starts, directions, lengths, start_s)[:2]
+
+
+def _project_on_segments(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray,
+                         lengths: np.ndarray, start_s: np.ndarray):
+    """:func:`_project`'s ``(s, d)`` and the index of each point's segment."""
     rel_x = xy[:, 0, None] - starts[None, :, 0]  # (K, S)
     rel_y = xy[:, 1, None] - starts[None, :, 1]
     dir_x, dir_y = directions[:, 0], directions[:, 1]
@@ -40,7 +48,7 @@ def _project(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray, lengths
     seg = np.argmin(off_x * off_x + off_y * off_y, axis=1)
     k = np.arange(len(xy))
     return (start_s[seg] + along[k, seg],
-            dir_x[seg] * rel_y[k, seg] - dir_y[seg] * rel_x[k, seg])
+            dir_x[seg] * rel_y[k, seg] - dir_y[seg] * rel_x[k, seg], seg)
 
 
 def frenet_numpy(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray,
@@ -60,6 +68,28 @@ def locate_numpy(x_m: float, y_m: float, starts: np.ndarray, directions: np.ndar
     """``(s, d)`` of one point, as :func:`frenet_numpy` finds them."""
     s_m, d_m = _project(np.array([[x_m, y_m]]), starts, directions, lengths, start_s)
     return float(s_m[0]), float(d_m[0])
+
+
+def place_numpy(ego: np.ndarray, ego_speed_mps: float, obstacles: np.ndarray,
+                traffic: np.ndarray, traffic_speeds_mps: np.ndarray, starts: np.ndarray,
+                directions: np.ndarray, lengths: np.ndarray, start_s: np.ndarray,
+                headings_rad: np.ndarray, curvature_1pm: float, lane_scale: float,
+                out_boxes: np.ndarray, out_velocities: np.ndarray) -> None:
+    """Into ``out_boxes`` (1 + K + N, 5) and ``out_velocities`` (1 + K + N, 2): the ego,
+    the K obstacles (standing still) and the N traffic boxes (at their speeds along
+    their headings), in the road frame of a lane ``lane_scale`` times as long as the
+    polyline: ``[s * lane_scale, d, yaw - the segment's heading, length, width]`` and
+    ``[speed cos(yaw) * lane_scale / (1 - curvature d), speed sin(yaw)]`` (the
+    factor only where the curvature is not 0)."""
+    boxes = np.vstack([np.reshape(ego, (1, 5)), obstacles, traffic])
+    speeds = np.concatenate([[ego_speed_mps], np.zeros(len(obstacles)), traffic_speeds_mps])
+    s_m, d_m, seg = _project_on_segments(boxes[:, :2], starts, directions, lengths, start_s)
+    yaw = boxes[:, 2] - headings_rad[seg]
+    along = speeds * np.cos(yaw)
+    if curvature_1pm != 0.0:
+        along = along * (lane_scale / (1.0 - curvature_1pm * d_m))
+    out_boxes[:] = np.column_stack([s_m * lane_scale, d_m, yaw, boxes[:, 3], boxes[:, 4]])
+    out_velocities[:] = np.column_stack([along, speeds * np.sin(yaw)])
 
 
 def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, length_m: float,
@@ -94,3 +124,4 @@ KERNELS = NUMPY if _compiled is None else COMPILED
 frenet = frenet_numpy if _compiled is None else _compiled.frenet
 locate = locate_numpy if _compiled is None else _compiled.locate
 traffic = traffic_numpy if _compiled is None else _compiled.traffic
+place = place_numpy if _compiled is None else _compiled.place

@@ -28,9 +28,10 @@ def body(road: RoadGeometry, s_m: float, d_m: float, size=CAR, yaw_offset_rad=0.
 
 
 def measure(road, lane_d_m, ego, ego_speed, boxes, speeds):
+    """The conflicts with boxes of traffic at speeds."""
     boxes = np.array(boxes).reshape(-1, 5)
     touching = contacts(ego, boxes[:0], boxes)
-    return RoadFrame(road, lane_d_m).conflicts(ego, ego_speed, touching, boxes,
+    return RoadFrame(road, lane_d_m).conflicts(ego, ego_speed, touching, boxes[:0], boxes,
                                                np.asarray(speeds, float))
 
 

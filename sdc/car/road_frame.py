@@ -28,48 +28,38 @@ from scenarios.road_geometry import RoadGeometry
 from sdc.car.geometry_kernels import Conflicts, Contacts, conflicts
 
 
-def _wrap(angle_rad: np.ndarray) -> np.ndarray:
-    return (angle_rad + np.pi) % (2 * np.pi) - np.pi
-
-
 def velocities_mps(boxes: np.ndarray, speeds_mps: np.ndarray) -> np.ndarray:
     """(N, 2) world velocities of boxes moving along their headings [m/s]."""
     return np.column_stack([speeds_mps * np.cos(boxes[:, 2]), speeds_mps * np.sin(boxes[:, 2])])
 
 
 class RoadFrame:
-    """Places boxes in the road frame of one ego lane (see the module's docstring)."""
+    """Measures the ego's conflicts in the road frame of its lane (the module's docstring)."""
 
     def __init__(self, road: RoadGeometry, lane_d_m: float):
         self.road = road
-        self.curvature_1pm = road.curvature_1pm
         self.lane_scale = 1 - road.curvature_1pm * lane_d_m  # ego lane m per centre-line m
 
-    def place(self, boxes: np.ndarray,
-              speeds_mps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Boxes ``(N, 5)`` moving at ``speeds_mps`` along their headings, as boxes and
-        ``[vx, vy]`` velocities in the road frame."""
-        s_m, d_m = self.road.to_frenet(boxes[:, :2])
-        yaw_rad = _wrap(boxes[:, 2] - self.road.heading_at(s_m))
-        along = speeds_mps * np.cos(yaw_rad)
-        if self.curvature_1pm != 0.0:
-            along = along * (self.lane_scale / (1 - self.curvature_1pm * d_m))
-        placed = np.column_stack([s_m * self.lane_scale, d_m, yaw_rad, boxes[:, 3:5]])
-        return placed, np.column_stack([along, speeds_mps * np.sin(yaw_rad)])
-
     def conflicts(self, ego_box: np.ndarray, ego_speed_mps: float, contacts: Contacts,
-                  boxes: np.ndarray, speeds_mps: np.ndarray) -> Conflicts:
-        """The ego's :class:`~sdc.car.geometry_kernels.Conflicts` with ``boxes``
-        (obstacles at speed 0, traffic at its speeds), measured in the road frame."""
-        if len(boxes) == 0:
-            return Conflicts(np.inf, 0.0, np.inf)
-        everything = np.vstack([ego_box[None, :], boxes])
-        placed, velocity = self.place(everything, np.concatenate([[ego_speed_mps], speeds_mps]))
+                  obstacle_boxes: np.ndarray, traffic_boxes: np.ndarray,
+                  traffic_speeds_mps: np.ndarray) -> Conflicts:
+        """The ego's :class:`~sdc.car.geometry_kernels.Conflicts` with the obstacles
+        (standing still) and the traffic (at its speeds along its headings)."""
+        if len(obstacle_boxes) + len(traffic_boxes) == 0:
+            return NO_CONFLICTS
+        placed, velocity = self.road.place_in_road_frame(
+            ego_box, ego_speed_mps, obstacle_boxes, traffic_boxes, traffic_speeds_mps,
+            self.lane_scale)
         measured = conflicts(placed[0], velocity[0], placed[1:], velocity[1:])
         if contacts.obstacle >= 0 or contacts.vehicle >= 0:
             return measured._replace(ttc_s=0.0)
         if measured.ttc_s == 0.0:  # unrolled they touch, in the world they do not
-            world = velocities_mps(everything, np.concatenate([[ego_speed_mps], speeds_mps]))
-            exact = conflicts(ego_box, world[0], boxes, world[1:])
+            boxes = np.vstack([obstacle_boxes, traffic_boxes])
+            speeds = np.concatenate([np.zeros(len(obstacle_boxes)), traffic_speeds_mps])
+            ego_velocity = velocities_mps(ego_box[None, :], np.array([ego_speed_mps]))[0]
+            exact = conflicts(ego_box, ego_velocity, boxes, velocities_mps(boxes, speeds))
             return measured._replace(ttc_s=exact.ttc_s)
         return measured
+
+
+NO_CONFLICTS = Conflicts(np.inf, 0.0, np.inf)

@@ -110,10 +110,8 @@ class Simulation:
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
         self.contacts = contacts(self.box, snapshot.obstacle_boxes, snapshot.traffic_boxes)
         self.conflicts = self.road_frame.conflicts(
-            self.box, state.speed_mps, self.contacts,
-            np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes]),
-            np.concatenate([np.zeros(len(snapshot.obstacle_boxes)),
-                            snapshot.traffic_speeds_mps]))
+            self.box, state.speed_mps, self.contacts, snapshot.obstacle_boxes,
+            snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
 
     def observation(self) -> Observation:
         """What the controller sees at the current step."""
