@@ -2,22 +2,25 @@
 
 SUMO's Surrogate Safety Measures device measures gaps along the lanes, so a car
 ahead in the ego's lane on a curve is ahead, not off to one side. This does the
-same for oriented boxes: each body is placed in the road frame, x its position
-along the ego's lane (``s`` along the centre line times the lane's length ratio,
-:attr:`~scenarios.road_geometry.RoadGeometry.curvature_1pm`), y its offset ``d``
-from the centre line, its yaw relative to the road's heading there, and its
-velocity split along and across the road (a body moving along its own lane at
-offset ``d`` covers ``(1 - curvature * ego lane's d) / (1 - curvature * d)``
-metres of the ego's lane per metre). In that frame the curve is unrolled into a
-straight road and :func:`~sdc.car.geometry_kernels.conflicts` measures the time
-to collision (the exact first contact of the boxes at constant velocities in
-the road frame, so swerves count), DRAC and headway. On a straight road the
-frame is the world's, turned.
+same for oriented boxes (:meth:`~scenarios.road_geometry.RoadGeometry.place_in_road_frame`):
+each body is placed in the road frame, x its position along the ego's lane,
+y its offset ``d`` from the centre line, its yaw relative to the road's heading
+there, and its velocity split along and across the road. In that frame a curve
+is unrolled into a straight road, and :func:`~sdc.car.geometry_kernels.conflicts`
+measures:
+
+- the time to collision: the lesser of the exact first contact of the boxes at
+  constant velocities (swerves, crossings, traffic from behind) and SSM's time to
+  reach a leader in the ego's path along the lane (a car ahead in the lane while
+  the ego weaves in it);
+- DRAC and the time headway to the leaders ahead.
+
+On a straight road the frame is the world's, turned.
 
 Contact is the world's: the time to collision is 0 exactly when the ego's body
 overlaps another (``Contacts``). Where the unrolled boxes touch but the world's
-do not (a rounding of a few millimetres on a curve) the world frame's exact time
-is taken instead.
+do not (on a curve, rigid boxes unrolled differ by millimetres to centimetres)
+the world frame's exact first contact is taken instead.
 """
 
 from __future__ import annotations
