@@ -1,5 +1,5 @@
 """Safety margins of a run: the closest approach to the road edge (the time to
-collision is the car's, recorded in the trace: ``sdc.car.geometry.time_to_collision_s``),
+collision is the car's, recorded in the trace: ``sdc.car.road_frame``),
 and whether braking alone could have stopped the car before the obstacle ahead.
 
 Plain numpy on boxes ``[cx_m, cy_m, yaw_rad, length_m, width_m]`` and the spec; no simulator.
