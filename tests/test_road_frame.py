@@ -97,3 +97,21 @@ def test_traffic_from_behind_closing_in_counts():
     measured = measure(road, d_m, ego, 15.0, [behind], [20.0])
     assert measured.ttc_s == pytest.approx((30.0 - (EGO[0] + CAR[0]) / 2) / 5.0)
     assert measured.headway_s == math.inf  # not a leader of the ego
+
+
+@pytest.mark.parametrize("radius_m", [80.0, -80.0])
+def test_lane_keeping_past_a_truck_on_a_curve_is_a_clean_pass(lesson_plain, radius_m):
+    """The real run of the issue: lane keeping past a truck in the next lane on an
+    80 m curve, 0.8 to 1.3 m apart. The old straight-ahead extents read a TTC of
+    0.001 s on the right-hand curve."""
+    from scenarios.scenario_spec import ScenarioSpec
+    from sdc.run.episode import run_episode
+
+    lesson_plain["road"].update(kind="curve", curve_radius_m=radius_m, length_m=150.0, lanes=2)
+    lesson_plain["obstacles"] = [{"kind": "truck", "lane": 1, "position_m": 60.0}]
+    lesson_plain["ego"].update(lane=0, speed_mps=12.0)
+    lesson_plain["controller"] = {"name": "lane-keep"}
+    lesson_plain["scenario"]["duration_s"] = 10.0
+    row = run_episode(ScenarioSpec.from_plain(lesson_plain)).row
+    assert row["collision"] is False and 0.8 < row["min_gap_obstacle_m"] < 1.5
+    assert row["min_ttc_s"] is None or row["min_ttc_s"] > 0.5

@@ -140,17 +140,24 @@ def test_on_a_straight_road_ttc_and_drac_equal_ssm_to_its_rounding(case, tmp_pat
 
 
 @pytest.mark.parametrize("radius_m", [150.0, -150.0])
-@pytest.mark.parametrize("accel_mps2", [0.0, -2.0])
-def test_on_a_curve_ttc_and_drac_follow_ssm_along_the_lane(radius_m, accel_mps2, tmp_path):
-    """A stopped car 160 m ahead in the ego's lane on a curve of radius 150 m, left
-    and right (the ego on the outer and the inner lane): ours has a value at every
-    step SSM has one (the old straight-ahead TTC was inf for 105 of 118 steps), and
-    equals SSM's with its gap carried over to the ego's lane."""
-    spec = spec_of({"kind": "curve", "curve_radius_m": radius_m, "length_m": 400.0}, 15.0,
-                   CAR_AT_170, 15.0)
+@pytest.mark.parametrize("case", ["stopped car", "braking toward it", "slower leader"])
+def test_on_a_curve_ttc_and_drac_follow_ssm_along_the_lane(radius_m, case, tmp_path):
+    """On a curve of radius 150 m, left and right (the ego on the outer and the inner
+    lane): a stopped car 160 m ahead in the ego's lane, the ego braking toward it, a
+    slower leader. Ours has a value at every step SSM has one (the old straight-ahead
+    TTC was inf for 105 of 118 steps), and equals SSM's with its gap carried over to
+    the ego's lane."""
+    curve = {"kind": "curve", "curve_radius_m": radius_m, "length_m": 700.0}
+    if case == "slower leader":  # SUMO moves it 10 m/s of lane length, as the ego sees
+        spec = spec_of(curve, 20.0, [], 20.0)
+        floats, logged = run_with_ssm(spec, 0.0, tmp_path, leader=(140.0, 10.0))
+    else:
+        spec = spec_of(curve, 15.0, CAR_AT_170, 15.0)
+        floats, logged = run_with_ssm(spec, -2.0 if case == "braking toward it" else 0.0,
+                                      tmp_path)
     k = lane_scale(spec, make_road(spec))
     half_lengths_m = (EGO_LENGTH_M + OBSTACLE_SIZES_M["car"][0]) / 2
-    rows = paired(*run_with_ssm(spec, accel_mps2, tmp_path))
+    rows = paired(floats, logged)
     assert len(rows) > 70 and abs(k - 1) > 0.011
     compared = 0
     for ttc, drac, speed, ssm_ttc, ssm_drac in rows:
@@ -158,10 +165,12 @@ def test_on_a_curve_ttc_and_drac_follow_ssm_along_the_lane(radius_m, accel_mps2,
         if ssm_ttc > 20.0:  # crawling to a stop: gaps of 1 cm over speeds of 1 mm/s
             continue
         compared += 1
-        expected_gap_m = (ssm_ttc * speed + half_lengths_m) * k - half_lengths_m
-        assert ttc * speed == pytest.approx(expected_gap_m, abs=ROUNDING * speed + PLACEMENT_M)
+        closing = speed - (10.0 if case == "slower leader" else 0.0)
+        expected_gap_m = (ssm_ttc * closing + half_lengths_m) * k - half_lengths_m
+        assert ttc * closing == pytest.approx(expected_gap_m,
+                                              abs=ROUNDING * closing + PLACEMENT_M)
         if ssm_drac:  # closing^2 / (2 gap), SSM's gap carried over to the lane
-            ssm_gap_m = ssm_ttc * speed
+            ssm_gap_m = ssm_ttc * closing
             lane_gap_m = (ssm_gap_m + half_lengths_m) * k - half_lengths_m
             expected = ssm_drac * ssm_gap_m / lane_gap_m
             allowed = ROUNDING + expected * (CLOSING_REL + PLACEMENT_M / lane_gap_m)
