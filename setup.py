@@ -11,7 +11,7 @@ own, as numpy rounds it, which is what makes the two paths equal.
 from setuptools import Extension, setup
 
 FLAGS = ["-O2", "-ffp-contract=off"]
-HEADERS = ["scenarios/_buffers.h"]
+HEADERS = ["scenarios/_buffers.h", "scenarios/_polyline.h"]
 
 
 def kernel(name: str, source: str) -> Extension:

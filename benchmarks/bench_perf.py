@@ -64,7 +64,6 @@ from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_plugins import make_controller
-from sdc.car.geometry_kernels import contacts
 from sdc.car.sensors import Lidar
 from sdc.run.episode import Simulation
 
@@ -184,10 +183,7 @@ def world_loop_ms(spec: ScenarioSpec, sense: bool = False) -> float:
                                box[2], snapshot.obstacle_boxes, snapshot.traffic_boxes)
                 road.locate(box[0], box[1])
                 road.locate(box[0] + look_ahead_m * cos_yaw, box[1] + look_ahead_m * sin_yaw)
-                touching = contacts(box, snapshot.obstacle_boxes, snapshot.traffic_boxes)
-                sim.road_frame.conflicts(box, spec.ego.speed_mps, touching,
-                                         snapshot.obstacle_boxes, snapshot.traffic_boxes,
-                                         snapshot.traffic_speeds_mps)
+                sim.road_frame.measure(box, spec.ego.speed_mps, snapshot)
             steps_s.append(time.perf_counter() - start)
     return 1e3 * float(np.median(steps_s))
 

@@ -100,6 +100,13 @@ class RoadGeometry:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
                        0, len(self._seg_len_m) - 1)
 
+    @property
+    def polyline(self) -> tuple[np.ndarray, ...]:
+        """The centre line as the compiled kernels take it: segment starts (S, 2), unit
+        directions (S, 2), lengths (S,), ``s`` at their starts (S,) and headings (S,)."""
+        return (self._seg_start_xy, self._seg_dir, self._seg_len_m, self._seg_start_s_m,
+                self._seg_heading_rad)
+
     def place_in_road_frame(self, ego: np.ndarray, ego_speed_mps: float, obstacles: np.ndarray,
                             traffic: np.ndarray, traffic_speeds_mps: np.ndarray,
                             lane_scale: float) -> tuple[np.ndarray, np.ndarray]:
@@ -115,10 +122,8 @@ class RoadGeometry:
         out_boxes, out_velocities = np.empty((n, 5)), np.empty((n, 2))
         dense = [np.ascontiguousarray(a, np.float64)
                  for a in (ego, obstacles, traffic, traffic_speeds_mps)]
-        road_kernels.place(dense[0], ego_speed_mps, *dense[1:],
-                           self._seg_start_xy, self._seg_dir, self._seg_len_m,
-                           self._seg_start_s_m, self._seg_heading_rad, self.curvature_1pm,
-                           lane_scale, out_boxes, out_velocities)
+        road_kernels.place(dense[0], ego_speed_mps, *dense[1:], *self.polyline,
+                           self.curvature_1pm, lane_scale, out_boxes, out_velocities)
         return out_boxes, out_velocities
 
     def heading_at(self, s_m) -> np.ndarray:

@@ -172,3 +172,56 @@ def test_a_wrong_array_is_refused_with_its_name():
         compiled.contacts(np.zeros(5), np.zeros((0, 5)), np.zeros(4, np.float32))
     with pytest.raises(TypeError, match="velocities"):
         compiled.conflicts(np.zeros(5), np.zeros(2), np.zeros((1, 5)), np.zeros(3))
+
+
+def both_steps(ego, speed, obstacles, traffic, speeds, road, lane_scale):
+    """A step's contacts and conflicts from the numpy twin and the compiled code."""
+    args = [np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic, speeds)]
+    extra = (*road.polyline, road.curvature_1pm, lane_scale)
+    return [s(args[0], speed, *args[1:], *extra) for s in (kernels.step_numpy, compiled.step)]
+
+
+@needs_compiled
+@pytest.mark.parametrize("radius_m", [None, 60.0, -150.0])
+def test_the_numpy_step_equals_the_compiled_one(radius_m):
+    """Crowds of boxes around the ego on a straight road and on curves, many of them
+    touching or bumper to bumper (where the world frame's first contact stands in):
+    the fused compiled step and its numpy composition agree bit for bit, and equal
+    the contacts and conflicts kernels they are made of."""
+    from scenarios.road_geometry import RoadGeometry
+    from scenarios.scenario_spec import RoadSpec
+
+    spec = (RoadSpec(kind="straight", length_m=400.0, lanes=3) if radius_m is None else
+            RoadSpec(kind="curve", curve_radius_m=radius_m, length_m=400.0, lanes=3))
+    road = RoadGeometry.from_spec(spec)
+    rng = np.random.default_rng(7)
+    met = {"touching": 0, "world": 0, "finite": 0, "leader": 0}
+    for _ in range(300):
+        s_m = rng.uniform(20, 380, 7)
+        d_m = rng.choice([-3.5, 0.0, 3.5], 7) + rng.normal(0, 0.3, 7)
+        s_m[1:4] = s_m[0] + rng.choice([-1, 1], 3) * rng.uniform(4.5, 5.0, 3)  # bumper to bumper
+        d_m[1:4] = d_m[0]
+        xy = road.xy_at(s_m, d_m)
+        boxes = np.column_stack([xy, road.heading_at(s_m) + rng.normal(0, 0.05, 7),
+                                 np.full(7, 4.6), np.full(7, 1.9)])
+        speeds = rng.uniform(0, 25, 7)
+        lane_scale = 1 - road.curvature_1pm * d_m[0]
+        twin, fast = both_steps(boxes[0], float(speeds[0]), boxes[1:3], boxes[3:], speeds[3:],
+                                road, lane_scale)
+        assert same_bits(twin, fast)
+        assert twin[:3] == kernels.contacts_numpy(boxes[0], boxes[1:3], boxes[3:])
+        placed, velocity = road.place_in_road_frame(boxes[0], float(speeds[0]), boxes[1:3],
+                                                    boxes[3:], speeds[3:], lane_scale)
+        along = kernels.conflicts_numpy(placed[0], velocity[0], placed[1:], velocity[1:])
+        touching = twin[0] >= 0 or twin[1] >= 0
+        met["touching"] += touching
+        met["world"] += not touching and along[0] == 0.0
+        met["finite"] += 0 < twin[3] < np.inf
+        met["leader"] += twin[4] > 0
+        assert (twin[3] == 0.0) == touching
+        assert twin[4:] == along[1:]
+        if not touching and along[0] > 0.0:
+            assert twin[3] == along[0]
+    assert min(met["touching"], met["finite"], met["leader"]) > 10
+    if radius_m is not None:
+        assert met["world"] > 0  # the fallback was exercised

@@ -10,6 +10,7 @@ import pytest
 
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec
+from scenarios.snapshot import NO_BOXES, Snapshot
 from sdc.car.geometry_kernels import contacts
 from sdc.car.road_frame import RoadFrame
 
@@ -29,10 +30,8 @@ def body(road: RoadGeometry, s_m: float, d_m: float, size=CAR, yaw_offset_rad=0.
 
 def measure(road, lane_d_m, ego, ego_speed, boxes, speeds):
     """The conflicts with boxes of traffic at speeds."""
-    boxes = np.array(boxes).reshape(-1, 5)
-    touching = contacts(ego, boxes[:0], boxes)
-    return RoadFrame(road, lane_d_m).conflicts(ego, ego_speed, touching, boxes[:0], boxes,
-                                               np.asarray(speeds, float))
+    snapshot = Snapshot(0.0, np.array(boxes).reshape(-1, 5), NO_BOXES, np.asarray(speeds, float))
+    return RoadFrame(road, lane_d_m).measure(ego, ego_speed, snapshot)[1]
 
 
 @pytest.mark.parametrize("radius_m", [150.0, -150.0, 60.0])

@@ -103,6 +103,17 @@ def run_with_ssm(spec: ScenarioSpec, accel_mps2: float, tmp_path, leader=None):
     return episode.trace.floats, ssm_log(log)
 
 
+def run_case(road: dict, case: str, tmp_path):
+    """Our trace and SSM's log of one case: a stopped car 160 m ahead at 15 m/s, the
+    ego braking toward it (-3 m/s^2 on a straight road, -2 on a curve), or a slower
+    leader 140 m ahead (beyond the lidar's 80 + 25 m, within reach), 10 against 20 m/s."""
+    if case == "slower leader":
+        return run_with_ssm(spec_of(road, 20.0, [], 25.0), 0.0, tmp_path, leader=(140.0, 10.0))
+    braking = -3.0 if road["kind"] == "straight" else -2.0
+    return run_with_ssm(spec_of(road, 15.0, CAR_AT_170, 20.0),
+                        braking if case == "braking toward it" else 0.0, tmp_path)
+
+
 def paired(floats, logged):
     """(our TTC, our DRAC, speed, SSM's TTC, SSM's DRAC) at every step SSM has a TTC."""
     rows = []
@@ -120,13 +131,7 @@ CAR_AT_170 = [{"kind": "car", "lane": 0, "position_m": 170.0}]
 
 @pytest.mark.parametrize("case", ["stopped car", "braking toward it", "slower leader"])
 def test_on_a_straight_road_ttc_and_drac_equal_ssm_to_its_rounding(case, tmp_path):
-    if case == "slower leader":  # 140 m ahead: beyond the lidar's 80 + 25 m, within reach
-        spec = spec_of(STRAIGHT, 20.0, [], 25.0)
-        floats, logged = run_with_ssm(spec, 0.0, tmp_path, leader=(140.0, 10.0))
-    else:
-        spec = spec_of(STRAIGHT, 15.0, CAR_AT_170, 20.0)
-        floats, logged = run_with_ssm(spec, -3.0 if case == "braking toward it" else 0.0,
-                                      tmp_path)
+    floats, logged = run_case(STRAIGHT, case, tmp_path)
     rows = paired(floats, logged)
     assert len(rows) > 70
     for ttc, drac, _, ssm_ttc, ssm_drac in rows:
@@ -148,13 +153,8 @@ def test_on_a_curve_ttc_and_drac_follow_ssm_along_the_lane(radius_m, case, tmp_p
     TTC was inf for 105 of 118 steps), and equals SSM's with its gap carried over to
     the ego's lane."""
     curve = {"kind": "curve", "curve_radius_m": radius_m, "length_m": 700.0}
-    if case == "slower leader":  # SUMO moves it 10 m/s of lane length, as the ego sees
-        spec = spec_of(curve, 20.0, [], 20.0)
-        floats, logged = run_with_ssm(spec, 0.0, tmp_path, leader=(140.0, 10.0))
-    else:
-        spec = spec_of(curve, 15.0, CAR_AT_170, 15.0)
-        floats, logged = run_with_ssm(spec, -2.0 if case == "braking toward it" else 0.0,
-                                      tmp_path)
+    floats, logged = run_case(curve, case, tmp_path)  # SUMO moves the leader along lanes
+    spec = spec_of(curve, 15.0, CAR_AT_170, 20.0)  # k of the ego's lane: the same in every case
     k = lane_scale(spec, make_road(spec))
     half_lengths_m = (EGO_LENGTH_M + OBSTACLE_SIZES_M["car"][0]) / 2
     rows = paired(floats, logged)

@@ -11,6 +11,7 @@
  * segments rows [x0, y0, x1, y1], all in metres and radians.
  */
 #include "../../scenarios/_buffers.h"
+#include "../../scenarios/_polyline.h"
 #include <math.h>
 
 /* maximum/minimum for non-NaN input, the first argument on ties (0.0 against -0.0),
@@ -215,6 +216,55 @@ static double first_contact(const double *a, const double *va, const double *b,
     return t_in > 0.0 ? t_in : 0.0;
 }
 
+/* the conflicts of box a with boxes met one at a time (conflicts below) */
+typedef struct {
+    double own_x, own_y, contact, along, drac, headway;
+} Measures;
+
+static Measures measures_start(const double *a) {
+    Measures m = {0.0, 0.0, INFINITY, INFINITY, 0.0, INFINITY};
+    extents(a, &m.own_x, &m.own_y);
+    return m;
+}
+
+/* box b at velocity vb: its first contact with a, and a's leader measures if b leads */
+static void measure_one(Measures *m, const double *a, const double *va, const double *b,
+                        const double *vb) {
+    m->contact = np_min(m->contact, first_contact(a, va, b, vb));
+    double ext_x, ext_y;
+    extents(b, &ext_x, &ext_y);
+    double ahead = b[0] - a[0];
+    if (!(fabs(b[1] - a[1]) < ext_y + m->own_y && ahead > 0.0)) return;  /* not a leader */
+    double gap = ahead - ext_x - m->own_x, closing = va[0] - vb[0];
+    if (gap > 0.0 && closing > 0.0) {
+        m->along = np_min(m->along, gap / closing);
+        m->drac = np_max(m->drac, closing * closing / (2.0 * gap));
+    }
+    m->headway = np_min(m->headway, gap > 0.0 ? (va[0] > 0.0 ? gap / va[0] : INFINITY) : 0.0);
+}
+
+static inline double measures_ttc(const Measures *m) {
+    return m->contact <= m->along ? m->contact : m->along;
+}
+
+/* the first obstacle and the first traffic box that box a overlaps (-1: none), and
+ * its outline gap to the nearest obstacle (inf: none), returned */
+static double touch(const double *a, const double *obstacles, Py_ssize_t n_o,
+                    const double *traffic, Py_ssize_t n_t, long *hit_obstacle,
+                    long *hit_traffic) {
+    double gap = INFINITY;
+    *hit_obstacle = *hit_traffic = -1;
+    for (Py_ssize_t k = 0; k < n_o; k++) {
+        const double *b = obstacles + 5 * k;
+        int touching = overlaps(a, b);
+        if (touching && *hit_obstacle < 0) *hit_obstacle = (long)k;
+        gap = np_min(gap, touching ? 0.0 : outline_gap(a, b));
+    }
+    for (Py_ssize_t k = 0; k < n_t && *hit_traffic < 0; k++)
+        if (overlaps(a, traffic + 5 * k)) *hit_traffic = (long)k;
+    return gap;
+}
+
 /* contacts(box, obstacles, traffic): what the ego's box meets this step, as (index of
  * the first obstacle it overlaps or -1, the same for the traffic, its outline gap to
  * the nearest obstacle or inf). Overlaps are boxes_overlap and gaps box_gap_m of
@@ -233,16 +283,8 @@ static PyObject *contacts(PyObject *self, PyObject *args) {
         goto fail_t;
     }
     const double *a = av.buf, *obstacles = ov.buf, *traffic = tv.buf;
-    long hit_obstacle = -1, hit_traffic = -1;
-    double gap = INFINITY;
-    for (Py_ssize_t k = 0; k < n_o; k++) {
-        const double *b = obstacles + 5 * k;
-        int touching = overlaps(a, b);
-        if (touching && hit_obstacle < 0) hit_obstacle = (long)k;
-        gap = np_min(gap, touching ? 0.0 : outline_gap(a, b));
-    }
-    for (Py_ssize_t k = 0; k < n_t && hit_traffic < 0; k++)
-        if (overlaps(a, traffic + 5 * k)) hit_traffic = (long)k;
+    long hit_obstacle, hit_traffic;
+    double gap = touch(a, obstacles, n_o, traffic, n_t, &hit_obstacle, &hit_traffic);
     result = Py_BuildValue("lld", hit_obstacle, hit_traffic, gap);
 fail_t:
     PyBuffer_Release(&tv);
@@ -273,23 +315,9 @@ static PyObject *conflicts(PyObject *self, PyObject *args) {
         goto fail_vb;
     }
     const double *a = av.buf, *va = vav.buf, *boxes = bv.buf, *velocities = vbv.buf;
-    double own_x, own_y, contact = INFINITY, along = INFINITY, drac = 0.0, headway = INFINITY;
-    extents(a, &own_x, &own_y);
-    for (Py_ssize_t k = 0; k < n_b; k++) {
-        const double *b = boxes + 5 * k, *vb = velocities + 2 * k;
-        contact = np_min(contact, first_contact(a, va, b, vb));
-        double ext_x, ext_y;
-        extents(b, &ext_x, &ext_y);
-        double ahead = b[0] - a[0];
-        if (!(fabs(b[1] - a[1]) < ext_y + own_y && ahead > 0.0)) continue;  /* not a leader */
-        double gap = ahead - ext_x - own_x, closing = va[0] - vb[0];
-        if (gap > 0.0 && closing > 0.0) {
-            along = np_min(along, gap / closing);
-            drac = np_max(drac, closing * closing / (2.0 * gap));
-        }
-        headway = np_min(headway, gap > 0.0 ? (va[0] > 0.0 ? gap / va[0] : INFINITY) : 0.0);
-    }
-    result = Py_BuildValue("ddd", contact <= along ? contact : along, drac, headway);
+    Measures m = measures_start(a);
+    for (Py_ssize_t k = 0; k < n_b; k++) measure_one(&m, a, va, boxes + 5 * k, velocities + 2 * k);
+    result = Py_BuildValue("ddd", measures_ttc(&m), m.drac, m.headway);
 fail_vb:
     PyBuffer_Release(&vbv);
 fail_b:
@@ -301,10 +329,91 @@ fail_a:
     return result;
 }
 
+/* a box's world velocity moving at speed along its heading (velocities_mps of
+ * sdc/car/road_frame.py) */
+static inline void heading_velocity(const double *b, double speed, double *v) {
+    v[0] = speed * cos(b[2]);
+    v[1] = speed * sin(b[2]);
+}
+
+/* step(box, speed, obstacles, traffic, traffic_speeds, starts, directions, lengths,
+ * start_s, headings, curvature, lane_scale): a step's contacts and conflicts in one
+ * pass, as (first obstacle overlapped or -1, first vehicle or -1, obstacle gap, time
+ * to collision, DRAC, headway): contacts above, then conflicts of the boxes placed
+ * in the road frame of the ego's lane (place of scenarios/_road_kernels.c), 0 on
+ * contact, and the world frame's first contact where the unrolled boxes touch but
+ * the world's do not (RoadFrame.conflicts of sdc/car/road_frame.py) */
+static PyObject *step(PyObject *self, PyObject *args) {
+    PyObject *a_obj, *o_obj, *t_obj, *v_obj, *line_objs[4], *h_obj;
+    double speed, curvature, lane_scale;
+    if (!PyArg_ParseTuple(args, "OdOOOOOOOOdd", &a_obj, &speed, &o_obj, &t_obj, &v_obj,
+                          &line_objs[0], &line_objs[1], &line_objs[2], &line_objs[3], &h_obj,
+                          &curvature, &lane_scale))
+        return NULL;
+    static const char *names[5] = {"box", "obstacles", "traffic", "traffic_speeds", "headings"};
+    static const Py_ssize_t rows[5] = {5, 5, 5, 1, 1};
+    PyObject *objs[5] = {a_obj, o_obj, t_obj, v_obj, h_obj};
+    Py_buffer views[5], line_views[4];
+    Py_ssize_t counts[5];
+    Polyline line;
+    PyObject *result = NULL;
+    int got = 0;
+    for (; got < 5; got++)
+        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+            goto done;
+    if (get_polyline(line_objs, line_views, &line) < 0) goto done;
+    if (counts[0] != 1 || counts[3] != counts[2] || counts[4] != line.count) {
+        PyErr_SetString(PyExc_ValueError, "one box, a speed per traffic box, a heading per "
+                                          "segment");
+        goto release_line;
+    }
+    const double *a = views[0].buf, *obstacles = views[1].buf, *traffic = views[2].buf;
+    const double *speeds = views[3].buf, *headings = views[4].buf;
+    Py_ssize_t n_o = counts[1], n_t = counts[2];
+    long hit_obstacle, hit_traffic;
+    double gap = touch(a, obstacles, n_o, traffic, n_t, &hit_obstacle, &hit_traffic);
+    double ttc = INFINITY, drac = 0.0, headway = INFINITY;
+    if (n_o + n_t > 0) {
+        double a_rf[5], va_rf[2], b_rf[5], vb_rf[2];
+        road_frame_place(&line, headings, curvature, lane_scale, a, speed, a_rf, va_rf);
+        Measures m = measures_start(a_rf);
+        for (Py_ssize_t k = 0; k < n_o + n_t; k++) {
+            int obstacle = k < n_o;
+            const double *b = obstacle ? obstacles + 5 * k : traffic + 5 * (k - n_o);
+            road_frame_place(&line, headings, curvature, lane_scale, b,
+                             obstacle ? 0.0 : speeds[k - n_o], b_rf, vb_rf);
+            measure_one(&m, a_rf, va_rf, b_rf, vb_rf);
+        }
+        ttc = measures_ttc(&m);
+        drac = m.drac;
+        headway = m.headway;
+        if (hit_obstacle >= 0 || hit_traffic >= 0) {
+            ttc = 0.0;
+        } else if (ttc == 0.0) { /* unrolled they touch, in the world they do not */
+            double va[2], vb[2];
+            heading_velocity(a, speed, va);
+            ttc = INFINITY;
+            for (Py_ssize_t k = 0; k < n_o + n_t; k++) {
+                int obstacle = k < n_o;
+                const double *b = obstacle ? obstacles + 5 * k : traffic + 5 * (k - n_o);
+                heading_velocity(b, obstacle ? 0.0 : speeds[k - n_o], vb);
+                ttc = np_min(ttc, first_contact(a, va, b, vb));
+            }
+        }
+    }
+    result = Py_BuildValue("lldddd", hit_obstacle, hit_traffic, gap, ttc, drac, headway);
+release_line:
+    for (int i = 3; i >= 0; i--) PyBuffer_Release(&line_views[i]);
+done:
+    while (got-- > 0) PyBuffer_Release(&views[got]);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
     {"contacts", contacts, METH_VARARGS, "Overlaps and obstacle gap."},
     {"conflicts", conflicts, METH_VARARGS, "Time to collision, DRAC and time headway."},
+    {"step", step, METH_VARARGS, "A step's contacts and conflicts along the road."},
     {NULL, NULL, 0, NULL},
 };
 

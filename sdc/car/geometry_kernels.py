@@ -7,7 +7,9 @@ of :mod:`sdc.car.geometry`: the lidar scan is :func:`~sdc.car.geometry.ray_box_r
 and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; the contacts are
 :func:`~sdc.car.geometry.boxes_overlap` and :func:`~sdc.car.geometry.box_gap_m`; the
 conflicts :func:`~sdc.car.geometry.first_contact_s` and
-:func:`~sdc.car.geometry.leader_measures`. Both paths agree bit for bit
+:func:`~sdc.car.geometry.leader_measures`; a step's contacts and conflicts along the
+road (:func:`step`) those, with the bodies placed by ``place_numpy`` of
+:mod:`scenarios.road_kernels`. Both paths agree bit for bit
 (``tests/test_kernels.py``); the compiled one avoids numpy's per-call cost, which
 dominates a step's few small arrays.
 """
@@ -19,6 +21,8 @@ from typing import NamedTuple
 import numpy as np
 
 from scenarios.compiled_kernels import COMPILED, NUMPY, compiled_extension
+from scenarios.road_geometry import RoadGeometry
+from scenarios.road_kernels import place_numpy
 from scenarios.snapshot import NO_BOXES
 from sdc.car.geometry import (
     box_gap_m,
@@ -61,12 +65,47 @@ def conflicts_numpy(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray
     return (contact_s if contact_s <= along_s else along_s), drac, headway
 
 
+def velocities_mps(boxes: np.ndarray, speeds_mps: np.ndarray) -> np.ndarray:
+    """(N, 2) world velocities of boxes moving along their headings [m/s]."""
+    return np.column_stack([speeds_mps * np.cos(boxes[:, 2]), speeds_mps * np.sin(boxes[:, 2])])
+
+
+def step_numpy(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
+               traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray, *polyline_and_frame
+               ) -> tuple[int, int, float, float, float, float]:
+    """The fields of :class:`Contacts` and :class:`Conflicts` of a step (:func:`step`),
+    one numpy question at a time: the contacts, the bodies placed in the road frame
+    (``place_numpy`` of :mod:`scenarios.road_kernels`), their conflicts, 0 on contact
+    and the world frame's first contact where the unrolled boxes touch but the
+    world's do not. ``polyline_and_frame``: the road's polyline (starts, directions,
+    lengths, start_s, headings), its curvature and the ego lane's scale."""
+    touching = contacts_numpy(box, obstacle_boxes, traffic_boxes)
+    n = 1 + len(obstacle_boxes) + len(traffic_boxes)
+    if n == 1:
+        return (*touching, np.inf, 0.0, np.inf)
+    placed, velocity = np.empty((n, 5)), np.empty((n, 2))
+    place_numpy(box, speed_mps, obstacle_boxes, traffic_boxes, traffic_speeds_mps,
+                *polyline_and_frame, placed, velocity)
+    ttc_s, drac, headway = conflicts_numpy(placed[0], velocity[0], placed[1:], velocity[1:])
+    if touching[0] >= 0 or touching[1] >= 0:
+        ttc_s = 0.0
+    elif ttc_s == 0.0:  # unrolled they touch, in the world they do not
+        boxes = np.vstack([obstacle_boxes, traffic_boxes])
+        speeds = np.concatenate([np.zeros(len(obstacle_boxes)), traffic_speeds_mps])
+        world = velocities_mps(np.vstack([box[None, :], boxes]),
+                               np.concatenate([[speed_mps], speeds]))
+        ttc_s = float(np.min(first_contact_s(box, world[0], boxes, world[1:]),
+                             initial=np.inf))
+    return (*touching, ttc_s, drac, headway)
+
+
 _compiled = compiled_extension("sdc.car._geometry_kernels")
 #: which kernels run: "compiled" or "numpy"
 KERNELS = NUMPY if _compiled is None else COMPILED
 _scan = scan_numpy if _compiled is None else _compiled.scan
 _contacts = contacts_numpy if _compiled is None else _compiled.contacts
 _conflicts = conflicts_numpy if _compiled is None else _compiled.conflicts
+_step = step_numpy if _compiled is None else _compiled.step
 
 
 def _dense(array: np.ndarray) -> np.ndarray:
@@ -118,3 +157,15 @@ def conflicts(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
     ego's lane while the ego weaves in it); DRAC and headway are the leader measures."""
     return Conflicts(*_conflicts(_dense(box), _dense(velocity_mps), _dense(boxes),
                                  _dense(velocities_mps)))
+
+
+def step(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
+         traffic_boxes: np.ndarray, traffic_speeds_mps: np.ndarray, road: RoadGeometry,
+         lane_scale: float) -> tuple[Contacts, Conflicts]:
+    """The ego's :class:`Contacts` and its :class:`Conflicts` measured along the road,
+    in one pass (``sdc.car.road_frame`` says how): the obstacles stand still, the
+    traffic moves at its speeds along its headings; ``lane_scale`` is the ego lane's
+    length per metre of the road's centre line."""
+    found = _step(_dense(box), speed_mps, _dense(obstacle_boxes), _dense(traffic_boxes),
+                  _dense(traffic_speeds_mps), *road.polyline, road.curvature_1pm, lane_scale)
+    return Contacts(*found[:3]), Conflicts(*found[3:])

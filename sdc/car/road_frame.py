@@ -20,7 +20,8 @@ On a straight road the frame is the world's, turned.
 Contact is the world's: the time to collision is 0 exactly when the ego's body
 overlaps another (``Contacts``). Where the unrolled boxes touch but the world's
 do not (on a curve, rigid boxes unrolled differ by millimetres to centimetres)
-the world frame's exact first contact is taken instead.
+the world frame's exact first contact is taken instead. One compiled call a step
+does all of it (:func:`~sdc.car.geometry_kernels.step`).
 """
 
 from __future__ import annotations
@@ -28,41 +29,20 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.road_geometry import RoadGeometry
-from sdc.car.geometry_kernels import Conflicts, Contacts, conflicts
-
-
-def velocities_mps(boxes: np.ndarray, speeds_mps: np.ndarray) -> np.ndarray:
-    """(N, 2) world velocities of boxes moving along their headings [m/s]."""
-    return np.column_stack([speeds_mps * np.cos(boxes[:, 2]), speeds_mps * np.sin(boxes[:, 2])])
+from scenarios.snapshot import Snapshot
+from sdc.car.geometry_kernels import Conflicts, Contacts, step
 
 
 class RoadFrame:
-    """Measures the ego's conflicts in the road frame of its lane (the module's docstring)."""
+    """Measures the ego's contacts and conflicts in the road frame of its lane."""
 
     def __init__(self, road: RoadGeometry, lane_d_m: float):
         self.road = road
         self.lane_scale = 1 - road.curvature_1pm * lane_d_m  # ego lane m per centre-line m
 
-    def conflicts(self, ego_box: np.ndarray, ego_speed_mps: float, contacts: Contacts,
-                  obstacle_boxes: np.ndarray, traffic_boxes: np.ndarray,
-                  traffic_speeds_mps: np.ndarray) -> Conflicts:
-        """The ego's :class:`~sdc.car.geometry_kernels.Conflicts` with the obstacles
-        (standing still) and the traffic (at its speeds along its headings)."""
-        if len(obstacle_boxes) + len(traffic_boxes) == 0:
-            return NO_CONFLICTS
-        placed, velocity = self.road.place_in_road_frame(
-            ego_box, ego_speed_mps, obstacle_boxes, traffic_boxes, traffic_speeds_mps,
-            self.lane_scale)
-        measured = conflicts(placed[0], velocity[0], placed[1:], velocity[1:])
-        if contacts.obstacle >= 0 or contacts.vehicle >= 0:
-            return measured._replace(ttc_s=0.0)
-        if measured.ttc_s == 0.0:  # unrolled they touch, in the world they do not
-            boxes = np.vstack([obstacle_boxes, traffic_boxes])
-            speeds = np.concatenate([np.zeros(len(obstacle_boxes)), traffic_speeds_mps])
-            ego_velocity = velocities_mps(ego_box[None, :], np.array([ego_speed_mps]))[0]
-            exact = conflicts(ego_box, ego_velocity, boxes, velocities_mps(boxes, speeds))
-            return measured._replace(ttc_s=exact.ttc_s)
-        return measured
-
-
-NO_CONFLICTS = Conflicts(np.inf, 0.0, np.inf)
+    def measure(self, ego_box: np.ndarray, ego_speed_mps: float,
+                snapshot: Snapshot) -> tuple[Contacts, Conflicts]:
+        """What the ego's box touches, and its conflicts with the obstacles (standing
+        still) and the traffic (at its speeds along its headings)."""
+        return step(ego_box, ego_speed_mps, snapshot.obstacle_boxes, snapshot.traffic_boxes,
+                    snapshot.traffic_speeds_mps, self.road, self.lane_scale)

@@ -26,7 +26,6 @@ from scenarios.world_backends import make_road, make_world
 from sdc.car.collision import collision_with
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
-from sdc.car.geometry_kernels import contacts
 from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
@@ -108,10 +107,8 @@ class Simulation:
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
         self.ranges.flags.writeable = False  # a controller sees what the trace records
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
-        self.contacts = contacts(self.box, snapshot.obstacle_boxes, snapshot.traffic_boxes)
-        self.conflicts = self.road_frame.conflicts(
-            self.box, state.speed_mps, self.contacts, snapshot.obstacle_boxes,
-            snapshot.traffic_boxes, snapshot.traffic_speeds_mps)
+        self.contacts, self.conflicts = self.road_frame.measure(self.box, state.speed_mps,
+                                                                snapshot)
 
     def observation(self) -> Observation:
         """What the controller sees at the current step."""
