@@ -1,8 +1,7 @@
 /*
  * A polyline road for the compiled kernels (scenarios/_road_kernels.c and
- * sdc/car/_geometry_kernels.c): the Frenet projection on its segments and the
- * placement of a body in the road frame of a lane, as the numpy twins in
- * scenarios/road_kernels.py compute them (same formulas, same order).
+ * sdc/car/_geometry_kernels.c): the Frenet projection on its segments, as the
+ * numpy twins in scenarios/road_kernels.py compute it (same formulas, same order).
  */
 #ifndef SDC_POLYLINE_H
 #define SDC_POLYLINE_H
@@ -66,26 +65,6 @@ static int get_polyline(PyObject *const objs[4], Py_buffer views[4], Polyline *l
 fail:
     while (got-- > 0) PyBuffer_Release(&views[got]);
     return -1;
-}
-
-/* one body in the road frame of a lane lane_scale times as long as the polyline
- * (RoadGeometry.place_in_road_frame): [x along the lane, d, yaw relative to the
- * road, length, width] and [velocity along, velocity across] */
-static void road_frame_place(const Polyline *line, const double *headings, double curvature,
-                      double lane_scale, const double *b, double speed, double *out,
-                      double *vel) {
-    double s_m, d_m;
-    Py_ssize_t seg = project(line, b[0], b[1], &s_m, &d_m);
-    double yaw = b[2] - headings[seg];
-    double along = speed * cos(yaw);
-    if (curvature != 0.0) along = along * (lane_scale / (1.0 - curvature * d_m));
-    out[0] = s_m * lane_scale;
-    out[1] = d_m;
-    out[2] = yaw;
-    out[3] = b[3];
-    out[4] = b[4];
-    vel[0] = along;
-    vel[1] = speed * sin(yaw);
 }
 
 #endif

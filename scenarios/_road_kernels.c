@@ -1,7 +1,7 @@
 /*
  * The world's per-step questions, compiled: where points are in road
- * coordinates (the Frenet projection on a polyline), where bodies are in the road
- * frame of a lane, and the read of SUMO's traffic around the ego. In Python each cost more than the step's geometry:
+ * coordinates (the Frenet projection on a polyline), and the read of SUMO's
+ * traffic around the ego. In Python each cost more than the step's geometry:
  * a step asks a few points of a polyline of up to hundreds of segments, and
  * libsumo hands a context subscription's results over as a dict of dicts.
  *
@@ -93,57 +93,6 @@ static PyObject *locate(PyObject *self, PyObject *args) {
     return Py_BuildValue("dd", s_m, d_m);
 }
 
-/* place(ego, ego_speed, obstacles, traffic, traffic_speeds, starts, directions,
- * lengths, start_s, headings, curvature, lane_scale, out_boxes, out_velocities):
- * the ego, the obstacles (standing still) and the traffic (moving at its speeds along
- * its headings), in that order, in the road frame of a lane lane_scale times as long
- * as the polyline (RoadGeometry.place_in_road_frame) */
-static PyObject *place(PyObject *self, PyObject *args) {
-    PyObject *e_obj, *o_obj, *t_obj, *v_obj, *line_objs[4], *h_obj, *ob_obj, *ov_obj;
-    double ego_speed, curvature, lane_scale;
-    if (!PyArg_ParseTuple(args, "OdOOOOOOOOddOO", &e_obj, &ego_speed, &o_obj, &t_obj, &v_obj,
-                          &line_objs[0], &line_objs[1], &line_objs[2], &line_objs[3], &h_obj,
-                          &curvature, &lane_scale, &ob_obj, &ov_obj))
-        return NULL;
-    static const char *names[7] = {"ego", "obstacles", "traffic", "traffic_speeds", "headings",
-                                   "out_boxes", "out_velocities"};
-    static const Py_ssize_t rows[7] = {5, 5, 5, 1, 1, 5, 2};
-    PyObject *objs[7] = {e_obj, o_obj, t_obj, v_obj, h_obj, ob_obj, ov_obj};
-    Py_buffer views[7], line_views[4];
-    Py_ssize_t counts[7];
-    Polyline line;
-    PyObject *result = NULL;
-    int got = 0;
-    for (; got < 7; got++)
-        if (get_doubles(objs[got], &views[got], got >= 5, rows[got], &counts[got], names[got]) < 0)
-            goto done;
-    if (get_polyline(line_objs, line_views, &line) < 0) goto done;
-    Py_ssize_t n_o = counts[1], n_t = counts[2], n = 1 + n_o + n_t;
-    if (counts[0] != 1 || counts[3] != n_t || counts[4] != line.count || counts[5] != n
-        || counts[6] != n) {
-        PyErr_SetString(PyExc_ValueError, "one ego, a speed per traffic box, a heading per "
-                                          "segment, and a row out for every box");
-        goto release_line;
-    }
-    const double *headings = views[4].buf, *speeds = views[3].buf;
-    double *out = views[5].buf, *vel = views[6].buf;
-    const double *obstacles = views[1].buf, *traffic = views[2].buf;
-    road_frame_place(&line, headings, curvature, lane_scale, views[0].buf, ego_speed, out, vel);
-    for (Py_ssize_t k = 0; k < n_o; k++)
-        road_frame_place(&line, headings, curvature, lane_scale, obstacles + 5 * k, 0.0,
-                         out + 5 * (1 + k), vel + 2 * (1 + k));
-    for (Py_ssize_t k = 0; k < n_t; k++)
-        road_frame_place(&line, headings, curvature, lane_scale, traffic + 5 * k, speeds[k],
-                         out + 5 * (1 + n_o + k), vel + 2 * (1 + n_o + k));
-    result = Py_None;
-    Py_INCREF(result);
-release_line:
-    for (int i = 3; i >= 0; i--) PyBuffer_Release(&line_views[i]);
-done:
-    while (got-- > 0) PyBuffer_Release(&views[got]);
-    return result;
-}
-
 static int read_double(PyObject *values, PyObject *key, double *out) {
     PyObject *value = PyDict_GetItemWithError(values, key);
     if (value == NULL) {
@@ -224,7 +173,6 @@ static PyMethodDef methods[] = {
     {"frenet", frenet, METH_VARARGS, "Road coordinates of points on a polyline."},
     {"locate", locate, METH_VARARGS, "Road coordinates of one point on a polyline."},
     {"traffic", traffic, METH_VARARGS, "Traffic boxes and speeds from context results."},
-    {"place", place, METH_VARARGS, "Boxes and velocities in the road frame of a lane."},
     {NULL, NULL, 0, NULL},
 };
 

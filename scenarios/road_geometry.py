@@ -107,25 +107,6 @@ class RoadGeometry:
         return (self._seg_start_xy, self._seg_dir, self._seg_len_m, self._seg_start_s_m,
                 self._seg_heading_rad)
 
-    def place_in_road_frame(self, ego: np.ndarray, ego_speed_mps: float, obstacles: np.ndarray,
-                            traffic: np.ndarray, traffic_speeds_mps: np.ndarray,
-                            lane_scale: float) -> tuple[np.ndarray, np.ndarray]:
-        """The ego's box, the obstacles' (standing still) and the traffic's (moving at
-        its speeds along its headings), in that order, as boxes ``(1 + K + N, 5)`` and
-        velocities ``(1 + K + N, 2)`` [m, rad, m/s] in the road frame of a lane
-        ``lane_scale`` times as long as the centre line: x is ``s * lane_scale``, y
-        the offset ``d``, the yaw relative to the road's heading (of the segment each
-        centre projects on); the velocity along is scaled by ``lane_scale / (1 -
-        curvature_1pm * d)`` on a curve (a body moving along its own lane at offset
-        ``d`` covers that much of the lane's length per metre)."""
-        n = 1 + len(obstacles) + len(traffic)
-        out_boxes, out_velocities = np.empty((n, 5)), np.empty((n, 2))
-        dense = [np.ascontiguousarray(a, np.float64)
-                 for a in (ego, obstacles, traffic, traffic_speeds_mps)]
-        road_kernels.place(dense[0], ego_speed_mps, *dense[1:], *self.polyline,
-                           self.curvature_1pm, lane_scale, out_boxes, out_velocities)
-        return out_boxes, out_velocities
-
     def heading_at(self, s_m) -> np.ndarray:
         """Heading of the centre line at ``s_m`` [rad, CCW from +x]."""
         return self._seg_heading_rad[self._segment_at(np.asarray(s_m, dtype=float))]

@@ -5,8 +5,9 @@ was built, else their numpy twins below, chosen once at import
 - :func:`frenet`: road coordinates ``(s, d)`` of points on a polyline and their
   distance to the nearer road edge (:meth:`scenarios.road_geometry.RoadGeometry.to_frenet`);
 - :func:`locate`: the same of one point, in plain floats;
-- :func:`place`: boxes and their velocities in the road frame of a lane
-  (:meth:`scenarios.road_geometry.RoadGeometry.place_in_road_frame`);
+- :func:`place_numpy`: boxes and their velocities in the road frame of a lane, in
+  numpy only: the compiled placement is part of the car's step
+  (``sdc.car.geometry_kernels.step``, through ``scenarios/_polyline.h``);
 - :func:`traffic`: SUMO's context subscription results as traffic boxes and speeds
   (:meth:`scenarios.sumo_world.SumoWorld._traffic`).
 
@@ -124,4 +125,3 @@ KERNELS = NUMPY if _compiled is None else COMPILED
 frenet = frenet_numpy if _compiled is None else _compiled.frenet
 locate = locate_numpy if _compiled is None else _compiled.locate
 traffic = traffic_numpy if _compiled is None else _compiled.traffic
-place = place_numpy if _compiled is None else _compiled.place

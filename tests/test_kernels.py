@@ -8,7 +8,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
+from test_road import polyline_st
 
+from scenarios.road_geometry import RoadGeometry
+from scenarios.road_kernels import place_numpy
+from scenarios.scenario_spec import RoadSpec
 from sdc.car import geometry_kernels as kernels
 
 try:
@@ -100,48 +104,46 @@ def test_no_boxes_and_no_segments_see_nothing():
     ranges = kernels.lidar_ranges_m(np.zeros(2), 0.0, np.linspace(-1, 1, 5), np.zeros((0, 5)),
                                     np.zeros((0, 4)), 80.0)
     assert np.isinf(ranges).all() and ranges.shape == (5,)
-    assert kernels.contacts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), np.zeros((0, 5)),
-                            np.zeros((0, 5))) == (-1, -1, np.inf)
-    assert kernels.conflicts(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), np.array([5.0, 0.0]),
-                             np.zeros((0, 5)), np.zeros((0, 2))) == (np.inf, 0.0, np.inf)
+    assert kernels.step(np.array([0.0, 0.0, 0.0, 4.0, 2.0]), 5.0, np.zeros((0, 5)),
+                        np.zeros((0, 5)), np.zeros(0), STRAIGHT, 1.0) == (
+        (-1, -1, np.inf), (np.inf, 0.0, np.inf))
 
 
-def both_contacts(ego, obstacles, traffic):
-    """The contacts of the numpy twin and of the compiled code, the same arguments to both."""
-    args = [np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic)]
-    return [contacts(*args) for contacts in (kernels.contacts_numpy, compiled.contacts)]
-
-
-def both_conflicts(ego, velocity, boxes, velocities):
-    """The conflicts of the numpy twin and of the compiled code."""
-    args = [np.ascontiguousarray(a, float) for a in (ego, velocity, boxes, velocities)]
-    return [conflicts(*args) for conflicts in (kernels.conflicts_numpy, compiled.conflicts)]
-
-
-velocity_st = st.tuples(st.floats(-40.0, 40.0), st.floats(-40.0, 40.0))
+#: a straight road along +x through the origin: its road frame is the world's
+STRAIGHT = RoadGeometry(np.array([[-500.0, 0.0], [500.0, 0.0]]), 3, 3.5)
 
 
 @needs_compiled
 @PROPS
-@given(ego=box_st, obstacles=st.lists(box_st, max_size=4), traffic=st.lists(box_st, max_size=6))
-def test_the_numpy_contacts_equal_the_compiled_ones(ego, obstacles, traffic):
-    """First overlaps (boxes_overlap) and obstacle gap (box_gap_m) of the numpy twin
-    equal the compiled answers bit for bit."""
+@given(ego=box_st, speed=st.floats(0.0, 40.0), obstacles=st.lists(box_st, max_size=4),
+       traffic=st.lists(box_st, max_size=6),
+       speeds=st.lists(st.floats(0.0, 40.0), min_size=6, max_size=6))
+def test_the_numpy_step_equals_the_compiled_one_anywhere(ego, speed, obstacles, traffic,
+                                                         speeds):
+    """Boxes anywhere at any heading: first overlaps (boxes_overlap), obstacle gap
+    (box_gap_m), time to collision (first_contact_s), DRAC and headway
+    (leader_measures) of the numpy twin equal the compiled answers bit for bit."""
     obstacles, traffic = (np.array(b, float).reshape(-1, 5) for b in (obstacles, traffic))
-    twin, fast = both_contacts(np.array(ego), obstacles, traffic)
+    twin, fast = both_steps(np.array(ego), speed, obstacles, traffic,
+                            np.array(speeds[: len(traffic)]), STRAIGHT, 1.0)
     assert same_bits(twin, fast)
 
 
 @needs_compiled
 @PROPS
-@given(ego=box_st, velocity=velocity_st, boxes=st.lists(box_st, max_size=6),
-       velocities=st.lists(velocity_st, min_size=6, max_size=6))
-def test_the_numpy_conflicts_equal_the_compiled_ones(ego, velocity, boxes, velocities):
-    """Time to collision (first_contact_s), DRAC and headway (leader_measures) of the
-    numpy twin equal the compiled answers bit for bit."""
-    boxes = np.array(boxes, float).reshape(-1, 5)
-    twin, fast = both_conflicts(np.array(ego), np.array(velocity), boxes,
-                                np.array(velocities[: len(boxes)]).reshape(-1, 2))
+@given(line=polyline_st, crowd=st.lists(box_st, min_size=2, max_size=7),
+       speeds=st.lists(st.floats(0.0, 40.0), min_size=7, max_size=7),
+       curvature=st.sampled_from([0.0, 1 / 150, -1 / 60]), lane_scale=st.floats(0.9, 1.1))
+def test_the_numpy_step_equals_the_compiled_one_on_any_polyline(line, crowd, speeds, curvature,
+                                                                lane_scale):
+    """Any polyline road, bodies anywhere placed in its road frame (segment ends and
+    the extended first and last segments included): the numpy twin and the compiled
+    step agree bit for bit."""
+    crowd = np.array(crowd, float)
+    crowd[:, :2] = line[0] + (crowd[:, :2] - crowd[0, :2]) * 0.3  # near the road and the ego
+    road = RoadGeometry(line, 2, 3.5, curvature)
+    twin, fast = both_steps(crowd[0], speeds[0], crowd[1:2], crowd[2:],
+                            np.array(speeds[2: len(crowd)]), road, lane_scale)
     assert same_bits(twin, fast)
 
 
@@ -151,34 +153,40 @@ def test_the_numpy_kernels_on_near_misses_overlaps_and_leaders():
     ego = np.array([0.0, 0.0, 0.3, 4.85, 1.93])
     others = np.column_stack([rng.uniform(-8, 8, (500, 2)), rng.uniform(-3, 3, 500),
                               rng.uniform(0.5, 6, 500), rng.uniform(0.5, 2.5, 500)])
-    velocities = rng.uniform(-20, 20, (500, 2))
+    speeds = rng.uniform(0, 20, 500)
     met = {"overlap": 0, "gap": 0, "ttc": 0, "drac": 0, "headway": 0}
     for k in range(0, 500, 5):
-        twin, fast = both_contacts(ego, others[k: k + 2], others[k + 2: k + 5])
+        twin, fast = both_steps(ego, 6.0, others[k: k + 2], others[k + 2: k + 5],
+                                speeds[k + 2: k + 5], STRAIGHT, 1.0)
         assert same_bits(twin, fast)
         met["overlap" if twin[2] == 0 else "gap"] += 1
-        twin, fast = both_conflicts(ego, np.array([6.0, 0.5]), others[k: k + 5],
-                                    velocities[k: k + 5])
-        assert same_bits(twin, fast)
-        met["ttc"] += 0 < twin[0] < np.inf
-        met["drac"] += twin[1] > 0
-        met["headway"] += 0 < twin[2] < np.inf
+        met["ttc"] += 0 < twin[3] < np.inf
+        met["drac"] += twin[4] > 0
+        met["headway"] += 0 < twin[5] < np.inf
     assert min(met.values()) > 10  # each kind was met
 
 
 @needs_compiled
 def test_a_wrong_array_is_refused_with_its_name():
+    polyline = STRAIGHT.polyline
     with pytest.raises(TypeError, match="traffic"):
-        compiled.contacts(np.zeros(5), np.zeros((0, 5)), np.zeros(4, np.float32))
-    with pytest.raises(TypeError, match="velocities"):
-        compiled.conflicts(np.zeros(5), np.zeros(2), np.zeros((1, 5)), np.zeros(3))
+        compiled.step(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros(4, np.float32), np.zeros(0),
+                      *polyline, 0.0, 1.0)
+    with pytest.raises(TypeError, match="headings"):
+        compiled.step(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros((0, 5)), np.zeros(0),
+                      *polyline[:4], polyline[4].astype(np.float32), 0.0, 1.0)
+    with pytest.raises(ValueError, match="a speed per traffic box"):
+        compiled.step(np.zeros(5), 0.0, np.zeros((0, 5)), np.zeros((1, 5)), np.zeros(2),
+                      *polyline, 0.0, 1.0)
 
 
 def both_steps(ego, speed, obstacles, traffic, speeds, road, lane_scale):
-    """A step's contacts and conflicts from the numpy twin and the compiled code."""
+    """A step's contacts and conflicts from the numpy twin and the compiled code, the
+    same arguments to both."""
     args = [np.ascontiguousarray(a, float) for a in (ego, obstacles, traffic, speeds)]
     extra = (*road.polyline, road.curvature_1pm, lane_scale)
-    return [s(args[0], speed, *args[1:], *extra) for s in (kernels.step_numpy, compiled.step)]
+    return [s(args[0], float(speed), *args[1:], *extra)
+            for s in (kernels.step_numpy, compiled.step)]
 
 
 @needs_compiled
@@ -187,10 +195,7 @@ def test_the_numpy_step_equals_the_compiled_one(radius_m):
     """Crowds of boxes around the ego on a straight road and on curves, many of them
     touching or bumper to bumper (where the world frame's first contact stands in):
     the fused compiled step and its numpy composition agree bit for bit, and equal
-    the contacts and conflicts kernels they are made of."""
-    from scenarios.road_geometry import RoadGeometry
-    from scenarios.scenario_spec import RoadSpec
-
+    the contacts, placement and conflicts they are made of."""
     spec = (RoadSpec(kind="straight", length_m=400.0, lanes=3) if radius_m is None else
             RoadSpec(kind="curve", curve_radius_m=radius_m, length_m=400.0, lanes=3))
     road = RoadGeometry.from_spec(spec)
@@ -210,8 +215,9 @@ def test_the_numpy_step_equals_the_compiled_one(radius_m):
                                 road, lane_scale)
         assert same_bits(twin, fast)
         assert twin[:3] == kernels.contacts_numpy(boxes[0], boxes[1:3], boxes[3:])
-        placed, velocity = road.place_in_road_frame(boxes[0], float(speeds[0]), boxes[1:3],
-                                                    boxes[3:], speeds[3:], lane_scale)
+        placed, velocity = np.empty((7, 5)), np.empty((7, 2))
+        place_numpy(boxes[0], float(speeds[0]), boxes[1:3], boxes[3:], speeds[3:],
+                    *road.polyline, road.curvature_1pm, lane_scale, placed, velocity)
         along = kernels.conflicts_numpy(placed[0], velocity[0], placed[1:], velocity[1:])
         touching = twin[0] >= 0 or twin[1] >= 0
         met["touching"] += touching

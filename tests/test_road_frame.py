@@ -11,7 +11,7 @@ import pytest
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec
 from scenarios.snapshot import NO_BOXES, Snapshot
-from sdc.car.geometry_kernels import contacts
+from sdc.car.geometry_kernels import contacts_numpy
 from sdc.car.road_frame import RoadFrame
 
 CAR = (4.5, 1.8)
@@ -80,7 +80,7 @@ def test_zero_exactly_when_the_bodies_touch(radius_m):
     seen = set()
     for apart_m in np.linspace(-0.05, 0.15, 41):
         other = body(road, 50.0 + ((EGO[0] + CAR[0]) / 2 + apart_m) / k, d_m)
-        overlap = contacts(ego, np.zeros((0, 5)), other[None]).vehicle >= 0
+        overlap = contacts_numpy(ego, np.zeros((0, 5)), other[None])[1] >= 0
         ttc_s = measure(road, d_m, ego, 5.0, [other], [0.0]).ttc_s
         assert (ttc_s == 0.0) == overlap
         assert ttc_s <= 0.15 / 5.0 + 1e-9  # 15 cm at 5 m/s and less

@@ -1,8 +1,8 @@
 /*
- * Compiled kernels for the per-step hot path: the lidar scan, the ego's contacts
- * (overlaps, gap to the obstacles) and its conflicts (time to collision, DRAC,
- * headway). Each is the exact counterpart of numpy functions in sdc/car/geometry.py (same formulas, same order
- * of operations, no fused multiply-adds): their composition in
+ * Compiled kernels for the per-step hot path: the lidar scan, and a step's
+ * contacts (overlaps, gap to the obstacles) and conflicts (time to collision, DRAC,
+ * headway). Each is the exact counterpart of numpy functions in sdc/car/geometry.py
+ * (same formulas, same order of operations, no fused multiply-adds): their composition in
  * sdc/car/geometry_kernels.py runs where this is not built, and the tests hold the
  * two to the same bits.
  *
@@ -216,7 +216,7 @@ static double first_contact(const double *a, const double *va, const double *b,
     return t_in > 0.0 ? t_in : 0.0;
 }
 
-/* the conflicts of box a with boxes met one at a time (conflicts below) */
+/* the conflicts of box a with boxes met one at a time (step below) */
 typedef struct {
     double own_x, own_y, contact, along, drac, headway;
 } Measures;
@@ -265,68 +265,24 @@ static double touch(const double *a, const double *obstacles, Py_ssize_t n_o,
     return gap;
 }
 
-/* contacts(box, obstacles, traffic): what the ego's box meets this step, as (index of
- * the first obstacle it overlaps or -1, the same for the traffic, its outline gap to
- * the nearest obstacle or inf). Overlaps are boxes_overlap and gaps box_gap_m of
- * sdc/car/geometry.py. */
-static PyObject *contacts(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *o_obj, *t_obj;
-    if (!PyArg_ParseTuple(args, "OOO", &a_obj, &o_obj, &t_obj)) return NULL;
-    Py_buffer av, ov, tv;
-    Py_ssize_t n_a, n_o, n_t;
-    PyObject *result = NULL;
-    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
-    if (get_doubles(o_obj, &ov, 0, 5, &n_o, "obstacles") < 0) goto fail_a;
-    if (get_doubles(t_obj, &tv, 0, 5, &n_t, "traffic") < 0) goto fail_o;
-    if (n_a != 1) {
-        PyErr_SetString(PyExc_ValueError, "box: one box");
-        goto fail_t;
-    }
-    const double *a = av.buf, *obstacles = ov.buf, *traffic = tv.buf;
-    long hit_obstacle, hit_traffic;
-    double gap = touch(a, obstacles, n_o, traffic, n_t, &hit_obstacle, &hit_traffic);
-    result = Py_BuildValue("lld", hit_obstacle, hit_traffic, gap);
-fail_t:
-    PyBuffer_Release(&tv);
-fail_o:
-    PyBuffer_Release(&ov);
-fail_a:
-    PyBuffer_Release(&av);
-    return result;
-}
-
-/* conflicts(box, velocity, boxes, velocities): (the time to collision: the lesser of
- * the earliest first_contact of the box with any of the boxes and the earliest time
- * to reach a leader along x; the largest DRAC; the smallest time headway of the box
- * following them along x): first_contact_s and leader_measures of
- * sdc/car/geometry.py */
-static PyObject *conflicts(PyObject *self, PyObject *args) {
-    PyObject *a_obj, *va_obj, *b_obj, *vb_obj;
-    if (!PyArg_ParseTuple(args, "OOOO", &a_obj, &va_obj, &b_obj, &vb_obj)) return NULL;
-    Py_buffer av, vav, bv, vbv;
-    Py_ssize_t n_a, n_va, n_b, n_vb;
-    PyObject *result = NULL;
-    if (get_doubles(a_obj, &av, 0, 5, &n_a, "box") < 0) return NULL;
-    if (get_doubles(va_obj, &vav, 0, 2, &n_va, "velocity") < 0) goto fail_a;
-    if (get_doubles(b_obj, &bv, 0, 5, &n_b, "boxes") < 0) goto fail_va;
-    if (get_doubles(vb_obj, &vbv, 0, 2, &n_vb, "velocities") < 0) goto fail_b;
-    if (n_a != 1 || n_va != 1 || n_vb != n_b) {
-        PyErr_SetString(PyExc_ValueError, "one box and its velocity, a velocity per box");
-        goto fail_vb;
-    }
-    const double *a = av.buf, *va = vav.buf, *boxes = bv.buf, *velocities = vbv.buf;
-    Measures m = measures_start(a);
-    for (Py_ssize_t k = 0; k < n_b; k++) measure_one(&m, a, va, boxes + 5 * k, velocities + 2 * k);
-    result = Py_BuildValue("ddd", measures_ttc(&m), m.drac, m.headway);
-fail_vb:
-    PyBuffer_Release(&vbv);
-fail_b:
-    PyBuffer_Release(&bv);
-fail_va:
-    PyBuffer_Release(&vav);
-fail_a:
-    PyBuffer_Release(&av);
-    return result;
+/* one body in the road frame of a lane lane_scale times as long as the polyline
+ * (place_numpy of scenarios/road_kernels.py): [x along the lane, d, yaw relative
+ * to the road, length, width] and [velocity along, velocity across] */
+static void road_frame_place(const Polyline *line, const double *headings, double curvature,
+                             double lane_scale, const double *b, double speed, double *out,
+                      double *vel) {
+    double s_m, d_m;
+    Py_ssize_t seg = project(line, b[0], b[1], &s_m, &d_m);
+    double yaw = b[2] - headings[seg];
+    double along = speed * cos(yaw);
+    if (curvature != 0.0) along = along * (lane_scale / (1.0 - curvature * d_m));
+    out[0] = s_m * lane_scale;
+    out[1] = d_m;
+    out[2] = yaw;
+    out[3] = b[3];
+    out[4] = b[4];
+    vel[0] = along;
+    vel[1] = speed * sin(yaw);
 }
 
 /* a box's world velocity moving at speed along its heading (velocities_mps of
@@ -339,10 +295,10 @@ static inline void heading_velocity(const double *b, double speed, double *v) {
 /* step(box, speed, obstacles, traffic, traffic_speeds, starts, directions, lengths,
  * start_s, headings, curvature, lane_scale): a step's contacts and conflicts in one
  * pass, as (first obstacle overlapped or -1, first vehicle or -1, obstacle gap, time
- * to collision, DRAC, headway): contacts above, then conflicts of the boxes placed
- * in the road frame of the ego's lane (place of scenarios/_road_kernels.c), 0 on
- * contact, and the world frame's first contact where the unrolled boxes touch but
- * the world's do not (RoadFrame.conflicts of sdc/car/road_frame.py) */
+ * to collision, DRAC, headway): touch above, then the conflicts of the boxes placed
+ * in the road frame of the ego's lane (road_frame_place), 0 on contact, and the
+ * world frame's first contact where the unrolled boxes touch but the world's do not
+ * (step_numpy of sdc/car/geometry_kernels.py) */
 static PyObject *step(PyObject *self, PyObject *args) {
     PyObject *a_obj, *o_obj, *t_obj, *v_obj, *line_objs[4], *h_obj;
     double speed, curvature, lane_scale;
@@ -411,8 +367,6 @@ done:
 
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
-    {"contacts", contacts, METH_VARARGS, "Overlaps and obstacle gap."},
-    {"conflicts", conflicts, METH_VARARGS, "Time to collision, DRAC and time headway."},
     {"step", step, METH_VARARGS, "A step's contacts and conflicts along the road."},
     {NULL, NULL, 0, NULL},
 };

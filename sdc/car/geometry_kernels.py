@@ -4,12 +4,12 @@ where it was built, else its numpy twins below, chosen once at import
 
 The twins take the compiled functions' arguments and compose the numpy functions
 of :mod:`sdc.car.geometry`: the lidar scan is :func:`~sdc.car.geometry.ray_box_ranges`
-and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; the contacts are
-:func:`~sdc.car.geometry.boxes_overlap` and :func:`~sdc.car.geometry.box_gap_m`; the
-conflicts :func:`~sdc.car.geometry.first_contact_s` and
-:func:`~sdc.car.geometry.leader_measures`; a step's contacts and conflicts along the
-road (:func:`step`) those, with the bodies placed by ``place_numpy`` of
-:mod:`scenarios.road_kernels`. Both paths agree bit for bit
+and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; a step's
+contacts and conflicts along the road (:func:`step`) are the contacts
+(:func:`~sdc.car.geometry.boxes_overlap`, :func:`~sdc.car.geometry.box_gap_m`), the
+bodies placed in the road frame (``place_numpy`` of :mod:`scenarios.road_kernels`)
+and their conflicts (:func:`~sdc.car.geometry.first_contact_s`,
+:func:`~sdc.car.geometry.leader_measures`). Both paths agree bit for bit
 (``tests/test_kernels.py``); the compiled one avoids numpy's per-call cost, which
 dominates a step's few small arrays.
 """
@@ -103,8 +103,6 @@ _compiled = compiled_extension("sdc.car._geometry_kernels")
 #: which kernels run: "compiled" or "numpy"
 KERNELS = NUMPY if _compiled is None else COMPILED
 _scan = scan_numpy if _compiled is None else _compiled.scan
-_contacts = contacts_numpy if _compiled is None else _compiled.contacts
-_conflicts = conflicts_numpy if _compiled is None else _compiled.conflicts
 _step = step_numpy if _compiled is None else _compiled.step
 
 
@@ -133,30 +131,12 @@ class Contacts(NamedTuple):
     obstacle_gap_m: float  # its outline's distance to the nearest obstacle, inf: none
 
 
-def contacts(box: np.ndarray, obstacle_boxes: np.ndarray, traffic_boxes: np.ndarray) -> Contacts:
-    """The ego's overlaps and obstacle gap in one pass."""
-    return Contacts(*_contacts(_dense(box), _dense(obstacle_boxes), _dense(traffic_boxes)))
-
-
 class Conflicts(NamedTuple):
     """How close the ego is to a crash with the boxes around it, at constant velocities."""
 
     ttc_s: float  # time until it first touches any of them, 0: touching, inf: never
     drac_mps2: float  # deceleration it needs to avoid the leaders ahead of it, 0: none
     headway_s: float  # gap to the nearest leader over its speed, inf: no leader
-
-
-def conflicts(box: np.ndarray, velocity_mps: np.ndarray, boxes: np.ndarray,
-              velocities_mps: np.ndarray) -> Conflicts:
-    """The ego's :class:`Conflicts` with ``boxes``: boxes ``(N, 5)`` and velocities
-    ``[vx, vy]`` [m/s] in one frame, x along the road. The time to collision is the
-    lesser of the exact first contact of the boxes at constant velocities
-    (:func:`~sdc.car.geometry.first_contact_s`: swerves, crossings, traffic from
-    behind) and the time to reach a leader along x at the closing speed
-    (:func:`~sdc.car.geometry.leader_measures`, as SUMO's SSM device: a car in the
-    ego's lane while the ego weaves in it); DRAC and headway are the leader measures."""
-    return Conflicts(*_conflicts(_dense(box), _dense(velocity_mps), _dense(boxes),
-                                 _dense(velocities_mps)))
 
 
 def step(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,

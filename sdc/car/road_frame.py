@@ -2,12 +2,12 @@
 
 SUMO's Surrogate Safety Measures device measures gaps along the lanes, so a car
 ahead in the ego's lane on a curve is ahead, not off to one side. This does the
-same for oriented boxes (:meth:`~scenarios.road_geometry.RoadGeometry.place_in_road_frame`):
-each body is placed in the road frame, x its position along the ego's lane,
+same for oriented boxes (``place_numpy`` of :mod:`scenarios.road_kernels`): each
+body is placed in the road frame, x its position along the ego's lane,
 y its offset ``d`` from the centre line, its yaw relative to the road's heading
 there, and its velocity split along and across the road. In that frame a curve
-is unrolled into a straight road, and :func:`~sdc.car.geometry_kernels.conflicts`
-measures:
+is unrolled into a straight road, and ``conflicts_numpy`` of
+:mod:`sdc.car.geometry_kernels` measures:
 
 - the time to collision: the lesser of the exact first contact of the boxes at
   constant velocities (swerves, crossings, traffic from behind) and SSM's time to
