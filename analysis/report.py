@@ -23,16 +23,22 @@ from analysis.look_at import MAX_THUMBNAILS, RANKING, params_text, ranked_runs, 
 from analysis.plain_json import json_plain
 from analysis.run_outcome import COMPLETED
 from analysis.safety import REACTION_TIME_S
+from analysis.settling_report import (
+    read_settling,
+    settling_image,
+    settling_lines,
+    settling_summary,
+)
 from analysis.stats import (
     Method,
     by_controller,
     interval,
-    interval_of,
     mcnemar,
-    rate_summary,
     rates_by,
     safe_envelope,
     stop_possible_summary,
+    upper_bound_counting_failures,
+    warm_state_summary,
 )
 from analysis.verdicts import (
     NO_OUTCOME,
@@ -54,6 +60,9 @@ RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "sta
                   "collision", "collision_with", "collision_time_s", "min_gap_obstacle_m",
                   "min_ttc_s", "wall_time_s")
 _MANIFEST_KEYS = {"sweep.sweep.name": str}
+#: runs sharing fewer distinct warm states than this: a warning that the traffic's
+#: variety is that small, whatever the intervals say
+FEW_WARM_STATES = 10
 
 
 class ReportError(SpecError):
@@ -111,14 +120,13 @@ def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
 
 def gate(results: pd.DataFrame, controllers: list[str], rate: float, method: Method) -> dict:
     """``--fail-above RATE``: which controllers' collision rate may exceed ``rate``: the
-    upper end of its 95% interval, its error and timeout runs counted as collisions."""
-    bounds = {}
+    upper end of its 95% interval, its error and timeout runs counted as collisions,
+    clustered by warm state (``design_effects``: per controller)."""
+    bounds, design_effects = {}, {}
     for c in controllers:
-        numbers = rate_summary(results[results.controller == c])
-        failed = numbers["n_error"] + numbers["n_timeout"]
-        bounds[c] = interval_of(numbers["collisions"] + failed, numbers["n_ok"] + failed,
-                                method)[1]
-    return {"rate": rate, "upper_bounds": bounds,
+        bounds[c], design_effects[c] = upper_bound_counting_failures(
+            results[results.controller == c], method)
+    return {"rate": rate, "upper_bounds": bounds, "design_effects": design_effects,
             "failed": [c for c, high in bounds.items() if high > rate]}
 
 
@@ -144,6 +152,8 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
         "sweep_status": manifest.get("status"),
         "coverage": coverage(results, manifest, shared),
         "interval": method,
+        # runs that started from one warm state share their traffic: wider intervals
+        "warm_states": warm_state_summary(counted),
         "verdicts": verdict_summary(counted),
         "by_controller": by_controller(counted),
         # side by side when a sweep ran on more than one world backend
@@ -160,11 +170,55 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
     }
 
 
-def _rate_row(keys: list[str], numbers: dict, method: Method) -> list[str]:
+def shares_traffic(summary: dict) -> bool:
+    """Did any two of the counted runs start from the same warm state?"""
+    return bool(summary["warm_states"].get("shared"))
+
+
+DEFF_HEAD = "design effect"
+
+
+def _deff(value: float) -> str:
+    return f"{value:.2f}"
+
+
+def _rate_row(keys: list[str], numbers: dict, method: Method, deff: bool) -> list[str]:
     low, high = interval(numbers, method)
     return [*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
             percent(numbers["collision_rate"]), f"{percent(low)} - {percent(high)}",
-            str(numbers["n_error"]), str(numbers["n_timeout"])]
+            str(numbers["n_error"]), str(numbers["n_timeout"]),
+            *([_deff(numbers["deff"])] if deff else [])]
+
+
+def _plural(count: int, noun: str) -> str:
+    return f"{count} {noun}" + ("" if count == 1 else "s")
+
+
+def warm_state_lines(summary: dict) -> list[str]:
+    """Whether the traffic had settled by the end of its warm-up (when the sweep kept
+    its warm-ups); when runs shared their traffic: how many warm states they drew
+    from, that the intervals are widened (each controller's design effect on its
+    collision rate), and a WARNING when the warm states are fewer than
+    :data:`FEW_WARM_STATES`."""
+    lines = settling_lines(summary.get("settling"))
+    if not shares_traffic(summary):
+        return lines
+    warm = summary["warm_states"]
+    effects = ", ".join(f"{c} {_deff(numbers['deff'])}"
+                        for c, numbers in summary["by_controller"].items())
+    lines.append(
+        f"Shared traffic: the {warm['runs']} runs drew their background traffic from "
+        f"{_plural(warm['distinct'], 'distinct warm state')} ({warm['runs_sharing']} of them "
+        "started from a warm state another run of their controller also started from). Runs "
+        "sharing a warm state are not independent samples of traffic, so every interval is "
+        "widened by its design effect (the rate's variance over the binomial one, in the "
+        f"tables; collision rate: {effects}). The paired McNemar tests are not adjusted "
+        "for it.")
+    if warm["distinct"] < FEW_WARM_STATES:
+        lines.append(f"WARNING: the traffic's variety is only "
+                     f"{_plural(warm['distinct'], 'warm state')}: the intervals cannot speak "
+                     "for traffic beyond them.")
+    return lines
 
 
 def coverage_lines(summary: dict) -> list[str]:
@@ -188,8 +242,10 @@ def verdict_rows(summary: dict) -> list[list[str]]:
     verdicts = summary["verdicts"]
     if not verdicts["recorded"]:
         return []
+    deff = shares_traffic(summary)
     rows = [["controller", "runs", "completed without collision", "95% interval", "collided",
-             "stuck", "unfinished", "no outcome", "median time lost"]]
+             "stuck", "unfinished", "no outcome", "median time lost",
+             *([DEFF_HEAD] if deff else [])]]
     for controller, numbers in verdicts["by_controller"].items():
         outcomes = numbers["outcomes"]
         done = outcomes[COMPLETED]
@@ -199,7 +255,8 @@ def verdict_rows(summary: dict) -> list[list[str]]:
                      f"{percent(done['low'])} - {percent(done['high'])}",
                      *(f"{outcomes[o]['runs']} ({percent(outcomes[o]['rate'])})"
                        for o in ("collided", "stuck", "unfinished", NO_OUTCOME)),
-                     "-" if lost is None else f"{lost:.1f} s"])
+                     "-" if lost is None else f"{lost:.1f} s",
+                     *([_deff(done["deff"])] if deff else [])])
     return rows
 
 
@@ -221,9 +278,11 @@ def headline_rows(summary: dict) -> list[list[str]]:
                   if c in by_backend[b]]
     else:
         groups = [([c], numbers) for c, numbers in summary["by_controller"].items()]
+    deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
-             "rate", "95% interval", "errors", "timeouts"]]
-    return rows + [_rate_row(keys, numbers, summary["interval"]) for keys, numbers in groups]
+             "rate", "95% interval", "errors", "timeouts", *([DEFF_HEAD] if deff else [])]]
+    return rows + [_rate_row(keys, numbers, summary["interval"], deff)
+                   for keys, numbers in groups]
 
 
 def stop_title(summary: dict) -> str:
@@ -242,7 +301,7 @@ def stop_rows(summary: dict) -> list[list[str]]:
     headline's columns (backend: all), no rows when it was not recorded."""
     stop = summary["stop_possible"]
     backend = ["all"] if summary["by_backend"] else []
-    return [_rate_row([c, *backend], numbers, summary["interval"])
+    return [_rate_row([c, *backend], numbers, summary["interval"], shares_traffic(summary))
             for c, numbers in stop.get("by_controller", {}).items()]
 
 
@@ -302,8 +361,12 @@ def findings(summary: dict) -> list[str]:
 def gate_line(gate: dict) -> str:
     bounds = ", ".join(f"{c} {percent(high)}" for c, high in gate["upper_bounds"].items())
     verdict = ("FAILED: " + ", ".join(gate["failed"]) if gate["failed"] else "passed")
+    effects = gate.get("design_effects", {})
+    widened = ("" if all(d == 1 for d in effects.values()) else
+               "; widened for runs sharing a warm state, design effects "
+               + ", ".join(f"{c} {_deff(d)}" for c, d in effects.items()))
     return (f"--fail-above {gate['rate']:g}: {verdict} (upper 95% bounds of the collision "
-            f"rates, errors and timeouts counted as collisions: {bounds})")
+            f"rates, errors and timeouts counted as collisions: {bounds}{widened})")
 
 
 def _aligned(rows: list[list[str]]) -> list[str]:
@@ -316,7 +379,7 @@ def terminal_table(summary: dict) -> list[str]:
     """Partial-sweep lines, the verdicts, the collision table, then the collision rates
     where a stop was possible in the same columns."""
     verdicts = verdict_rows(summary)
-    lines = [*coverage_lines(summary)]
+    lines = [*coverage_lines(summary), *warm_state_lines(summary)]
     lines += [VERDICT_TITLE, *_aligned(verdicts)] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
@@ -380,6 +443,8 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
     lines = [f"# Collision report: {summary['sweep']}", "", _count_line(summary), "",
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
+    for line in warm_state_lines(summary):  # paragraphs of their own
+        lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
     lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
               else [NOT_RECORDED, ""])
     lines += [COLLISION_TITLE, "", *_markdown_table(rows), "",
@@ -434,6 +499,10 @@ img.thumb { width: 320px; max-width: none; }
 """
 
 
+def _warn_class(line: str) -> str:
+    return ' class="warn"' if line.startswith("WARNING") else ""
+
+
 def _table_html(rows: list[list[str]], table_id: str | None = None) -> str:
     head = "".join(f"<th>{html.escape(c)}</th>" for c in rows[0])
     body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
@@ -455,6 +524,8 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
              "as safe.</p>",
              *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
+             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>'
+               for line in warm_state_lines(summary)),
              f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
              "</p>",
              _table_html(verdicts, "verdicts") if verdicts else "",
@@ -465,12 +536,14 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
               if summary["stop_possible"]["recorded"] else ""),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
     parts += [_figure_html(title, png) for title, png in images]
+    deff = shares_traffic(summary)
     for column, rows in summary["by"].items():
         table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
-                  "failed"]]
+                  "failed", *([DEFF_HEAD] if deff else [])]]
         table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
                    percent(_finite(r["collision_rate"])),
-                   f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"])]
+                   f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"]),
+                   *([_deff(r["deff"])] if deff else [])]
                   for r in rows]
         parts.append(f"<details><summary>By {html.escape(column)}</summary>"
                      f"{_table_html(table)}</details>")
@@ -537,9 +610,12 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     by = [by_column(results, column) for column in by] or varying_parameters(results)
     shared = shared_samples(results)
     summary = build_summary(results, manifest, by, method, shared, fail_above)
+    warm_ups = read_settling(sweep_dir)
+    summary["settling"] = settling_summary(warm_ups)
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
-    html_path.write_text(html_page(summary, results, sweep_dir, figures(counted, by, method)))
+    images = figures(counted, by, method) + settling_image(warm_ups, summary["settling"])
+    html_path.write_text(html_page(summary, results, sweep_dir, images))
     summary_path = sweep_dir / "summary.json"
     summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"

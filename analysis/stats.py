@@ -2,6 +2,13 @@
 
 Only ``status == "ok"`` rows count toward a rate; error and timeout rows are
 counted beside it, never as "no collision".
+
+Runs that started from the same warm state (column ``warm_state``: the background
+traffic warmed up once and reused) are not independent samples of traffic. Every
+rate interval here counts them as a cluster (:func:`clustered_counts`): the
+binomial interval is taken on the effective number of independent runs, never
+on more runs than the plain interval. Results without the column, or whose runs
+each have their own warm state, get the plain binomial interval unchanged.
 """
 
 from __future__ import annotations
@@ -9,8 +16,9 @@ from __future__ import annotations
 import itertools
 import math
 from statistics import NormalDist
-from typing import Literal
+from typing import Literal, NamedTuple
 
+import numpy as np
 import pandas as pd
 from scipy import stats
 
@@ -18,10 +26,18 @@ Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
 MAX_GROUPS = 12
 ENVELOPE_RATE = 0.05
+#: the column naming the warm state (shared background traffic) a run started from
+WARM_STATE = "warm_state"
+#: the statuses a run ends with (as the sweep runner writes them): a rate over every
+#: run counts the rows with one of these
+STATUSES = ("ok", "error", "timeout")
 
 
-def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval for ``k`` successes in ``n`` trials ((0, 1) when n = 0)."""
+def wilson_interval(k: float, n: float, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval for ``k`` successes in ``n`` trials ((0, 1) when n = 0).
+
+    ``k`` and ``n`` may be fractional (effective counts, :func:`clustered_counts`):
+    the score formula only needs the proportion and the number of trials."""
     if n == 0:
         return 0.0, 1.0
     z = NormalDist().inv_cdf(0.5 + confidence / 2)
@@ -32,8 +48,13 @@ def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def clopper_pearson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Exact (Clopper-Pearson) interval from beta quantiles ((0, 1) when n = 0)."""
+def clopper_pearson_interval(k: float, n: float,
+                             confidence: float = 0.95) -> tuple[float, float]:
+    """Exact (Clopper-Pearson) interval from beta quantiles ((0, 1) when n = 0).
+
+    Fractional ``k`` and ``n`` (effective counts) go into the same beta quantiles,
+    whose shape parameters need not be whole: the interval is then exact for no
+    binomial, but it is the one Korn and Graubard (1998) use for survey counts."""
     if n == 0:
         return 0.0, 1.0
     alpha = 1 - confidence
@@ -42,17 +63,131 @@ def clopper_pearson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[
     return low, high
 
 
-def interval_of(k: int, n: int, method: Method) -> tuple[float, float]:
+def interval_of(k: float, n: float, method: Method) -> tuple[float, float]:
     """The 95% interval of ``k`` in ``n`` by ``method``."""
     return (wilson_interval if method == "wilson" else clopper_pearson_interval)(k, n)
 
 
+class ClusteredCounts(NamedTuple):
+    """Binary outcomes of runs in clusters, as the binomial counts with the same
+    uncertainty: give ``(k_eff, n_eff)`` to any binomial interval."""
+
+    k_eff: float  #: events among the effective runs: the observed rate times ``n_eff``
+    n_eff: float  #: the number of independent runs the clustered runs are worth
+    deff: float  #: design effect: the rate's variance over the binomial one, at least 1
+    n_clusters: int  #: independent units: the distinct clusters, a run without one its own
+
+
+def cluster_codes(clusters, n_runs: int) -> np.ndarray:
+    """One integer per run naming its cluster; a run whose label is null (or every run,
+    when ``clusters`` is None) is a cluster of its own."""
+    if clusters is None:
+        return np.arange(n_runs)
+    codes, labels = pd.factorize(pd.Series(clusters).to_numpy(), use_na_sentinel=True)
+    alone = codes < 0
+    codes[alone] = len(labels) + np.arange(int(alone.sum()))
+    return codes
+
+
+def clustered_counts(flags, clusters=None, confidence: float = 0.95) -> ClusteredCounts:
+    """The effective binomial counts of the 0/1 ``flags`` of runs grouped by ``clusters``
+    (labels, one a run; null: a run alone), for a rate whose runs are not independent.
+
+    The rate is p = k / n. Its cluster-robust variance is
+    ``V = G / (G - 1) * sum_g (Y_g - p m_g)^2 / n^2`` over the G clusters (Y_g events
+    in the m_g runs of cluster g); the design effect ``deff = V / (p (1 - p) / n)`` is
+    held at 1 or more, so no interval comes out narrower than the plain one. The
+    effective number of runs is ``n / deff``, further shrunk by
+    ``(t_{n-1} / t_{G-1})^2`` (Student-t quantiles at ``confidence``): V is estimated
+    from G clusters only, and with few of them a normal critical value undercovers
+    (Korn and Graubard's degrees-of-freedom adjustment; measured in
+    ``tests/test_clustered_intervals.py``).
+
+    When V cannot be estimated (no event, or no non-event, or a single cluster) the
+    runs are counted as if every run of a cluster had the same outcome (intraclass
+    correlation 1, the worst case): ``n_eff = n^2 / sum_g m_g^2``, which is G for
+    clusters of equal size, and ``deff = n / n_eff``. So 0 events in 8 clusters of 25
+    runs have the interval of 0 in 8 runs (Wilson: up to 32%), while 1 event among
+    them is worth 0.69 in 138 runs (up to 3.6%): zero events say nothing of how much
+    the cluster matters, and the interval may not assume that it matters little.
+
+    Without a shared cluster (no labels, or every label distinct or null) the counts
+    are the plain ``(k, n)`` as integers and ``deff`` is 1: the plain interval, exactly.
+    """
+    events = np.asarray(pd.array(flags, dtype="boolean").fillna(False), dtype=float)
+    n = len(events)
+    k = int(events.sum())
+    codes = cluster_codes(clusters, n)
+    n_clusters = len(np.unique(codes))
+    if n_clusters == n:  # no shared cluster (or no run): independent runs
+        return ClusteredCounts(k, n, 1.0, n_clusters)
+    runs_per_cluster = np.bincount(codes)
+    p = k / n
+    if k in (0, n) or n_clusters < 2:
+        n_eff = n * n / float(np.sum(runs_per_cluster.astype(float) ** 2))
+        return ClusteredCounts(p * n_eff, n_eff, n / n_eff, n_clusters)
+    events_per_cluster = np.bincount(codes, weights=events)
+    spread = np.sum((events_per_cluster - p * runs_per_cluster) ** 2)
+    variance = n_clusters / (n_clusters - 1) * spread / (n * n)
+    deff = max(1.0, variance / (p * (1 - p) / n))
+    n_eff = n / deff * _degrees_of_freedom_factor(n, n_clusters, confidence)
+    return ClusteredCounts(p * n_eff, n_eff, deff, n_clusters)
+
+
+def _degrees_of_freedom_factor(n_runs: int, n_clusters: int, confidence: float) -> float:
+    """``(t_{n-1} / t_{G-1})^2``: how much fewer runs a variance estimated from G
+    clusters is worth than one from n independent runs."""
+    upper = 0.5 + confidence / 2
+    return float(stats.t.ppf(upper, n_runs - 1) / stats.t.ppf(upper, n_clusters - 1)) ** 2
+
+
+def warm_states_of(rows: pd.DataFrame) -> pd.Series | None:
+    """The warm state each run started from (null: none shared), or None for results
+    from before the :data:`WARM_STATE` column."""
+    return rows[WARM_STATE] if WARM_STATE in rows.columns else None
+
+
+def count_warm_states(rows: pd.DataFrame) -> int | None:
+    """How many distinct warm states ``rows`` started from (None without the column)."""
+    states = warm_states_of(rows)
+    return None if states is None else int(states.nunique(dropna=True))
+
+
+def warm_state_summary(rows: pd.DataFrame) -> dict:
+    """How the runs shared their traffic: ``{"recorded": False}`` without the column;
+    else the number of distinct warm states, how many runs started from a warm state
+    another run of the same controller also started from (``runs_sharing``; a sample's
+    controllers sharing theirs is the paired design, not a cluster), and whether any
+    did (``shared``)."""
+    states = warm_states_of(rows)
+    if states is None:
+        return {"recorded": False}
+    per_controller = rows.assign(_state=states).dropna(subset=["_state"]).groupby(
+        ["controller", "_state"]).size()
+    sharing = int(per_controller[per_controller > 1].sum())
+    return {"recorded": True, "runs": len(rows), "distinct": int(states.nunique(dropna=True)),
+            "runs_sharing": sharing, "shared": sharing > 0}
+
+
+def flag_interval(flags, rows: pd.DataFrame, method: Method) -> tuple[tuple[float, float],
+                                                                      ClusteredCounts]:
+    """The 95% interval by ``method`` of the rate of ``flags`` (one per row of ``rows``),
+    clustered by the rows' warm states, and the counts it was taken on."""
+    counts = clustered_counts(flags, warm_states_of(rows))
+    return interval_of(counts.k_eff, counts.n_eff, method), counts
+
+
 def rate_summary(rows: pd.DataFrame) -> dict:
     """Counts by status, collisions among the ok rows, their rate and 95% intervals
-    (Wilson, and Clopper-Pearson as ``cp_low``/``cp_high``)."""
+    (Wilson, and Clopper-Pearson as ``cp_low``/``cp_high``), clustered by warm state:
+    ``deff`` is the design effect, ``n_eff`` the effective number of ok runs the
+    intervals were taken on, ``warm_states`` the distinct warm states of the ok runs
+    (None for results without the column)."""
     ok = rows[rows.status == "ok"]
     k, n = int(ok.collision.sum()), len(ok)
-    wilson, exact = wilson_interval(k, n), clopper_pearson_interval(k, n)
+    counts = clustered_counts(ok.collision, warm_states_of(ok))
+    wilson = wilson_interval(counts.k_eff, counts.n_eff)
+    exact = clopper_pearson_interval(counts.k_eff, counts.n_eff)
     return {
         "n_ok": n,
         "n_error": int((rows.status == "error").sum()),
@@ -61,9 +196,28 @@ def rate_summary(rows: pd.DataFrame) -> dict:
         "collision_rate": k / n if n else None,
         "wilson_low": wilson[0], "wilson_high": wilson[1],
         "cp_low": exact[0], "cp_high": exact[1],
+        "deff": counts.deff, "n_eff": float(counts.n_eff),
+        "warm_states": count_warm_states(ok),
         "collision_with": {str(kind): int(count) for kind, count in
                            ok.collision_with[ok.collision].value_counts().sort_index().items()},
     }
+
+
+def failed_or_collided(rows: pd.DataFrame) -> pd.Series:
+    """Per run (of the rows with a known status): True when it did not run ok or ran
+    ok into a collision; missing evidence is never safety."""
+    counted = rows[rows.status.isin(STATUSES)]
+    return (counted.status != "ok") | counted.collision.fillna(False).astype(bool)
+
+
+def upper_bound_counting_failures(rows: pd.DataFrame,
+                                  method: Method = "wilson") -> tuple[float, float]:
+    """The upper end of the 95% interval (by ``method``, clustered by warm state) of
+    the collision rate with error and timeout runs counted as collisions, and the
+    design effect it was taken with."""
+    flags = failed_or_collided(rows)
+    (_, high), counts = flag_interval(flags, rows.loc[flags.index], method)
+    return high, counts.deff
 
 
 def interval(summary: dict, method: Method) -> tuple[float, float]:
@@ -100,21 +254,29 @@ def group_label(group) -> str:
     return str(group)
 
 
-def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> pd.DataFrame:
-    """One row per (group of ``column``, controller): counts, rate, interval."""
+def _grouped(results: pd.DataFrame, column: str):
+    """(group of ``column``, controller, rows) for every pair with a run, in order."""
     if column not in results.columns:
         known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
         raise KeyError(f"--by: no column {column!r} (swept parameters: {known})")
     groups = group_values(results[column])
-    out = []
     for (group, controller), rows in results.groupby([groups, "controller"], sort=True,
                                                      observed=True):
+        yield group, controller, rows
+
+
+def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> pd.DataFrame:
+    """One row per (group of ``column``, controller): counts, rate, interval (clustered
+    by warm state, with its design effect ``deff`` and the group's ``warm_states``)."""
+    out = []
+    for group, controller, rows in _grouped(results, column):
         summary = rate_summary(rows)
         low, high = interval(summary, method)
         out.append({"group": group, "controller": controller, "n_ok": summary["n_ok"],
                     "n_failed": summary["n_error"] + summary["n_timeout"],
                     "collisions": summary["collisions"],
-                    "collision_rate": summary["collision_rate"], "low": low, "high": high})
+                    "collision_rate": summary["collision_rate"], "low": low, "high": high,
+                    "deff": summary["deff"], "warm_states": summary["warm_states"]})
     return pd.DataFrame(out)
 
 
@@ -185,18 +347,20 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
     not (None when the first is not); that group is ``stopped_at``, and ``why`` says
     why: ``above`` (its rate exceeds ``threshold``), ``too_few`` (its rate does not,
     but its runs are too few to show it), ``no_runs`` (no ok run). ``why`` is None
-    when every group was shown at or below.
+    when every group was shown at or below. The interval is clustered by warm state
+    (:func:`upper_bound_counting_failures`).
     """
     groups = group_levels(group_values(results[column]))  # every controller's: same bins
-    table = rates_by(results, column)
-    rows = {str(r.group): r for r in table[table.controller == controller].itertuples()}
+    mine = {str(group): rows for group, c, rows in _grouped(results, column)
+            if c == controller}
     safe_up_to, stopped = None, None
     for group in groups:
-        row = rows.get(str(group))
-        n_ok = 0 if row is None else int(row.n_ok)
-        k = 0 if row is None else int(row.collisions)
-        failed = 0 if row is None else int(row.n_failed)
-        high = wilson_interval(k + failed, n_ok + failed)[1]
+        rows = mine.get(str(group))
+        summary = rate_summary(rows) if rows is not None else None
+        n_ok = 0 if summary is None else summary["n_ok"]
+        k = 0 if summary is None else summary["collisions"]
+        failed = 0 if summary is None else summary["n_error"] + summary["n_timeout"]
+        high = 1.0 if rows is None else upper_bound_counting_failures(rows)[0]
         if n_ok == 0:
             why = "no_runs"
         elif high <= threshold:

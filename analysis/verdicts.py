@@ -4,7 +4,9 @@ The headline rate is *completed without collision* over **every** run of a
 controller: an error or a timeout is a run that did not complete, never a safe
 one. Each outcome's rate (:mod:`analysis.run_outcome`) has a Wilson 95% interval
 over the same runs, with the runs without an outcome (error, timeout) beside
-them, so the rates add up to one. Controllers are compared on the samples they
+them, so the rates add up to one. Runs that started from the same warm state
+count as a cluster (:func:`analysis.stats.clustered_counts`), which widens the
+interval by the rate's design effect. Controllers are compared on the samples they
 all ran (:func:`shared_samples`), pair by pair with McNemar's exact test.
 """
 
@@ -15,7 +17,7 @@ import itertools
 import pandas as pd
 
 from analysis.run_outcome import COMPLETED, OUTCOMES
-from analysis.stats import paired_test, wilson_interval
+from analysis.stats import count_warm_states, flag_interval, paired_test
 
 NO_OUTCOME = "no outcome"  # error and timeout runs
 #: a controller completing fewer of its runs than this is never presented as safe
@@ -36,23 +38,34 @@ def shared_samples(results: pd.DataFrame) -> pd.Index:
     return present.index[present == results.controller.nunique()]
 
 
-def _rate(k: int, n: int) -> dict:
-    low, high = wilson_interval(k, n)
-    return {"runs": k, "rate": k / n if n else None, "low": low, "high": high}
+def _rate(flags: pd.Series, rows: pd.DataFrame) -> dict:
+    """How many of ``rows`` hold ``flags``, their rate over all the rows and its Wilson
+    95% interval, clustered by warm state (``deff``: its design effect)."""
+    (low, high), counts = flag_interval(flags, rows, "wilson")
+    k, n = int(flags.sum()), len(rows)
+    return {"runs": k, "rate": k / n if n else None, "low": low, "high": high,
+            "deff": counts.deff}
+
+
+def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
+    """Per outcome (and :data:`NO_OUTCOME`), which of ``rows`` ended so."""
+    ok = rows.status == "ok"
+    flags = {o: ok & (rows.outcome == o) for o in OUTCOMES}
+    flags[NO_OUTCOME] = ~ok
+    return flags
 
 
 def outcome_summary(rows: pd.DataFrame) -> dict:
     """One controller's runs: each outcome's count and rate over all its runs, with
     the runs without an outcome as :data:`NO_OUTCOME`; the median time lost and
-    progress of the ok runs."""
+    progress of the ok runs; the distinct warm states of its runs (``warm_states``,
+    None for results without the column)."""
     ok = rows[rows.status == "ok"]
-    n = len(rows)
-    counts = {o: int((ok.outcome == o).sum()) for o in OUTCOMES}
-    counts[NO_OUTCOME] = n - len(ok)
     time_lost = ok.time_lost_s.dropna()
     return {
-        "runs": n,
-        "outcomes": {o: _rate(k, n) for o, k in counts.items()},
+        "runs": len(rows),
+        "outcomes": {o: _rate(flags, rows) for o, flags in outcome_flags(rows).items()},
+        "warm_states": count_warm_states(rows),
         "median_time_lost_s": float(time_lost.median()) if len(time_lost) else None,
         "median_progress_m": float(ok.progress_m.median()) if len(ok) else None,
     }

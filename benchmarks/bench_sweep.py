@@ -49,6 +49,9 @@ class Clock:
     def set_total(self, total: int) -> None:
         pass
 
+    def warm_states(self, done: int, total: int) -> None:
+        pass
+
     def stop(self) -> None:
         self.stopped = time.perf_counter()
 

@@ -62,6 +62,7 @@ class HighwayWorld:
     """One run of a scenario in highway-env (stepped directly; no gym env needed)."""
 
     backend = "highway"
+    warm_state_key = None  # its warm-up runs in every run (warm states are SUMO's)
 
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry):
         self.spec = spec

@@ -105,7 +105,10 @@ class TrafficSpec(Spec):
     ``speed_mean_mps`` are for the built-in roads.
 
     With ``warm_up_s``, the traffic flows that long before the ego is put on the
-    road (vehicles where it starts are taken off), so it starts inside traffic.
+    road (vehicles where it starts or an obstacle stands are taken off), so it starts
+    inside traffic. On the sumo backend the warmed-up traffic is a warm state
+    (``scenarios/warm_state.py``), computed once and loaded by every run that shares
+    it: the same network, traffic, step and ``warm_seed`` (default: the scenario's seed).
     """
 
     flow_vph_per_lane: float = num(0.0, ge=0, le=3600)
@@ -113,6 +116,7 @@ class TrafficSpec(Spec):
     speed_dev: float = num(0.1, ge=0, le=1)
     warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
     vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
+    warm_seed: int | None = num(None, ge=0, lt=2**31)  # the warm-up's seed (None: scenario's)
 
 
 @spec_class

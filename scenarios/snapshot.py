@@ -57,6 +57,28 @@ def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray
             & (s_m <= ego.start_m + START_ZONE_AHEAD_M))
 
 
+#: after a warm-up, traffic in an obstacle's lane this far behind / ahead of its centre
+#: is taken off as the obstacle appears (a car 50 m back at 14 m/s stops within it
+#: braking at SUMO's default 4.5 m/s^2) [m]
+OBSTACLE_ZONE_BEHIND_M, OBSTACLE_ZONE_AHEAD_M = 50.0, 10.0
+
+
+def near_obstacles(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray) -> np.ndarray:
+    """Which vehicle centres stand on or just behind an obstacle's spot, in its lane
+    (a bool mask): where it would appear out of nothing in front of them."""
+    near = np.zeros(len(centers_xy), bool)
+    if len(centers_xy) == 0 or not spec.obstacles:
+        return near
+    s_m, d_m = road.to_frenet(np.asarray(centers_xy, float).reshape(-1, 2))
+    for obstacle in spec.obstacles:
+        at_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
+        lane_d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
+        near |= ((np.abs(d_m - lane_d_m) < road.lane_width_m)
+                 & (s_m >= at_m - OBSTACLE_ZONE_BEHIND_M)
+                 & (s_m <= at_m + OBSTACLE_ZONE_AHEAD_M))
+    return near
+
+
 def obstacle_boxes(spec: ScenarioSpec, road: RoadGeometry) -> np.ndarray:
     """The exact boxes of the spec's obstacles, lateral offsets included."""
     if not spec.obstacles:

@@ -13,24 +13,40 @@ from __future__ import annotations
 
 import math
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
 from scenarios import road_kernels
+from scenarios.atomic_write import write_atomic
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.errors import SdcError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
     Snapshot,
     in_start_zone,
+    near_obstacles,
     obstacle_boxes,
     sensing_radius_m,
 )
 from scenarios.sumo_net.build import EDGE_ID, build_network, sumo_binary
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
+from scenarios.warm_state import (
+    HALTING_SPEED_MPS,
+    SAVE_OPTIONS,
+    SETTLING_COLUMNS,
+    SETTLING_SAMPLE_S,
+    WarmState,
+    cached_path,
+    file_sha256,
+    uses_warm_state,
+    warm_key,
+    warm_seed,
+)
 
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
@@ -57,14 +73,19 @@ def _route_edges(road: RoadGeometry, s_m: float) -> list[str]:
     return road.route_edges(s_m) if isinstance(road, NetworkRoad) else [EDGE_ID]
 
 
-def _flows(spec: ScenarioSpec) -> list[str]:
-    """A flow per lane entering at the road's start."""
+#: a warm state's flows run on past any run's end (the state must not know the run's
+#: duration) [s]
+WARM_FLOW_END_S = 1e7
+
+
+def _flows(spec: ScenarioSpec, route: str, end_s: float) -> list[str]:
+    """A flow per lane entering at the road's start, until ``end_s``."""
     traffic = spec.traffic
     if traffic.flow_vph_per_lane == 0:
         return []
     return [
-        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="r0" begin="0" '
-        f'end="{traffic.warm_up_s + spec.scenario.duration_s}" '
+        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="{route}" begin="0" '
+        f'end="{end_s}" '
         f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
         for lane in range(spec.road.lane_count)
     ]
@@ -79,28 +100,34 @@ def _trips(trips: list[tuple[str, str]]) -> list[str]:
     ]
 
 
-def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
-               trips: list[tuple[str, str]] = ()) -> str:
-    """The ``.rou.xml`` text: vehicle types, the ego's route, obstacles as stopped
-    vehicles, and the background traffic (flows, or on a network the ``trips``
-    (from edge, to edge) leaving at 0 s)."""
-    model = VEHICLE_MODELS[spec.vehicle.model]
+def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
     traffic = spec.traffic
-    network = isinstance(road, NetworkRoad)
-    factor = 1.0 if network else traffic.speed_mean_mps / spec.road.speed_limit_mps
+    factor = (1.0 if isinstance(road, NetworkRoad)
+              else traffic.speed_mean_mps / spec.road.speed_limit_mps)
     lo, hi = SPEED_FACTOR_BOUNDS
-    lines = [
-        "<routes>",
-        f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
-        f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>',
-        f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}"/>',
-    ]
-    lines += [
+    return (f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
+            f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
+
+
+def _ego_types(spec: ScenarioSpec) -> list[str]:
+    model = VEHICLE_MODELS[spec.vehicle.model]
+    return [f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}"/>'] + [
         f'  <vType id="obstacle_{kind}" length="{length}" width="{width}"/>'
         for kind, (length, width) in OBSTACLE_SIZES_M.items()
     ]
-    ego_front_m = spec.ego.start_m + model.length_m / 2
-    lines.append(f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>')
+
+
+def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    ego_front_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
+    return f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>'
+
+
+def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
+               checks: str = "all") -> list[str]:
+    """The obstacles as vehicles stopped for good where they stand, entering at
+    ``depart`` with SUMO's insertion ``checks``."""
+    lines = []
+    checked = "" if checks == "all" else f' insertionChecks="{checks}"'
     for i, obstacle in enumerate(spec.obstacles):
         length_m = obstacle.size_m[0]
         s_m = road.place_s_m(obstacle.position_m, length_m)
@@ -110,14 +137,45 @@ def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
             lines.append(f'  <route id="{route}" edges="{edge}"/>')
         lines += [
             f'  <vehicle id="{OBSTACLE_PREFIX}{i}" type="obstacle_{obstacle.kind}" '
-            f'route="{route}" depart="0" departLane="{lane}" departPos="{front_m:.6f}" '
-            'departSpeed="0">',
+            f'route="{route}" depart="{depart}" departLane="{lane}" '
+            f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
             f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
             "  </vehicle>",
         ]
-    lines += _trips(trips) if network else _flows(spec)
-    lines.append("</routes>")
-    return "\n".join(lines) + "\n"
+    return lines
+
+
+def _routes(lines: list[str]) -> str:
+    return "\n".join(["<routes>", *lines, "</routes>"]) + "\n"
+
+
+def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+               trips: list[tuple[str, str]] = ()) -> str:
+    """The ``.rou.xml`` text of a run without a warm state: vehicle types, the ego's
+    route, obstacles as stopped vehicles, and the background traffic (flows, or on a
+    network the ``trips`` (from edge, to edge) leaving at 0 s)."""
+    network = isinstance(road, NetworkRoad)
+    end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
+    return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
+                    *_obstacles(spec, road),
+                    *(_trips(trips) if network else _flows(spec, "r0", end_s))])
+
+
+def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+                       trips: list[tuple[str, str]] = ()) -> str:
+    """The ``.rou.xml`` text of a warm-up: the background traffic alone."""
+    if isinstance(road, NetworkRoad):
+        return _routes([_traffic_type(spec, road), *_trips(trips)])
+    return _routes([_traffic_type(spec, road), f'  <route id="traffic" edges="{EDGE_ID}"/>',
+                    *_flows(spec, "traffic", WARM_FLOW_END_S)])
+
+
+def warm_run_routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    """The ``.rou.xml`` text loaded beside a warm state: the ego's types and route,
+    and the obstacles entering as the run begins, wherever the traffic stands
+    (the traffic on their spots is taken off first)."""
+    return _routes([*_ego_types(spec), _ego_route(spec, road),
+                    *_obstacles(spec, road, depart="begin", checks="none")])
 
 
 def _is_traffic(vehicle_id: str) -> bool:
@@ -138,27 +196,68 @@ class SumoWorld:
     backend = "sumo"
 
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
-                 gui: bool = False, sumo_options: tuple[str, ...] = ()):
+                 gui: bool = False, sumo_options: tuple[str, ...] = (),
+                 warm_state: Path | None = None):
         """``sumo_options``: more of SUMO's command-line options, after ours (its
-        outputs and devices, for example ``--device.ssm.*``)."""
+        outputs and devices, for example ``--device.ssm.*``). ``warm_state``: the
+        file of the spec's warm state when the caller has it (a job's copy); without
+        it, a run with a warm-up finds it in the cache or computes it there."""
         self.spec = spec
         self.gui = gui
         self.sumo_options = tuple(sumo_options)
         self.road = road
         self.cache_dir = cache_dir
+        self.warm_state_path = warm_state
         self._obstacle_boxes = obstacle_boxes(spec, road)
-        self._demand = (RandomTrips(road.net, scenario_stream(spec.scenario.seed, DEMAND))
-                        if isinstance(road, NetworkRoad) and spec.traffic.vehicles else None)
+        self._demand: RandomTrips | None = None
         self._trips_made = 0
         self._radius_m = sensing_radius_m(spec)
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
+        self.warm_state_key: str | None = None  # the key of the warm state it started from
+
+    def net_path(self) -> Path:
+        """The network file SUMO runs on."""
+        if isinstance(self.road, NetworkRoad):
+            return self.road.net.path
+        return build_network(self.spec.road, self.cache_dir)
+
+    def _new_demand(self) -> RandomTrips | None:
+        """The random trips of a network's traffic, drawn from the warm-up's seed."""
+        if not (isinstance(self.road, NetworkRoad) and self.spec.traffic.vehicles):
+            return None
+        return RandomTrips(self.road.net, scenario_stream(warm_seed(self.spec), DEMAND))
+
+    def _scratch(self) -> Path:
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
+        return Path(self._tmp.name)
+
+    def _start_sumo(self, sim, command: list[str], net: Path, routes: str,
+                    *options: str, seed: int | None = None) -> None:
+        """Start SUMO on ``net`` and ``routes`` (text) with ``options``, its random
+        generators seeded with ``seed`` (default: the scenario's)."""
+        path = self._scratch() / "scenario.rou.xml"
+        path.write_text(routes)
+        sim.start([
+            *command, "--net-file", str(net), "--route-files", str(path),
+            # a random trip with no way to its end is dropped, not fatal
+            *(["--ignore-route-errors", "true"] if isinstance(self.road, NetworkRoad) else []),
+            "--step-length", repr(self.spec.scenario.step_s),
+            "--seed", str(self.spec.scenario.seed if seed is None else seed),
+            "--collision.action", "none", "--time-to-teleport", "-1",
+            "--no-step-log", "true", "--no-warnings", "true",
+            *options,
+        ])
+        self._sumo = sim
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
 
-        With ``gui``, the same simulation runs in ``sumo-gui`` through traci (libsumo
-        has no GUI); its API and its results are the same.
+        With a warm-up, SUMO starts afresh on the warm state (:meth:`warm_state`),
+        the obstacles entering as the run begins. With ``gui``, the same simulation
+        runs in ``sumo-gui`` through traci (libsumo has no GUI); its API and its
+        results are the same.
         """
         if self.gui:
             import traci as sim  # a socket to sumo-gui
@@ -167,28 +266,25 @@ class SumoWorld:
         else:
             import libsumo as sim  # imported here: only this backend needs the simulator
             command = ["sumo"]
-
-        network = isinstance(self.road, NetworkRoad)
-        net = self.road.net.path if network else build_network(self.spec.road, self.cache_dir)
-        self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
-        routes = Path(self._tmp.name) / "scenario.rou.xml"
-        trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
-        self._trips_made = len(trips)
-        routes.write_text(routes_xml(self.spec, self.road, trips))
-        sim.start([
-            *command, "--net-file", str(net), "--route-files", str(routes),
-            # a random trip with no way to its end is dropped, not fatal
-            *(["--ignore-route-errors", "true"] if network else []),
-            "--step-length", repr(self.spec.scenario.step_s),
-            "--seed", str(self.spec.scenario.seed),
-            "--collision.action", "none", "--time-to-teleport", "-1",
-            "--no-step-log", "true", "--no-warnings", "true",
-            *self.sumo_options,
-        ])
-        self._sumo = sim
-        for _ in range(round(self.spec.traffic.warm_up_s / self.spec.scenario.step_s)):
-            self._advance()
-        self._clear_start()
+        net = self.net_path()
+        if uses_warm_state(self.spec):
+            state = self.warm_state(net)
+            state_file = self._scratch() / "warm-state.xml.gz"
+            state_file.write_bytes(state.sumo_state)
+            self._start_sumo(sim, command, net, warm_run_routes_xml(self.spec, self.road),
+                             "--load-state", str(state_file), *self.sumo_options)
+            self._demand = self._new_demand()
+            if self._demand is not None:
+                self._demand.restore(state.demand["rng"])
+                self._trips_made = state.demand["trips_made"]
+            self.warm_state_key = state.key
+            self._clear_start(obstacles=True)
+        else:
+            self._demand = self._new_demand()
+            trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
+            self._trips_made = len(trips)
+            self._start_sumo(sim, command, net, routes_xml(self.spec, self.road, trips),
+                             *self.sumo_options)
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
         model = VEHICLE_MODELS[self.spec.vehicle.model]
@@ -202,12 +298,76 @@ class SumoWorld:
                                      self._radius_m + SUBSCRIPTION_SLACK_M, _TRAFFIC_VARS)
         return self.step(ego_box, ego_speed_mps)
 
-    def _clear_start(self) -> None:
-        """Take the traffic off the ego's entry (after a warm-up)."""
+    def warm_state(self, net: Path) -> WarmState:
+        """The spec's warm state on network file ``net``: the one given, else the
+        cached one, else computed now (and cached). A given or cached file made for
+        other traffic is an :class:`SdcError`, never a run on it."""
+        key = warm_key(self.spec, file_sha256(net))
+        path = self.warm_state_path or cached_path(key)
+        if self.warm_state_path is None and not path.is_file():
+            state = self.compute_warm_state(net, key)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))
+            return state
+        state = WarmState.read(path)
+        if state.key != key:
+            raise SdcError(f"warm state {path}: made for other traffic (key "
+                           f"{state.key[:12]}..., this run's {key[:12]}...)")
+        return state
+
+    def compute_warm_state(self, net: Path, key: str,
+                           on_sample: Callable[[float], None] | None = None) -> WarmState:
+        """Warm the traffic up in a SUMO of its own (libsumo, also for a GUI run) and
+        save it, recording how the network's traffic settles on the way (each
+        sample's time goes to ``on_sample``, for progress)."""
+        import libsumo
+
+        spec = self.spec
+        demand = self._new_demand()
+        trips = demand.draw(spec.traffic.vehicles) if demand else []
+        self._demand, self._trips_made = demand, len(trips)
+        self._start_sumo(libsumo, ["sumo"], net, warm_up_routes_xml(spec, self.road, trips),
+                         *SAVE_OPTIONS, seed=warm_seed(spec))
+        try:
+            steps = round(spec.traffic.warm_up_s / spec.scenario.step_s)
+            every = max(1, round(SETTLING_SAMPLE_S / spec.scenario.step_s))
+            settling: dict[str, list[float]] = {c: [] for c in SETTLING_COLUMNS}
+            for k in range(1, steps + 1):
+                self._advance()
+                if k % every == 0 or k == steps:
+                    self._record_settling(settling)
+                    if on_sample is not None:
+                        on_sample(settling["t_s"][-1])
+            saved = self._scratch() / "saved-state.xml.gz"
+            libsumo.simulation.saveState(str(saved))
+            state = WarmState(
+                key, libsumo.simulation.getTime(), saved.read_bytes(),
+                None if demand is None else {"rng": demand.state(),
+                                             "trips_made": self._trips_made},
+                settling)
+        finally:
+            libsumo.close()
+            self._sumo = None
+        return state
+
+    def _record_settling(self, settling: dict[str, list[float]]) -> None:
+        vehicle = self._sumo.vehicle
+        speeds = np.array([vehicle.getSpeed(v) for v in vehicle.getIDList()])
+        settling["t_s"].append(self._sumo.simulation.getTime())
+        settling["vehicles"].append(len(speeds))
+        settling["mean_speed_mps"].append(float(speeds.mean()) if len(speeds) else 0.0)
+        settling["halting"].append(int((speeds < HALTING_SPEED_MPS).sum()))
+
+    def _clear_start(self, obstacles: bool = False) -> None:
+        """Take the traffic off the ego's entry (after a warm-up), and with
+        ``obstacles`` off the obstacles' spots too."""
         vehicle = self._sumo.vehicle
         ids = [v for v in vehicle.getIDList() if _is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
-        for vid in np.array(ids)[in_start_zone(self.spec, self.road, fronts)]:
+        taken = in_start_zone(self.spec, self.road, fronts)
+        if obstacles:
+            taken |= near_obstacles(self.spec, self.road, fronts)
+        for vid in np.array(ids)[taken]:
             vehicle.remove(str(vid))
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:

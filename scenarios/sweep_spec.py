@@ -34,6 +34,7 @@ from scenarios.toml_io import load_spec, read_toml
 
 SAMPLERS = ("grid", "random", "sobol", "lhs")
 MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
+WARM_STREAM = 3  # the random stream of a sweep's warm-up seeds (samples use 0 and 1)
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 
@@ -224,6 +225,7 @@ class _SweepTable(Spec):
     sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
     seed: int = num(0, ge=0, lt=2**31)
     levels: int | None = num(None, ge=2, le=1000)
+    warm_states: int | None = num(None, ge=1, le=MAX_SAMPLES)
     controllers: tuple = ("seed",)
     params: tuple = ()
 
@@ -241,6 +243,9 @@ class SweepSpec:
     levels: int  # grid points per continuous parameter (grid only)
     controllers: tuple[str, ...]
     params: tuple[Param, ...]
+    #: how many distinct warm states of the traffic the samples draw from (None: each
+    #: sample warms up its own, from its seed)
+    warm_states: int | None = None
 
     @classmethod
     def from_plain(cls, data: Any, base_dir: Path) -> SweepSpec:
@@ -315,8 +320,9 @@ class SweepSpec:
                 raise SpecError("sweep.samples", f"is required for the {meta.sampler} sampler")
             if meta.levels is not None:
                 raise SpecError("sweep.levels", "only applies to the grid sampler")
+        _check_warm_states(meta.warm_states, base, parsed)
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
-                   meta.levels or 5, tuple(controllers), tuple(parsed))
+                   meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states)
 
     @property
     def param_types(self) -> dict[str, type]:
@@ -339,8 +345,32 @@ class SweepSpec:
             table["samples"] = self.samples
         else:
             table["levels"] = self.levels
+        if self.warm_states is not None:
+            table["warm_states"] = self.warm_states
         table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
         return {"sweep": table}
+
+
+def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
+                       params: list[Param]) -> None:
+    if warm_states is None:
+        return
+    swept = {p.path for p in params}
+    if "traffic.warm_seed" in swept:
+        raise SpecError("sweep.warm_states", "and a swept traffic.warm_seed both choose the "
+                        "warm-ups' seeds: keep one")
+    if base.traffic.warm_up_s == 0 and "traffic.warm_up_s" not in swept:
+        raise SpecError("sweep.warm_states", "the base scenario has no traffic warm-up "
+                        "(traffic.warm_up_s = 0), so there is no warm state to share")
+
+
+def warm_seeds(sweep: SweepSpec) -> list[int] | None:
+    """The seeds of the sweep's ``warm_states`` warm-ups, drawn from its seed (None:
+    each sample warms up from its own seed)."""
+    if sweep.warm_states is None:
+        return None
+    rng = np.random.default_rng([sweep.seed, WARM_STREAM])
+    return [int(s) for s in rng.integers(0, 2**31 - 1, size=sweep.warm_states)]
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -416,10 +446,14 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
     last = first_sample + len(samples) - 1
     width = index_width or max(5, len(str(last)))
     base_plain = sweep.base.to_plain()
+    warm = warm_seeds(sweep)
     plan = []
     for i, (values, seed) in enumerate(zip(samples, seeds, strict=True), start=first_sample):
         plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
+        if warm is not None:  # the sample's warm state: one of the sweep's, by its seed
+            set_path(plain, "traffic.warm_seed", warm[int(values.get("scenario.seed", seed))
+                                                      % len(warm)])
         controller_values = {}  # each controller takes those it has (ControllerSpec.renamed)
         for path, value in values.items():
             if path.startswith("controller.") and path != "controller.name":

@@ -8,12 +8,15 @@ and ``close()``; it is a context manager.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+from collections.abc import Callable
 from pathlib import Path
 
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import build_network, sumo_load_error
+from scenarios.warm_state import file_sha256, warm_key
 
 BACKENDS = ("sumo", "highway")
 
@@ -57,8 +60,33 @@ def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
         network_area(read_net(road.net_file), cache_dir)
 
 
+def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:
+    """The file of ``spec``'s warm state (``scenarios/warm_state.py``), from this
+    machine's cache or computed into it."""
+    from scenarios.sumo_world import SumoWorld
+
+    with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
+        return world.warm_state(world.net_path()).to_bytes()
+
+
+def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | None = None,
+                    on_sample: Callable[[float], None] | None = None) -> dict[str, list]:
+    """How ``spec``'s traffic settles over a warm-up of ``duration_s`` (SUMO, no ego):
+    the series a warm state records (``scenarios.warm_state.SETTLING_COLUMNS``)."""
+    from scenarios.sumo_world import SumoWorld
+
+    spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
+                                                                 warm_up_s=duration_s))
+    with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
+        net = world.net_path()
+        return world.compute_warm_state(net, warm_key(spec, file_sha256(net)),
+                                        on_sample).settling
+
+
 def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
-               gui: bool = False):
+               gui: bool = False, warm_state: Path | None = None):
+    """``warm_state``: the file of the spec's warm state, when the caller has it (the
+    sumo backend; without it a run finds or computes its own)."""
     if spec.scenario.backend == "highway":
         if gui:
             raise SdcError("--gui: only the sumo backend has a GUI")
@@ -67,4 +95,4 @@ def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = 
         return HighwayWorld(spec, road)
     from scenarios.sumo_world import SumoWorld
 
-    return SumoWorld(spec, road, cache_dir, gui)
+    return SumoWorld(spec, road, cache_dir, gui, warm_state=warm_state)

@@ -6,6 +6,7 @@ Exit codes: 0 done (a collision is an outcome, not an error); 1 a run errored;
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shlex
@@ -205,6 +206,85 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     click.echo(f"report: {result.html_path}")
     sys.exit(EXIT_RUN_ERROR if outcome.counts["error"] or outcome.counts["timeout"] else EXIT_OK)
 
+
+
+@main.command()
+@click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
+@click.option("--for", "watch_s", type=click.FloatRange(20, 3600), default=600.0,
+              show_default=True, metavar="SECONDS",
+              help="How long to watch the traffic warm up [simulated s].")
+@click.option("--seed", type=click.IntRange(0, 2**31 - 1),
+              help="The warm-up's seed (default: the spec's traffic.warm_seed, else "
+                   "scenario.seed).")
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.png",
+              help="The plot [default: <scenario name>-settling.png here]; the series "
+                   "beside it as FILE.csv.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the suggestion as one JSON object on the last line.")
+def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
+           as_json: bool) -> None:
+    """Watch a scenario's traffic warm up and suggest traffic.warm_up_s.
+
+    SUMO runs the scenario's background traffic alone (no ego, no obstacles) for
+    --for seconds, recording every simulated second the vehicles in the network,
+    their mean speed and how many halt. A warm-up truncation rule (MSER on batch
+    means of one correlation length, e.g. one signal cycle: analysis/settling.py)
+    reads off when each measure settled; the suggestion is the latest, rounded up
+    to 10 s. When a measure may still be changing (the rule's cut lands at the end
+    of the first half of the watch), no value is suggested, only a lower bound:
+    watch longer. A drift that starts late in the watch goes unseen: watch at
+    least twice the warm-up you expect.
+    """
+    import pandas as pd
+    from rich.console import Console
+    from rich.progress import Progress
+
+    from analysis.settling import settling_figure, suggest_warm_up_s
+    from scenarios.world_backends import check_inputs, settling_series
+
+    try:
+        spec = load_spec(spec_file)
+        if spec.scenario.backend != "sumo":
+            raise SpecError("scenario.backend", "sdc settle watches SUMO's traffic; "
+                            f"the spec's backend is {spec.scenario.backend!r}")
+        if seed is not None:
+            spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
+                                                                         warm_seed=seed))
+        check_inputs(spec)
+        with Progress(console=Console(stderr=True), transient=True) as bar:
+            task = bar.add_task("warming up", total=watch_s)
+            series = settling_series(spec, watch_s,
+                                     on_sample=lambda t_s: bar.update(task, completed=t_s))
+    except SdcError as e:
+        _bad_input(str(e))
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        sys.exit(EXIT_INTERRUPTED)
+    frame = pd.DataFrame(series)
+    suggestion = suggest_warm_up_s(frame)
+    out = out or Path(f"{spec.scenario.name}-settling.png")
+    out.write_bytes(settling_figure(frame, suggestion, f"{spec.scenario.name}: traffic "
+                                    "warming up", current_warm_up_s=spec.traffic.warm_up_s))
+    frame.to_csv(out.with_suffix(".csv"), index=False)
+    for line in settle_lines(suggestion, spec.traffic.warm_up_s):
+        click.echo(line)
+    click.echo(f"plot: {out}; the series: {out.with_suffix('.csv')}")
+    if as_json:
+        click.echo(json.dumps(suggestion))
+
+
+def settle_lines(suggestion: dict, current_s: float) -> list[str]:
+    """What ``sdc settle`` prints: each measure's settling time and the suggestion."""
+    lines = [f"{name}: settled after {m['truncation_s']:.0f} s"
+             if m["settled"] else f"{name}: still changing" for name, m in
+             suggestion["measures"].items()]
+    if suggestion["settled"]:
+        lines.append(f"suggested traffic.warm_up_s = {suggestion['warm_up_s']:.0f} "
+                     f"({suggestion['rule']}; the spec has {current_s:g})")
+    else:
+        lines.append(f"not settled within {suggestion['observed_s']:.0f} s: warm_up_s of at "
+                     f"least {suggestion['warm_up_at_least_s']:.0f}; watch longer (--for)")
+    return lines
 
 
 def _other_demo(out_dir: Path, spec) -> bool:
@@ -601,6 +681,7 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
     if out.suffix == ".html":
         frames = write_html(scene, out, every)
     else:  # about 0.2 s a frame: show the progress
+        from rich.console import Console
         from rich.progress import Progress
 
         with Progress(console=Console(stderr=True), transient=True) as progress:

@@ -58,7 +58,7 @@ def test_sdc_kernels_picks_the_path_once_at_import():
 
 def run_json(run: dict, kernels: str, path: Path = REPO) -> dict:
     """The JSON line of ``sdc run`` for a pinned run, on one kernel path."""
-    spec = path / "scenarios" / "catalog" / run["scenario"]
+    spec = path / run.get("dir", "scenarios/catalog") / run["scenario"]
     args = ["-m", "sdc", "run", str(spec), "--seed", str(run["seed"]), "--backend",
             run["backend"], "--json"]
     if run["controller"] is not None:

@@ -13,7 +13,10 @@ The worker nodes also start in another working directory, with an environment
 that names neither directory (their own ``SDC_CACHE_DIR``). The sweep runs on a
 SUMO network file with a plug-in controller from a file, both in the scenario
 directory; its rows must equal the local executor's, bit for bit, and each node
-must hold its own copies of the files, named by their sha256.
+must hold its own copies of the files, named by their sha256. The traffic warms up
+and the samples share two warm states: the worker nodes compute them (the Ray
+driver starts with an empty cache of its own), the driver collects them and they
+travel to the nodes like the other files.
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ length_m = 200.0
 
 [traffic]
 vehicles = 20
+warm_up_s = 10.0
 
 [[obstacles]]
 kind = "car"
@@ -81,6 +85,7 @@ base = "town.toml"
 samples = 6
 sampler = "random"
 seed = 3
+warm_states = 2
 controllers = ["seed", "plugins/cautious.py:Cautious"]
 
 [sweep.params]
@@ -213,6 +218,8 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
     temp_dir = Path(tempfile.mkdtemp(prefix="r", dir="/tmp"))  # short: Ray's socket paths
     cluster = Cluster(temp_dir)
     nodes = [tmp_path / f"node{i}" for i in range(2)]
+    ray_driver_cache = tmp_path / "ray-driver-cache"
+    ray_driver_cache.mkdir()
     try:
         head_dir = tmp_path / "head"
         head_dir.mkdir()
@@ -221,7 +228,8 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
         for cpus, node in enumerate(nodes, start=1):
             (node / "cwd").mkdir(parents=True)
             cluster.start_hidden_worker(node / "cwd", _node_env(node / "cache"),
-                                        hidden=[tmp_path / "scenarios", driver_cache])
+                                        hidden=[tmp_path / "scenarios", driver_cache,
+                                                ray_driver_cache])
             cluster.wait_for_cpus(cpus)
         # the driver is `sdc sweep` in a process of its own: a Ray that a test before this
         # one started in this process leaves state behind that breaks joining another
@@ -229,7 +237,7 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
             [sys.executable, "-m", "sdc", "sweep", str(sweep_file), "--out",
              str(tmp_path / "ray"), "--executor", "ray", "--ray-address", cluster.address,
              "--traces", "all", "--quiet"], capture_output=True, text=True, timeout=600,
-            check=False)
+            env={**os.environ, "SDC_CACHE_DIR": str(ray_driver_cache)}, check=False)
     finally:
         cluster.stop()
         shutil.rmtree(temp_dir, ignore_errors=True)
@@ -261,3 +269,19 @@ def test_a_sweep_on_nodes_that_cannot_see_the_driver_files_equals_the_local_one(
         present = [copy for copy in copies if copy.exists()]
         assert present, f"no node holds a copy of {path.name}"
         assert all(copy.read_bytes() == path.read_bytes() for copy in present), present
+
+    # the two warm states: computed on the nodes, collected in the Ray driver's cache,
+    # shipped back by sha256
+    assert rows["local"].warm_state.nunique() == 2
+    manifest = json.loads((tmp_path / "ray" / "manifest.json").read_text())
+    assert manifest["sessions"][-1]["warm_states"] == {"distinct": 2, "computed": 2,
+                                                       "failed": {}}
+    states = {path: entry["sha256"] for path, entry in manifest["files"].items()
+              if entry["field"] == "warm state"}
+    assert len(states) == 2
+    assert sum(len(list((node / "cache" / "warm-states").glob("*.zip"))) for node in nodes
+               if (node / "cache" / "warm-states").is_dir()) >= 2
+    for path, sha in states.items():
+        assert Path(path).parent == ray_driver_cache / "warm-states"
+        copies = [node / "cache" / "job-files" / sha / Path(path).name for node in nodes]
+        assert any(copy.exists() for copy in copies), f"no node holds {path}"

@@ -151,3 +151,9 @@ def test_mcnemar_without_an_ok_run_of_one_controller_has_no_pairs():
                          rows("lane-keep", [None, None], statuses=["error", "error"])])
     assert mcnemar(results, "seed", "lane-keep")["pairs"] == 0
     assert mcnemar(results.iloc[:0], "seed", "lane-keep")["p_value"] == 1.0
+
+
+def test_results_without_warm_states_have_no_design_effect():
+    summary = by_controller(rows("seed", [True, False, False]))["seed"]
+    assert (summary["deff"], summary["n_eff"], summary["warm_states"]) == (1.0, 3.0, None)
+    assert (summary["wilson_low"], summary["wilson_high"]) == wilson_interval(1, 3)

@@ -35,6 +35,13 @@ class RandomTrips:
         self._chance = lengths_m / lengths_m.sum()
         self._rng = rng
 
+    def state(self) -> dict:
+        """Where the generator stands (plain data): :meth:`restore` continues from it."""
+        return self._rng.bit_generator.state
+
+    def restore(self, state: dict) -> None:
+        self._rng.bit_generator.state = state
+
     def draw(self, count: int) -> list[tuple[str, str]]:
         """The next ``count`` trips as (from edge, to edge)."""
         rng, chance, n = self._rng, self._chance, len(self.edge_ids)

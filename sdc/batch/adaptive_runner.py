@@ -54,9 +54,11 @@ from sdc.batch.sweep_runner import (
     open_dir,
     plan_table_of,
     record_job_files,
+    record_warm_states,
     start_session,
     sweep_columns,
 )
+from sdc.batch.warm_states import prepare_warm_states
 from sdc.run.result_row import adaptive_row, result_schema
 
 Mode = Literal["search", "estimate"]
@@ -187,10 +189,12 @@ class _Runs:
         tasks = [self._task(r) for r in todo if r.spec is not None]
         if tasks:
             build_networks(tasks, self.executor.workers)
-            record_job_files(self.out_dir, self.manifest, self.session, tasks)
             if not self._entered:
                 self.executor.__enter__()
                 self._entered = True
+            record_warm_states(self.out_dir, self.manifest, self.session, *prepare_warm_states(
+                tasks, self.executor, self.reporter.warm_states))
+            record_job_files(self.out_dir, self.manifest, self.session, tasks)
             for row in self.executor.map(tasks):
                 score = run_score(row, self.settings.score)
                 self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))

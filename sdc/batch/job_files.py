@@ -5,7 +5,8 @@ driver's bytes.
 A run of a ``sumo_net`` road reads ``road.net_file`` and that network's road
 edges (cached beside the built networks); a SUMO run of a built-in road reads
 the network netconvert built for it on the driver; a ``file.py:Class``
-controller reads its file. Each is a :class:`JobFile`: the field that names
+controller reads its file; a run with a warm-up starts from its warm state, once
+the driver has it (:mod:`sdc.batch.warm_states`). Each is a :class:`JobFile`: the field that names
 it, the driver's path (for messages and the manifest; no worker opens it), its
 sha256 and the file name its copy takes. :class:`FileCatalog` is the driver's
 side; :mod:`sdc.batch.worker_files` is the worker's.
@@ -24,10 +25,13 @@ from scenarios.file_read import read_bytes
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import build_network
 from scenarios.sumo_net.route_road import edges_cache_path
+from scenarios.warm_state import cached_path, uses_warm_state, warm_key
 from scenarios.world_backends import prepare_network
 
 #: JobFile.field of the files a run finds in its cache directory, by name
 CACHED_FIELDS = ("network", "road edges")
+#: JobFile.field of the warm state a run starts from (scenarios/warm_state.py)
+WARM_STATE_FIELD = "warm state"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,9 +99,18 @@ class FileCatalog:
             self._by_road[road] = (self._read("network", built, "the built SUMO network"),)
         return self._by_road[road]
 
+    def warm_key(self, spec: ScenarioSpec) -> str | None:
+        """The key of the warm state a run of ``spec`` starts from (None: none)."""
+        if not uses_warm_state(spec):
+            return None
+        return warm_key(spec, self._road_files(spec)[0].sha256)
+
     def files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
         """What a run of ``spec`` reads besides the spec."""
         files = self._road_files(spec)
+        key = self.warm_key(spec)
+        if key is not None and cached_path(key).is_file():
+            files += (self._read(WARM_STATE_FIELD, cached_path(key), "the warm state"),)
         if controller_kind(spec.controller.name) == "file":
             path = Path(spec.controller.name.rpartition(":")[0])
             files += (self._read("controller.name", path, "the controller file"),)

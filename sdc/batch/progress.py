@@ -21,16 +21,17 @@ class RichReporter:
     def __init__(self, console: Console | None = None, label: str = "sweep"):
         self.console, self.label = console or Console(stderr=True), label
         self._progress: Progress | None = None
+        self._warm = None
 
     def start(self, total: int, done: int, collisions: int, failed: int) -> None:
         self._progress = Progress(
-            TextColumn(self.label), BarColumn(), MofNCompleteColumn(),
+            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
             TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TextColumn("ETA"),
             TimeRemainingColumn(),
             TextColumn("collisions {task.fields[collisions]}  failed {task.fields[failed]}"),
             console=self.console,
         )
-        self._task = self._progress.add_task("sweep", total=total, completed=done,
+        self._task = self._progress.add_task(self.label, total=total, completed=done,
                                              collisions=collisions, failed=failed, rate="")
         self._counts = {"collisions": collisions, "failed": failed, "session": 0}
         self._t0 = time.monotonic()
@@ -49,6 +50,13 @@ class RichReporter:
         """The runs now planned in all: the bar's length, and so its ETA."""
         self._progress.update(self._task, total=total)
 
+    def warm_states(self, done: int, total: int) -> None:
+        """Warm states computed before the runs: a bar of their own."""
+        if self._warm is None:
+            self._warm = self._progress.add_task("warm states", total=total, completed=done,
+                                                 collisions="-", failed="-", rate="")
+        self._progress.update(self._warm, completed=done)
+
     def stop(self) -> None:
         if self._progress is not None:
             self._progress.stop()
@@ -64,6 +72,9 @@ class QuietReporter:
         pass
 
     def set_total(self, total: int) -> None:
+        pass
+
+    def warm_states(self, done: int, total: int) -> None:
         pass
 
     def stop(self) -> None:

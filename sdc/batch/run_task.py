@@ -12,11 +12,14 @@ from pathlib import Path
 from typing import Literal
 
 from analysis.run_outcome import COMPLETED
+from scenarios.atomic_write import write_atomic
 from scenarios.scenario_spec import ScenarioSpec
 from sdc.batch.job_files import JobFile
 from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row
 
 TraceMode = Literal["none", "failures", "all"]
+#: a task runs the scenario, or only computes its warm state (into ``trace_path``)
+TaskKind = Literal["run", "warm_up"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -27,7 +30,11 @@ class RunTask:
     spec, :mod:`sdc.batch.job_files`); a worker runs a copy whose ``spec`` names
     its own copies of them, ``cache_dir`` holding the cached ones, and whose
     ``recorded_spec`` is the driver's spec, for the trace's metadata
-    (:mod:`sdc.batch.worker_files`).
+    (:mod:`sdc.batch.worker_files`) and whose ``warm_state`` is its copy of the
+    warm state the run starts from, when one travels with the job.
+
+    A ``warm_up`` task computes the spec's warm state instead of running it, and
+    writes its file to ``trace_path`` (:mod:`sdc.batch.warm_states`).
     """
 
     run_id: str
@@ -38,6 +45,8 @@ class RunTask:
     files: tuple[JobFile, ...] = ()
     cache_dir: Path | None = None  # where the run finds built networks and road edges
     recorded_spec: ScenarioSpec | None = None  # the spec a trace records (default: spec)
+    warm_state: Path | None = None  # the worker's copy of the run's warm state
+    kind: TaskKind = "run"
 
 
 def _identity(task: RunTask) -> dict:
@@ -67,12 +76,28 @@ def _record_driver_paths(metadata: dict, spec: ScenarioSpec) -> None:
         metadata["road"]["net_file"] = spec.road.net_file
 
 
+def _warm_up(task: RunTask) -> dict:
+    """Compute (or find in this machine's cache) the warm state of ``task.spec`` and
+    write its file to ``task.trace_path``; the row says ok or why not."""
+    from scenarios.world_backends import warm_state_file
+
+    try:
+        data = warm_state_file(task.spec, task.cache_dir)
+        write_atomic(task.trace_path, lambda tmp: tmp.write_bytes(data))
+    except Exception as e:  # noqa: BLE001 - its runs compute it themselves, or fail alike
+        return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
+    return {"run_id": task.run_id, "status": "ok"}
+
+
 def execute(task: RunTask) -> dict:
     """Run ``task`` and return its result row; write its trace when asked to."""
     from sdc.run.episode import run_episode  # keeps importers that never run fast
 
+    if task.kind == "warm_up":
+        return _warm_up(task)
     try:
-        episode = run_episode(task.spec, run_id=task.run_id, cache_dir=task.cache_dir)
+        episode = run_episode(task.spec, run_id=task.run_id, cache_dir=task.cache_dir,
+                              warm_state=task.warm_state)
     except Exception as e:  # the run's own failure is an outcome row, not a crash
         return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
     wanted = task.traces == "all" or (task.traces == "failures"

@@ -24,6 +24,7 @@ import pyarrow.parquet as pq
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.warm_state import SETTLING_FILE
 from scenarios.world_backends import prepare_network
 from sdc.batch.job_files import FileCatalog
 from sdc.batch.manifest import (
@@ -38,6 +39,7 @@ from sdc.batch.manifest import (
 )
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
+from sdc.batch.warm_states import prepare_warm_states, write_settling
 from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
 
 STATUSES = ("ok", "error", "timeout")
@@ -49,6 +51,7 @@ class Reporter(Protocol):
     def start(self, total: int, done: int, collisions: int, failed: int) -> None: ...
     def advance(self, row: dict) -> None: ...
     def set_total(self, total: int) -> None: ...  # the runs now planned (an estimate's change)
+    def warm_states(self, done: int, total: int) -> None: ...  # warm states computed so far
     def stop(self) -> None: ...
 
 
@@ -184,6 +187,17 @@ def record_job_files(out_dir: Path, manifest: dict, session: dict,
     write_manifest(out_dir, manifest)
 
 
+def record_warm_states(out_dir: Path, manifest: dict, session: dict, warm: dict,
+                       keys: list[str]) -> None:
+    """Record how many distinct warm states the session's runs start from (and
+    which failed to compute; the manifest keeps the largest count of a session), and
+    how their traffic settled (:data:`~scenarios.warm_state.SETTLING_FILE`)."""
+    session["warm_states"] = warm
+    manifest["warm_states"] = max(manifest.get("warm_states", 0), warm["distinct"])
+    if keys:
+        write_settling(out_dir / SETTLING_FILE, keys)
+
+
 def _tally(table: pa.Table) -> tuple[Counter, int]:
     """Rows by status, and how many collided."""
     return (Counter(table.column("status").to_pylist()),
@@ -227,8 +241,10 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                 reporter.advance(row)
         if tasks:
             build_networks(tasks, executor.workers)
-            record_job_files(out_dir, manifest, session, tasks)
             with executor:
+                record_warm_states(out_dir, manifest, session,
+                                   *prepare_warm_states(tasks, executor, reporter.warm_states))
+                record_job_files(out_dir, manifest, session, tasks)
                 for row in executor.map(tasks):
                     store.add(row)
                     reporter.advance(row)

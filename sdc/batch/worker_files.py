@@ -20,7 +20,7 @@ from pathlib import Path
 from scenarios.atomic_write import write_atomic
 from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
-from sdc.batch.job_files import JobFile, sha256_hex
+from sdc.batch.job_files import WARM_STATE_FIELD, JobFile, sha256_hex
 from sdc.batch.run_task import RunTask
 
 #: the job's bytes of a file, or None when the executor has none to give
@@ -87,6 +87,8 @@ class WorkerFiles:
             elif file.field == "road.net_file":
                 spec = dataclasses.replace(spec, road=dataclasses.replace(
                     spec.road, net_file=str(path)))
+            elif file.field == WARM_STATE_FIELD:
+                task = dataclasses.replace(task, warm_state=path)
             elif file.field == "controller.name":
                 cls = spec.controller.name.rpartition(":")[2]
                 spec = dataclasses.replace(spec, controller=dataclasses.replace(

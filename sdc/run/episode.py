@@ -22,6 +22,7 @@ from analysis.trace_file import Trace
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
+from scenarios.warm_state import warm_state_id
 from scenarios.world_backends import make_road, make_world
 from sdc.car.collision import collision_with
 from sdc.car.controller_api import Observation
@@ -210,6 +211,7 @@ class Simulation:
             steps=len(trace),
             wall_time_s=time.perf_counter() - self.wall_start,
             network_vehicles=self.network_vehicles,
+            warm_state=warm_state_id(self.world.warm_state_key),
             trace_sha256=trace.sha256(),
         )
         metadata = {
@@ -226,13 +228,15 @@ class Simulation:
 
 
 def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
-                cache_dir: Path | None = None, gui: bool = False) -> Episode:
+                cache_dir: Path | None = None, gui: bool = False,
+                warm_state: Path | None = None) -> Episode:
     """Run ``spec`` (its seed, its controller, its backend) and return the outcome,
     its row named ``run_id`` (default :func:`default_run_id`); with ``gui``, in
-    sumo-gui (same results, at the speed of the step length)."""
+    sumo-gui (same results, at the speed of the step length). ``warm_state``: the file
+    of its warm state when the caller has one (same results as one found or computed)."""
     controller = make_controller(spec.controller)
     road = make_road(spec, cache_dir)
-    with make_world(spec, road, cache_dir, gui) as world:
+    with make_world(spec, road, cache_dir, gui, warm_state) as world:
         sim = Simulation(spec, world)
         sim.start()
         termination = None

@@ -104,6 +104,9 @@ COLUMNS: tuple[Column, ...] = (
            "wall time of the run [s] (of a timeout: until it was stopped)"),
     Column("network_vehicles", pa.int64(), OUTCOME,
            "traffic in the whole network as the ego entered"),
+    Column("warm_state", pa.string(), OUTCOME,
+           "the warm state the run's traffic started from (its key's first 16 hex "
+           "digits); runs that share one share their traffic; None: no warm-up"),
     Column("trace_sha256", pa.string(), OUTCOME,
            "hash of the trace: same spec and seed, same hash"),
     Column("traceback", pa.string(), STATUS, "the Python traceback of a run that raised"),

@@ -1,0 +1,203 @@
+"""Warm states: a run gives the same trace whether its traffic's warm state was
+computed in the run, found in the cache, shipped with a sweep's job or rebuilt
+by ``sdc replay``; sweeps draw their samples from as many states as they say."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from analysis.report import write_report
+from analysis.settling_report import TITLE as SETTLING_TITLE
+from scenarios import CATALOG_DIR
+from scenarios.errors import SdcError, SpecError
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.sumo_world import SumoWorld
+from scenarios.sweep_spec import expand, load_sweep, warm_seeds
+from scenarios.toml_io import load_spec
+from scenarios.warm_state import WarmState, cached_path, file_sha256, warm_key
+from scenarios.world_backends import make_road
+from sdc.batch.executors import LocalExecutor
+from sdc.batch.progress import QuietReporter
+from sdc.batch.sweep_runner import run_sweep
+from sdc.run.episode import run_episode
+
+REPO = Path(__file__).resolve().parent.parent
+TOWN_NET = CATALOG_DIR / "networks" / "grid-10x10.net.xml"
+
+
+def town(seed: int = 1, warm_up_s: float = 20.0, vehicles: int = 300, **traffic) -> ScenarioSpec:
+    """Grid-town, smaller: 300 cars warmed up 20 s, a 6 s run."""
+    spec = load_spec(CATALOG_DIR / "grid-town.toml")
+    return dataclasses.replace(
+        spec, scenario=dataclasses.replace(spec.scenario, seed=seed, duration_s=6.0),
+        traffic=dataclasses.replace(spec.traffic, vehicles=vehicles, warm_up_s=warm_up_s,
+                                    **traffic))
+
+
+def highway(seed: int = 1) -> ScenarioSpec:
+    """Two lanes of flows at 1200 vph, warmed up 15 s."""
+    spec = load_spec(CATALOG_DIR / "highway-obstacle.toml")
+    return dataclasses.replace(
+        spec, scenario=dataclasses.replace(spec.scenario, seed=seed, duration_s=6.0),
+        traffic=dataclasses.replace(spec.traffic, flow_vph_per_lane=1200.0, warm_up_s=15.0))
+
+
+def fresh_cache(path: Path, monkeypatch) -> Path:
+    monkeypatch.setenv("SDC_CACHE_DIR", str(path))
+    return path
+
+
+def sha_in_fresh_process(spec: ScenarioSpec, tmp_path: Path) -> str:
+    spec_file = tmp_path / "spec.json"
+    spec_file.write_text(json.dumps(spec.to_plain()))
+    code = ("import json, sys; from scenarios.scenario_spec import ScenarioSpec; "
+            "from sdc.run.episode import run_episode; "
+            "spec = ScenarioSpec.from_plain(json.load(open(sys.argv[1]))); "
+            "print(run_episode(spec).row['trace_sha256'])")
+    out = subprocess.run([sys.executable, "-c", code, str(spec_file)], cwd=REPO,
+                         capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+@pytest.mark.parametrize("make", [town, highway], ids=["town", "highway"])
+def test_computed_cached_and_fresh_process_warm_states_give_one_trace(make, tmp_path,
+                                                                      monkeypatch):
+    fresh_cache(tmp_path / "cache", monkeypatch)
+    spec = make()
+    computed = run_episode(spec)  # computes the state, then starts afresh on it
+    key = computed.row["warm_state"]
+    assert key is not None and len(list((tmp_path / "cache" / "warm-states").iterdir())) == 1
+    cached = run_episode(spec)
+    assert cached.row["trace_sha256"] == computed.row["trace_sha256"]
+    assert sha_in_fresh_process(spec, tmp_path) == computed.row["trace_sha256"]
+    # the traffic is there: warmed up, and (on the highway) still flowing in
+    assert computed.row["network_vehicles"] > 10
+
+
+def test_a_warm_state_is_the_traffic_alone(tmp_path, monkeypatch):
+    """Runs that differ in the ego, its route or the obstacles share one state; the
+    warm-up's seed, the traffic or its length make another."""
+    fresh_cache(tmp_path / "cache", monkeypatch)
+    net_sha = file_sha256(TOWN_NET)
+    base = town(seed=1, warm_seed=7)
+    moved = dataclasses.replace(base, obstacles=(dataclasses.replace(
+        base.obstacles[0], position_m=60.0),), scenario=dataclasses.replace(
+        base.scenario, seed=2))
+    assert warm_key(moved, net_sha) == warm_key(base, net_sha)
+    for other in (town(seed=1, warm_seed=8), town(seed=1, warm_seed=7, vehicles=301),
+                  town(seed=1, warm_seed=7, warm_up_s=21.0), town(seed=8)):
+        assert warm_key(other, net_sha) != warm_key(base, net_sha)
+    assert warm_key(town(seed=7), net_sha) == warm_key(town(seed=3, warm_seed=7), net_sha)
+
+    a, b = run_episode(base), run_episode(moved)
+    assert a.row["warm_state"] == b.row["warm_state"]
+    assert len(list((tmp_path / "cache" / "warm-states").iterdir())) == 1
+    # the state holds how the network's traffic settled, sampled every second
+    state = WarmState.read(cached_path(warm_key(base, net_sha)))
+    assert state.settling["t_s"][-1] == pytest.approx(20.0, abs=0.07)
+    assert len(state.settling["t_s"]) == 20 and max(state.settling["vehicles"]) == 300
+    assert state.demand["trips_made"] >= 300
+
+
+def test_a_warm_state_made_for_other_traffic_is_refused(tmp_path, monkeypatch):
+    fresh_cache(tmp_path / "cache", monkeypatch)
+    run_episode(town(warm_seed=1))
+    other = cached_path(warm_key(town(warm_seed=1), file_sha256(TOWN_NET)))
+    spec = town(warm_seed=2)
+    world = SumoWorld(spec, make_road(spec), warm_state=other)
+    with pytest.raises(SdcError, match="made for other traffic"):
+        world.warm_state(TOWN_NET)
+    broken = tmp_path / "broken.zip"
+    broken.write_bytes(b"not a zip")
+    with pytest.raises(SdcError, match="broken.zip: cannot be read"):
+        SumoWorld(spec, make_road(spec), warm_state=broken).warm_state(TOWN_NET)
+
+
+SWEEP = """[sweep]
+name = "warm"
+base = "town.toml"
+samples = 6
+seed = 3
+warm_states = 2
+controllers = ["seed", "lane-keep"]
+
+[sweep.params]
+"obstacles[0].position_m" = {{ uniform = [60.0, 90.0] }}
+"""
+
+
+def town_sweep(root: Path, warm_states: str = "warm_states = 2") -> Path:
+    root.mkdir(parents=True, exist_ok=True)
+    text = (CATALOG_DIR / "grid-town.toml").read_text()
+    text = (text.replace("vehicles = 2000", "vehicles = 300")
+            .replace("duration_s = 30.0", "duration_s = 6.0")
+            .replace('net_file = "networks/', f'net_file = "{CATALOG_DIR}/networks/'))
+    text = text.replace("warm_up_s = ", "warm_up_s = 20.0 # ")
+    (root / "town.toml").write_text(text)
+    (root / "sweep.toml").write_text(SWEEP.format().replace("warm_states = 2", warm_states))
+    return root / "sweep.toml"
+
+
+def test_a_sweep_draws_its_samples_from_its_warm_states_and_replays_them(tmp_path, monkeypatch,
+                                                                        chromium_page):
+    cache = fresh_cache(tmp_path / "cache", monkeypatch)
+    sweep = load_sweep(town_sweep(tmp_path / "scenarios"))
+    seeds = warm_seeds(sweep)
+    plan = expand(sweep)
+    assert {r.spec.traffic.warm_seed for r in plan} == set(seeds) and len(seeds) == 2
+    assert all(r.spec.traffic.warm_seed == seeds[r.seed % 2] for r in plan)
+
+    out = run_sweep(sweep, tmp_path / "out", LocalExecutor(2), QuietReporter(), traces="all")
+    assert out.counts == {"ok": 12, "error": 0, "timeout": 0, "missing": 0}
+    rows = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert rows.warm_state.nunique() == 2
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert manifest["warm_states"] == 2
+    assert manifest["sessions"][-1]["warm_states"] == {"distinct": 2, "computed": 2,
+                                                       "failed": {}}
+    shipped = [path for path, entry in manifest["files"].items()
+               if entry["field"] == "warm state"]
+    assert len(shipped) == 2 and all(Path(p).parent == cache / "warm-states" for p in shipped)
+
+    # replayed with the cache the sweep filled, and with none (the state rebuilt)
+    for cache_dir in (cache, tmp_path / "empty-cache"):
+        env = {**os.environ, "SDC_CACHE_DIR": str(cache_dir)}
+        for run_id in ("00001-seed", "00004-lane-keep"):
+            replay = subprocess.run([sys.executable, "-m", "sdc", "replay", str(tmp_path / "out"),
+                                     "--run", run_id, "--verify"], cwd=REPO, env=env,
+                                    capture_output=True, text=True, check=False)
+            assert replay.returncode == 0 and "identical" in replay.stdout, replay.stdout
+    assert len(list((tmp_path / "empty-cache" / "warm-states").iterdir())) == 2
+
+    # the report: how the traffic settled in the warm-ups, the warm states counted and
+    # the intervals widened, as a user sees the page
+    report = write_report(tmp_path / "out")
+    lines = "\n".join(report.terminal)
+    assert "Traffic warm-up: 20 s (the mean of 2 warm-ups kept in warm-states.json)" in lines
+    assert "2 distinct warm states" in lines and "WARNING: the traffic's variety" in lines
+    page, problems = chromium_page
+    page.goto(report.html_path.as_uri())
+    widths = page.eval_on_selector_all(f'img[alt="{SETTLING_TITLE}"]',
+                                       "els => els.map(e => e.naturalWidth)")
+    assert len(widths) == 1 and widths[0] > 300 and problems == []
+
+    # a sweep without warm_states: one state per sample, as before
+    default = load_sweep(town_sweep(tmp_path / "one-each", warm_states=""))
+    assert default.warm_states is None
+    assert all(r.spec.traffic.warm_seed is None for r in expand(default))
+
+
+def test_warm_states_need_a_warm_up(tmp_path):
+    path = town_sweep(tmp_path / "s")
+    text = (tmp_path / "s" / "town.toml").read_text()
+    (tmp_path / "s" / "town.toml").write_text(text.replace("warm_up_s = 20.0", "warm_up_s = 0.0"))
+    with pytest.raises(SpecError, match="sweep.warm_states: the base scenario has no traffic"):
+        load_sweep(path)
