@@ -222,11 +222,11 @@ class SumoWorld:
             return self.road.net.path
         return build_network(self.spec.road, self.cache_dir)
 
-    def _new_demand(self) -> RandomTrips | None:
-        """The random trips of a network's traffic, drawn from the warm-up's seed."""
+    def _new_demand(self, seed: int) -> RandomTrips | None:
+        """The random trips of a network's traffic, drawn from ``seed``'s stream."""
         if not (isinstance(self.road, NetworkRoad) and self.spec.traffic.vehicles):
             return None
-        return RandomTrips(self.road.net, scenario_stream(warm_seed(self.spec), DEMAND))
+        return RandomTrips(self.road.net, scenario_stream(seed, DEMAND))
 
     def _scratch(self) -> Path:
         if self._tmp is None:
@@ -273,14 +273,14 @@ class SumoWorld:
             state_file.write_bytes(state.sumo_state)
             self._start_sumo(sim, command, net, warm_run_routes_xml(self.spec, self.road),
                              "--load-state", str(state_file), *self.sumo_options)
-            self._demand = self._new_demand()
-            if self._demand is not None:
+            self._demand = self._new_demand(warm_seed(self.spec))
+            if self._demand is not None:  # it goes on where the warm-up left it
                 self._demand.restore(state.demand["rng"])
                 self._trips_made = state.demand["trips_made"]
             self.warm_state_key = state.key
             self._clear_start(obstacles=True)
         else:
-            self._demand = self._new_demand()
+            self._demand = self._new_demand(self.spec.scenario.seed)
             trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
             self._trips_made = len(trips)
             self._start_sumo(sim, command, net, routes_xml(self.spec, self.road, trips),
@@ -323,7 +323,7 @@ class SumoWorld:
         import libsumo
 
         spec = self.spec
-        demand = self._new_demand()
+        demand = self._new_demand(warm_seed(spec))
         trips = demand.draw(spec.traffic.vehicles) if demand else []
         self._demand, self._trips_made = demand, len(trips)
         self._start_sumo(libsumo, ["sumo"], net, warm_up_routes_xml(spec, self.road, trips),

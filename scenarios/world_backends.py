@@ -16,7 +16,7 @@ from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import build_network, sumo_load_error
-from scenarios.warm_state import file_sha256, warm_key
+from scenarios.warm_state import cached_path, file_sha256, uses_warm_state, warm_key
 
 BACKENDS = ("sumo", "highway")
 
@@ -58,6 +58,15 @@ def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
 
     with contextlib.suppress(SdcError):
         network_area(read_net(road.net_file), cache_dir)
+
+
+def warm_state_path(spec: ScenarioSpec, cache_dir: Path | None = None) -> Path | None:
+    """Where ``spec``'s warm state is cached on this machine (None: it has no warm-up)."""
+    if not uses_warm_state(spec):
+        return None
+    net = (Path(spec.road.net_file) if spec.road.kind == "sumo_net"
+           else build_network(spec.road, cache_dir))
+    return cached_path(warm_key(spec, file_sha256(net)))
 
 
 def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:

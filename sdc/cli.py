@@ -40,11 +40,22 @@ def _check_trace_path(trace: Path | None) -> None:
         _bad_input(f"--trace: directory {trace.parent} does not exist")
 
 
+def say_warm_up(spec: ScenarioSpec) -> None:
+    """Tell the user (on stderr) when the run first warms its traffic up: minutes, once."""
+    from scenarios.world_backends import warm_state_path
+
+    path = warm_state_path(spec)
+    if path is not None and not path.is_file():
+        click.echo(f"warming the traffic up: {spec.traffic.warm_up_s:g} s of SUMO, once "
+                   f"(the warm state is cached in {path.parent})", err=True)
+
+
 def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     """Run a spec; a failure inside the run becomes a row with ``status`` error."""
     from sdc.batch.run_task import RunTask, execute
     from sdc.run.episode import default_run_id
 
+    say_warm_up(spec)
     return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
 
 
@@ -66,7 +77,8 @@ def summary_lines(name: str, row: dict) -> list[str]:
         f"{name}  controller={row['controller']}  seed={row['seed']}  backend={row['backend']}",
         f"  outcome:   {outcome}; ended by {row['termination']} after "
         f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
-        f"{row['network_vehicles']} vehicles in the network)",
+        f"{row['network_vehicles']} vehicles in the network"
+        + (f", warm state {row['warm_state']}" if row.get("warm_state") else "") + ")",
         f"  maneuver:  {maneuver}",
         f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
         f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
@@ -351,6 +363,11 @@ def _plan_lines(sweep, plan) -> list[str]:
     lines = [f"sweep {sweep.name}: {samples} samples x {len(sweep.controllers)} controllers = "
              f"{len(plan)} runs ({sweep.sampler} sampler, seed {sweep.seed}); "
              f"{invalid} runs with an invalid scenario"]
+    warm = {run.spec.traffic.warm_seed for run in plan if run.spec is not None
+            and run.spec.traffic.warm_up_s > 0 and run.spec.scenario.backend == "sumo"}
+    if sweep.warm_states is not None:
+        lines.append(f"the samples draw their traffic from {len(warm)} warm states "
+                     f"(sweep.warm_states = {sweep.warm_states})")
     paths = [p.path for p in sweep.params]
     lines.append("  ".join(["run_id", "seed"] + paths))
     for run in plan:
@@ -764,6 +781,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     recorded_trace = read_trace(recorded.trace_path)[0] if recorded.trace_path else None
     for line in version_warnings(recorded.manifest):
         click.echo(line, err=True)
+    say_warm_up(recorded.spec)
     episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
     replayed_sha = episode.trace.sha256()
     row = recorded.row

@@ -201,3 +201,29 @@ def test_warm_states_need_a_warm_up(tmp_path):
     (tmp_path / "s" / "town.toml").write_text(text.replace("warm_up_s = 20.0", "warm_up_s = 0.0"))
     with pytest.raises(SpecError, match="sweep.warm_states: the base scenario has no traffic"):
         load_sweep(path)
+
+
+def test_sdc_settle_watches_the_traffic_and_suggests_a_warm_up(tmp_path):
+    spec_file = tmp_path / "highway.toml"
+    text = (CATALOG_DIR / "highway-obstacle.toml").read_text()
+    spec_file.write_text(text.replace("flow_vph_per_lane = 600.0", "flow_vph_per_lane = 1500.0"))
+    out = tmp_path / "settle.png"
+    done = subprocess.run([sys.executable, "-m", "sdc", "settle", str(spec_file), "--for", "30",
+                           "--out", str(out), "--json"], cwd=REPO, capture_output=True,
+                          text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    suggestion = json.loads(done.stdout.strip().splitlines()[-1])
+    assert suggestion["rule"].startswith("MSER")
+    assert suggestion["observed_s"] == pytest.approx(30.0, abs=0.07)
+    # the 1 km road fills from empty for 40 s: no settled value, only a lower bound
+    assert set(suggestion["measures"]) == {"vehicles", "mean_speed_mps", "halting"}
+    assert not suggestion["measures"]["vehicles"]["settled"] and not suggestion["settled"]
+    assert "not settled within 30 s" in done.stdout
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    series = pd.read_csv(out.with_suffix(".csv"))
+    assert list(series.columns) == ["t_s", "vehicles", "mean_speed_mps", "halting"]
+    assert len(series) == 30 and series.vehicles.iloc[-1] > series.vehicles.iloc[5] > 0
+
+    bad = subprocess.run([sys.executable, "-m", "sdc", "settle", str(spec_file), "--for", "5"],
+                         cwd=REPO, capture_output=True, text=True, check=False)
+    assert bad.returncode == 2 and "--for" in bad.stderr
