@@ -34,7 +34,9 @@ from scenarios.toml_io import load_spec, read_toml
 
 SAMPLERS = ("grid", "random", "sobol", "lhs")
 MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
-WARM_STREAM = 3  # the random stream of a sweep's warm-up seeds (samples use 0 and 1)
+#: the warm-up seeds of a sweep are drawn from numpy.random.default_rng([seed, WARM_STREAM]),
+#: a stream apart from its samples' (children of SeedSequence(seed))
+WARM_STREAM = 3
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 

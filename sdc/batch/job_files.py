@@ -6,9 +6,9 @@ A run of a ``sumo_net`` road reads ``road.net_file`` and that network's road
 edges (cached beside the built networks); a SUMO run of a built-in road reads
 the network netconvert built for it on the driver; a ``file.py:Class``
 controller reads its file; a run with a warm-up starts from its warm state, once
-the driver has it (:mod:`sdc.batch.warm_states`). Each is a :class:`JobFile`: the field that names
-it, the driver's path (for messages and the manifest; no worker opens it), its
-sha256 and the file name its copy takes. :class:`FileCatalog` is the driver's
+the driver has it (:mod:`sdc.batch.warm_states`). Each is a :class:`JobFile`:
+the field that names it, the driver's path (for messages and the manifest; no
+worker opens it), its sha256 and the file name its copy takes. :class:`FileCatalog` is the driver's
 side; :mod:`sdc.batch.worker_files` is the worker's.
 """
 
