@@ -227,3 +227,19 @@ def test_sdc_settle_watches_the_traffic_and_suggests_a_warm_up(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "sdc", "settle", str(spec_file), "--for", "5"],
                          cwd=REPO, capture_output=True, text=True, check=False)
     assert bad.returncode == 2 and "--for" in bad.stderr
+
+
+def test_a_run_without_an_outcome_still_names_its_warm_state():
+    """An error or timeout row names the warm state its run was to start from, so the
+    report's gate counts it with the runs sharing its traffic, not as one apart."""
+    from sdc.batch.warm_states import with_warm_state
+    from sdc.run.result_row import error_row
+
+    key = "ab" * 32
+    row = error_row(run_id="00003-seed", seed=1, controller="seed", backend="sumo",
+                    error="boom", traceback=None)
+    assert row["warm_state"] is None
+    assert with_warm_state(row, {"00003-seed": key})["warm_state"] == key[:16]
+    assert with_warm_state(row, {})["warm_state"] is None
+    ran = {**row, "warm_state": "cd" * 8}  # a run's own word stands
+    assert with_warm_state(ran, {"00003-seed": key})["warm_state"] == "cd" * 8

@@ -58,7 +58,7 @@ from sdc.batch.sweep_runner import (
     start_session,
     sweep_columns,
 )
-from sdc.batch.warm_states import prepare_warm_states
+from sdc.batch.warm_states import prepare_warm_states, with_warm_state
 from sdc.run.result_row import adaptive_row, result_schema
 
 Mode = Literal["search", "estimate"]
@@ -192,10 +192,11 @@ class _Runs:
             if not self._entered:
                 self.executor.__enter__()
                 self._entered = True
-            record_warm_states(self.out_dir, self.manifest, self.session, *prepare_warm_states(
-                tasks, self.executor, self.reporter.warm_states))
+            warm, keys = prepare_warm_states(tasks, self.executor, self.reporter.warm_states)
+            record_warm_states(self.out_dir, self.manifest, self.session, warm, keys)
             record_job_files(self.out_dir, self.manifest, self.session, tasks)
             for row in self.executor.map(tasks):
+                row = with_warm_state(row, keys)
                 score = run_score(row, self.settings.score)
                 self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
         return [self.rows[r.run_id] for r in plan]

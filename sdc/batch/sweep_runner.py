@@ -39,7 +39,7 @@ from sdc.batch.manifest import (
 )
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
-from sdc.batch.warm_states import prepare_warm_states, write_settling
+from sdc.batch.warm_states import prepare_warm_states, with_warm_state, write_settling
 from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
 
 STATUSES = ("ok", "error", "timeout")
@@ -188,14 +188,14 @@ def record_job_files(out_dir: Path, manifest: dict, session: dict,
 
 
 def record_warm_states(out_dir: Path, manifest: dict, session: dict, warm: dict,
-                       keys: list[str]) -> None:
+                       keys: dict[str, str]) -> None:
     """Record how many distinct warm states the session's runs start from (and
     which failed to compute; the manifest keeps the largest count of a session), and
     how their traffic settled (:data:`~scenarios.warm_state.SETTLING_FILE`)."""
     session["warm_states"] = warm
     manifest["warm_states"] = max(manifest.get("warm_states", 0), warm["distinct"])
     if keys:
-        write_settling(out_dir / SETTLING_FILE, keys)
+        write_settling(out_dir / SETTLING_FILE, list(dict.fromkeys(keys.values())))
 
 
 def _tally(table: pa.Table) -> tuple[Counter, int]:
@@ -242,10 +242,11 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
         if tasks:
             build_networks(tasks, executor.workers)
             with executor:
-                record_warm_states(out_dir, manifest, session,
-                                   *prepare_warm_states(tasks, executor, reporter.warm_states))
+                warm, keys = prepare_warm_states(tasks, executor, reporter.warm_states)
+                record_warm_states(out_dir, manifest, session, warm, keys)
                 record_job_files(out_dir, manifest, session, tasks)
                 for row in executor.map(tasks):
+                    row = with_warm_state(row, keys)
                     store.add(row)
                     reporter.advance(row)
     except KeyboardInterrupt:

@@ -33,33 +33,48 @@ Progress = Callable[[int, int], None]
 SETTLING_SERIES = 20
 
 
-def warm_keys(tasks: Iterable[RunTask], catalog: FileCatalog) -> dict[str, RunTask]:
-    """Each distinct warm state the ``tasks`` start from, with the first task that
-    needs it (a run whose files the driver cannot read is left to report it)."""
-    needed: dict[str, RunTask] = {}
+def warm_keys(tasks: Iterable[RunTask], catalog: FileCatalog) -> dict[str, str]:
+    """The key of the warm state each of ``tasks`` starts from, by run ID (a run
+    without one, or whose files the driver cannot read, is left out: it reports them)."""
+    keys: dict[str, str] = {}
     for task in tasks:
         with contextlib.suppress(SdcError):
             key = catalog.warm_key(task.spec)
             if key is not None:
-                needed.setdefault(key, task)
-    return needed
+                keys[task.run_id] = key
+    return keys
 
 
-def warm_up_tasks(tasks: Iterable[RunTask], catalog: FileCatalog) -> list[RunTask]:
-    """A ``warm_up`` task for each warm state the tasks need and the driver lacks."""
+def warm_up_tasks(tasks: Iterable[RunTask], keys: dict[str, str]) -> list[RunTask]:
+    """A ``warm_up`` task for each warm state the ``tasks`` start from (``keys``: by run
+    ID) that the driver's cache lacks, on the spec of the first run that needs it."""
+    first = {}
+    for task in tasks:
+        if task.run_id in keys:
+            first.setdefault(keys[task.run_id], task)
     return [RunTask(f"warm-state-{key[:16]}", task.spec, trace_path=cached_path(key),
                     kind="warm_up")
-            for key, task in warm_keys(tasks, catalog).items() if not cached_path(key).is_file()]
+            for key, task in first.items() if not cached_path(key).is_file()]
+
+
+def with_warm_state(row: dict, keys: dict[str, str]) -> dict:
+    """``row`` naming its run's warm state (``keys``: by run ID) also when the run did
+    not get to start from it (an error, a timeout): the report counts it with the runs
+    that share its traffic."""
+    key = keys.get(row["run_id"])
+    if key is None or row.get("warm_state") is not None:
+        return row
+    return {**row, "warm_state": warm_state_id(key)}
 
 
 def prepare_warm_states(tasks: list[RunTask], executor,
-                        progress: Progress) -> tuple[dict, list[str]]:
+                        progress: Progress) -> tuple[dict, dict[str, str]]:
     """Compute on ``executor`` (inside its ``with`` block) the warm states ``tasks``
     need and the driver's cache lacks. Returns ``{"distinct": n, "computed": n,
-    "failed": {task id: error}}`` and the keys of the states the tasks start from."""
+    "failed": {task id: error}}`` and the key of each task's warm state by run ID."""
     catalog = FileCatalog()
-    needed = warm_keys(tasks, catalog)
-    todo = warm_up_tasks(tasks, catalog)
+    keys = warm_keys(tasks, catalog)
+    todo = warm_up_tasks(tasks, keys)
     failed = {}
     if todo:
         warm_state_dir().mkdir(parents=True, exist_ok=True)
@@ -68,8 +83,9 @@ def prepare_warm_states(tasks: list[RunTask], executor,
             if row["status"] != "ok":
                 failed[row["run_id"]] = row.get("error")
             progress(done, len(todo))
-    summary = {"distinct": len(needed), "computed": len(todo) - len(failed), "failed": failed}
-    return summary, list(needed)
+    summary = {"distinct": len(set(keys.values())), "computed": len(todo) - len(failed),
+               "failed": failed}
+    return summary, keys
 
 
 def write_settling(path: Path, keys: list[str]) -> None:
