@@ -119,9 +119,10 @@ class WarmState:
             with zipfile.ZipFile(path) as z:
                 meta = json.loads(z.read(_META))
                 sumo_state = z.read(_SUMO_STATE)
-        except (OSError, KeyError, ValueError, zipfile.BadZipFile) as e:
-            raise SdcError(f"warm state {path}: cannot be read ({e})") from None
-        if meta.get("format") != WARM_FORMAT:
-            raise SdcError(f"warm state {path}: format {meta.get('format')}, this sdc reads "
-                           f"{WARM_FORMAT}")
-        return cls(meta["key"], meta["t_s"], sumo_state, meta["demand"], meta["settling"])
+            if meta.get("format") != WARM_FORMAT:
+                raise SdcError(f"warm state {path}: format {meta.get('format')}, this sdc "
+                               f"reads {WARM_FORMAT}")
+            return cls(meta["key"], meta["t_s"], sumo_state, meta["demand"], meta["settling"])
+        except (OSError, KeyError, ValueError, AttributeError, zipfile.BadZipFile) as e:
+            raise SdcError(f"warm state {path}: cannot be read ({type(e).__name__}: {e})") \
+                from None

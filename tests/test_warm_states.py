@@ -243,3 +243,19 @@ def test_a_run_without_an_outcome_still_names_its_warm_state():
     assert with_warm_state(row, {})["warm_state"] is None
     ran = {**row, "warm_state": "cd" * 8}  # a run's own word stands
     assert with_warm_state(ran, {"00003-seed": key})["warm_state"] == "cd" * 8
+
+
+def test_a_warm_state_file_missing_a_part_is_refused_by_name(tmp_path):
+    import zipfile
+
+    path = tmp_path / "half.zip"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("warm-state.json", json.dumps({"format": 1, "t_s": 1.0}))
+        z.writestr("sumo-state.xml.gz", b"")
+    with pytest.raises(SdcError, match=r"half.zip: cannot be read \(KeyError"):
+        WarmState.read(path)
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("warm-state.json", json.dumps({"format": 99}))
+        z.writestr("sumo-state.xml.gz", b"")
+    with pytest.raises(SdcError, match="format 99, this sdc reads 1"):
+        WarmState.read(path)
