@@ -18,7 +18,8 @@ from analysis.verdicts import completed_runs
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 
 
-def _png(fig: Figure) -> bytes:
+def png_bytes(fig: Figure) -> bytes:
+    """The figure as PNG bytes (100 dpi, cropped to its contents)."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100, bbox_inches="tight")
     return buffer.getvalue()
@@ -66,7 +67,7 @@ def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wils
            title=f"Collision rate by {_label(column)} ({method} 95% interval)")
     ax.grid(alpha=0.3)
     ax.legend()
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
@@ -88,7 +89,7 @@ def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> byte
     ax.set_yticks(range(grid.shape[0]), [str(i) for i in grid.index], fontsize=8)
     ax.set(xlabel=_label(x), ylabel=_label(y), title=f"Collision rate, {controller}")
     fig.colorbar(image, ax=ax, label="collision rate")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 OUTCOME_STYLE = {"completed": ("tab:green", "o"), "collided": ("tab:red", "X"),
@@ -118,7 +119,7 @@ def outcome_bars(results: pd.DataFrame) -> bytes:
     ax.set(xlabel="share of the controller's runs", xlim=(0, 1),
            title="How the runs ended")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def separating_parameters(results: pd.DataFrame, columns: list[str]) -> list[str]:
@@ -163,7 +164,7 @@ def failure_map(results: pd.DataFrame, x: str, y: str | None) -> bytes:
         axes[0].set_yticks(range(len(names)), names)
     axes[-1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.suptitle("How every run ended, over the parameters that separate failures best")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 #: the DRAC panel's last bin holds this and more: beyond any car's brakes (8 m/s^2 for
@@ -191,7 +192,7 @@ def distributions(results: pd.DataFrame) -> bytes:
         ax.legend()
     fig.suptitle("Safety margins of the ok runs (no TTC: nothing on a course to touch; "
                  "DRAC 0: no leader closed in on)")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def collision_breakdown(results: pd.DataFrame) -> bytes:
@@ -210,7 +211,7 @@ def collision_breakdown(results: pd.DataFrame) -> bytes:
         bottom += counts
     ax.set(ylabel="runs", title="Collisions by what was hit (and failed runs)")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def convergence(history: pd.DataFrame, target_rhw: float | None) -> bytes:
@@ -234,7 +235,7 @@ def convergence(history: pd.DataFrame, target_rhw: float | None) -> bytes:
               title="Relative half-width (95%)", ylim=(0, None))
     for ax in (left, right):
         ax.grid(alpha=0.3)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def sampling_path(results: pd.DataFrame, x: str, y: str) -> bytes:
@@ -250,7 +251,7 @@ def sampling_path(results: pd.DataFrame, x: str, y: str) -> bytes:
     ax.set(xlabel=_label(x), ylabel=_label(y), title="Runs drawn, batch by batch")
     ax.grid(alpha=0.3)
     ax.legend(loc="best")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def mode_probabilities(modes: list[dict], total: dict) -> bytes:
@@ -269,4 +270,4 @@ def mode_probabilities(modes: list[dict], total: dict) -> bytes:
     ax.errorbar(p, y, xerr=[low, high], fmt="none", ecolor="black", capsize=4)
     ax.set_yticks(y, labels)
     ax.set(xlabel="P(collision), 95% interval", title="Where the probability comes from")
-    return _png(fig)
+    return png_bytes(fig)

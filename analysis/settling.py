@@ -95,7 +95,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from analysis.plots import _png
+from analysis.plots import png_bytes
 
 #: the measures the rule is applied to, each on its own
 MEASURES = ("mean_speed_mps", "halting", "vehicles")
@@ -335,4 +335,4 @@ def settling_figure(series: pd.DataFrame | Sequence[pd.DataFrame], suggestion: d
     axes[0].legend(loc="best", fontsize=8)
     axes[-1].set_xlabel("simulation time [s]")
     fig.suptitle(title)
-    return _png(fig)
+    return png_bytes(fig)
