@@ -21,6 +21,7 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.stats import STATUSES
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
@@ -41,8 +42,6 @@ from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
 from sdc.batch.warm_states import prepare_warm_states, with_warm_state, write_settling
 from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
-
-STATUSES = ("ok", "error", "timeout")
 
 
 class Reporter(Protocol):
