@@ -32,7 +32,7 @@ from scenarios.snapshot import (
     obstacle_boxes,
     sensing_radius_m,
 )
-from scenarios.sumo_net.build import EDGE_ID, build_network, sumo_binary
+from scenarios.sumo_net.build import EDGE_ID, network_file, sumo_binary
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
 from scenarios.warm_state import (
@@ -218,9 +218,7 @@ class SumoWorld:
 
     def net_path(self) -> Path:
         """The network file SUMO runs on."""
-        if isinstance(self.road, NetworkRoad):
-            return self.road.net.path
-        return build_network(self.spec.road, self.cache_dir)
+        return network_file(self.spec.road, self.cache_dir)
 
     def _new_demand(self, seed: int) -> RandomTrips | None:
         """The random trips of a network's traffic, drawn from ``seed``'s stream."""

@@ -15,7 +15,7 @@ from pathlib import Path
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import build_network, sumo_load_error
+from scenarios.sumo_net.build import build_network, network_file, sumo_load_error
 from scenarios.warm_state import cached_path, file_sha256, uses_warm_state, warm_key
 
 BACKENDS = ("sumo", "highway")
@@ -64,9 +64,7 @@ def warm_state_path(spec: ScenarioSpec, cache_dir: Path | None = None) -> Path |
     """Where ``spec``'s warm state is cached on this machine (None: it has no warm-up)."""
     if not uses_warm_state(spec):
         return None
-    net = (Path(spec.road.net_file) if spec.road.kind == "sumo_net"
-           else build_network(spec.road, cache_dir))
-    return cached_path(warm_key(spec, file_sha256(net)))
+    return cached_path(warm_key(spec, file_sha256(network_file(spec.road, cache_dir))))
 
 
 def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:

@@ -81,6 +81,12 @@ def network_file_name(road: RoadSpec) -> str:
     return f"{digest.hexdigest()[:20]}.net.xml"
 
 
+def network_file(road: RoadSpec, cache_dir: Path | None = None) -> Path:
+    """The ``.net.xml`` SUMO runs ``road`` on: a ``sumo_net`` road's own file, or the
+    network built for a built-in road (:func:`build_network`)."""
+    return Path(road.net_file) if road.kind == "sumo_net" else build_network(road, cache_dir)
+
+
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
     """Path of the ``.net.xml`` for ``road``, built on first use and cached (in
     ``cache_dir``, by default :func:`~scenarios.cache_dir.network_cache_dir`,
