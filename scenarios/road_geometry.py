@@ -96,6 +96,18 @@ class RoadGeometry:
         return road_kernels.locate(x_m, y_m, self._seg_start_xy, self._seg_dir,
                                    self._seg_len_m, self._seg_start_s_m)
 
+    def locate_near(self, x_m: float, y_m: float, near_s_m: float,
+                    reach_m: float = 30.0) -> tuple[float, float]:
+        """:meth:`locate` among the segments within ``reach_m`` of ``near_s_m`` along
+        the road: where a route passes close to itself (a grid's parallel streets,
+        its own end), a point that moved on from ``near_s_m`` stays on its part."""
+        starts = self._seg_start_s_list
+        first = max(0, bisect.bisect_right(starts, near_s_m - reach_m) - 1)
+        last = max(first + 1, bisect.bisect_right(starts, near_s_m + reach_m))
+        return road_kernels.locate(x_m, y_m, self._seg_start_xy[first:last],
+                                   self._seg_dir[first:last], self._seg_len_m[first:last],
+                                   self._seg_start_s_m[first:last])
+
     def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
         return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
                        0, len(self._seg_len_m) - 1)

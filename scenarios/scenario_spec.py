@@ -212,6 +212,9 @@ class AvoidParams(Spec):
     wait_gap_m: float = num(7.0, ge=0, le=100)
     #: the free space wanted on each side of the body when passing
     lateral_clearance_m: float = num(0.5, ge=0, le=5)
+    #: what comes within this of the body's sides, the car on its lane's centre,
+    #: is in its way (a kerb jutting into the lane at a junction's corner is not)
+    path_clearance_m: float = num(0.3, ge=0, le=5)
     #: returns this close inside the own lane's edges do not count as in the lane
     #: (the road edge's own returns)
     edge_tolerance_m: float = num(0.1, ge=0, le=1)
@@ -222,9 +225,9 @@ class AvoidParams(Spec):
     #: returns this far beyond the nearest one in the lane belong to the same
     #: obstacle (its width sets the lateral target)
     obstacle_depth_m: float = num(15.0, gt=0, le=100)
-    #: a neighbouring lane is entered only after it was seen empty beside the car
-    #: for this long, from the first step on (traffic from behind is out of the
-    #: lidar's view) ...
+    #: without a rear view, a neighbouring lane is entered only after it was seen
+    #: empty beside the car for this long, from the first step on (traffic from
+    #: behind is out of the lidar's view) ...
     lane_watch_s: float = num(3.0, ge=0, le=600)
     #: ... or for this long once anything was seen in it beside the car (a lane
     #: whose traffic overtakes the car is not entered while stopping is possible) ...
@@ -234,6 +237,14 @@ class AvoidParams(Spec):
     #: the swerve's estimated duration (bang-bang lateral acceleration plus the
     #: steering's lag) times this must fit in the gap, or the car brakes
     swerve_time_factor: float = num(1.3, ge=1, le=10)
+    #: the steering's lag in that estimate: winding up to this angle and back at
+    #: the car's steering rate
+    swerve_steer_rad: float = num(0.5, ge=0, le=1.5)
+    #: the tightest turn the estimate allows at any speed: the turning radius at
+    #: this fraction of the car's steering limit (an S of two such arcs)
+    tightest_steer_fraction: float = num(0.9, gt=0, le=1)
+    #: the swerve's sideways shift clears the obstacle's edge by this much more
+    shift_margin_m: float = num(0.2, ge=0, le=5)
     #: the car returns when its rear bumper is this far past the obstacle
     return_gap_m: float = num(2.0, ge=0, le=50)
     #: the return ends (cruise) once the offset is within this of the lane centre
@@ -244,12 +255,35 @@ class AvoidParams(Spec):
     preview_time_s: float = num(0.8, gt=0, le=10)
     #: the steering's lateral acceleration cap (the path's curvature x speed^2)
     max_lateral_accel_mps2: float = num(5.0, gt=0, le=20)
+    #: the car slows for the lane's bends ahead (junction turns, tight curves) to
+    #: take them at no more than this lateral acceleration
+    turn_lateral_accel_mps2: float = num(3.0, gt=0, le=20)
     #: braking for an obstacle asks this times the deceleration a stop needs ...
     brake_gain: float = num(1.5, ge=1, le=10)
     #: ... and stops outright from under this speed
     creep_speed_mps: float = num(0.5, ge=0, le=10)
     #: the cruise speed's feedback gain: acceleration per m/s of speed error
     speed_gain_1ps: float = num(0.5, gt=0, le=10)
+    #: with something ahead in its path the car keeps a speed from which it stops
+    #: short of it braking at this fraction of its hardest
+    gap_decel_fraction: float = num(0.5, gt=0, le=1)
+    #: the range image covers the rear when its beams reach this far round from
+    #: straight ahead on both sides (a 360-degree lidar): then the lanes behind are
+    #: watched instead of waited for (the watch times above apply without it)
+    rear_view_deg: float = num(170.0, gt=90, le=180)
+    #: with a rear view a lane is entered (out to pass, or back) only when the
+    #: nearest vehicle behind in it is at least rear_min_gap_m plus its closing
+    #: speed times rear_gap_time_s behind the car's rear bumper; a lane empty as
+    #: far as the lidar reaches is open, so its range must cover the fastest
+    #: closing speed times rear_gap_time_s
+    rear_gap_time_s: float = num(3.0, ge=0, le=30)
+    rear_min_gap_m: float = num(10.0, ge=0, le=200)
+    #: the closing speed is measured over this long (a vehicle seen for less than
+    #: half of it, or lost for a moment, keeps its lane closed)
+    rear_track_s: float = num(0.5, gt=0, le=10)
+    #: a gap behind that grows by more than this in a step belongs to another
+    #: vehicle: its track starts afresh
+    rear_jump_m: float = num(3.0, gt=0, le=100)
 
 
 #: each built-in controller's parameters (its classes are in ``sdc.car.controller_plugins``)

@@ -115,6 +115,14 @@ def test_nothing_in_the_lane_keeps_cruising_at_the_cruise_speed():
     assert phase == CRUISE and command.accel_mps2 == 0.0
 
 
+def test_a_kerb_jutting_into_the_lane_is_not_in_the_way():
+    road = FakeRoad([], lanes_left=1, lanes_right=0)
+    kerb_y = -LANE_W / 2 + 0.25  # a junction's corner, 0.25 m into the lane
+    road.edges = np.vstack([road.edges, [[20.0, kerb_y, 30.0, kerb_y]]])
+    assert first_step(road, at_speed(10.0))[1] == CRUISE
+    assert first_step(road, at_speed(10.0), path_clearance_m=0.6)[1] != CRUISE
+
+
 # ---- side choice -----------------------------------------------------------------
 
 def test_left_first_when_the_left_is_free():
@@ -221,6 +229,15 @@ def test_closed_loop_round_a_barrel_and_back():
     assert abs(y[-1]) < 0.1 and min(s.speed_mps for s in states) > 9.9
     beside = [s.y_m for s in states if abs(s.x_m + CENTER_AHEAD_M - road.boxes[0, 0]) < 3.0]
     assert min(beside) > 2.0  # passed with the barrel well clear
+
+
+def test_traffic_far_ahead_in_the_lane_does_not_hold_the_car_out():
+    far = barrel(180.0)  # 100 m beyond the first barrel
+    road = FakeRoad([barrel(80.0, lateral_m=0.5), far], lanes_left=1, lanes_right=0)
+    states, phases = drive(road, at_speed(10.0), 13.0)
+    kinds = [p for i, p in enumerate(phases) if i == 0 or phases[i - 1] != p]
+    assert kinds == [CRUISE, AVOID_LEFT, AVOID_RETURN, CRUISE]
+    assert abs(states[-1].y_m) < 0.3 and states[-1].x_m + FRONT_AHEAD_M < far[0] - 30
 
 
 def test_params_are_validated_and_named():

@@ -20,36 +20,31 @@ import numpy as np
 from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
 from sdc.car.controller_api import Command, Observation, VehicleModel
+from sdc.car.lane_path import LanePath
 
 CRUISE, BRAKE = "cruise", "brake"
 AVOID_LEFT, AVOID_RIGHT, AVOID_RETURN = "avoid_left", "avoid_right", "avoid_return"
 LEFT, RIGHT, OWN = 1.0, -1.0, 0.0  # the sign of a side's lateral offsets
+#: the lane taken when it is not sensed (off the road's ends): straight ahead
+STRAIGHT_AHEAD = LanePath(np.array([[-1000.0, 0.0], [1000.0, 0.0]]), np.array([-1000.0, 1000.0]))
 
 
 class LaneFrame:
-    """The range image's returns in the lane's frame at one step.
+    """The range image's returns in lane coordinates at one step (:class:`LanePath`).
 
-    ``ahead_m``: along the lane from the car's body centre; ``lateral_m``: from
-    the centre of the car's own lane (+ left), with the lane's curvature (read
-    from the lane reading's preview) taken out.
+    ``s_m``: along the lane (the same for a point from step to step), ``ahead_m``:
+    along the lane from the car's body centre, ``lateral_m``: from the centre of
+    the car's own lane (+ left). Road edges along the lane stay at their offsets
+    on curves and through junction turns, outside the lane.
     """
 
-    def __init__(self, obs: Observation, cos_sin: np.ndarray, look_ahead_m: float):
-        v = obs.vehicle
+    def __init__(self, obs: Observation, cos_sin: np.ndarray, path: LanePath):
         hit = np.isfinite(obs.ranges_m)
         r = obs.ranges_m[hit]
-        center_ahead_m = v.center_ahead_of_rear_axle_m
-        x = (obs.lidar_ahead_m - center_ahead_m) + r * cos_sin[0, hit]  # from the body centre
+        x = (obs.lidar_ahead_m - obs.vehicle.center_ahead_of_rear_axle_m) + r * cos_sin[0, hit]
         y = r * cos_sin[1, hit]
-        lane = obs.lane
-        if lane is None:
-            offset_m, heading_rad, self.curvature_1pm = 0.0, 0.0, 0.0
-        else:
-            offset_m, heading_rad = lane.offset_m, lane.heading_error_rad
-            self.curvature_1pm = lane_curvature_1pm(lane, look_ahead_m)
-        c, s = math.cos(heading_rad), math.sin(heading_rad)
-        self.ahead_m = x * c - y * s
-        self.lateral_m = offset_m + x * s + y * c - 0.5 * self.curvature_1pm * self.ahead_m**2
+        self.s_m, self.lateral_m = path.to_lane(np.column_stack([x, y]))
+        self.ahead_m = self.s_m - path.car_s_m
 
     def within(self, lo_m: float, hi_m: float, behind_m: float, ahead_m: float) -> np.ndarray:
         """Which returns lie laterally in ``[lo_m, hi_m]`` and along the lane in
@@ -64,27 +59,15 @@ class LaneFrame:
         return float(self.ahead_m[ahead].min()) - front_m if ahead.any() else math.inf
 
 
-def lane_curvature_1pm(lane, look_ahead_m: float) -> float:
-    """The lane's curvature [1/m, + left] from the offset, heading error and the
-    preview offset ``look_ahead_m`` ahead (0 without a usable preview)."""
-    if not look_ahead_m:
-        return 0.0
-    straight_m = lane.offset_m + look_ahead_m * math.sin(lane.heading_error_rad)
-    return 2.0 * (straight_m - lane.preview_offset_m) / look_ahead_m**2
-
-
-def pursuit_steer_rad(target_m: float, offset_m: float, heading_rad: float,
-                      curvature_1pm: float, preview_m: float, vehicle: VehicleModel,
-                      speed_mps: float, max_lateral_accel_mps2: float) -> float:
+def pursuit_steer_rad(path: LanePath, target_m: float, preview_m: float,
+                      vehicle: VehicleModel, speed_mps: float,
+                      max_lateral_accel_mps2: float) -> float:
     """Pure pursuit toward the point ``preview_m`` ahead along the lane at lateral
     offset ``target_m``: the steering angle whose arc from the rear axle passes
     through it, its curvature capped by the lateral acceleration."""
-    center_ahead_m = vehicle.center_ahead_of_rear_axle_m
-    lateral_m = target_m - offset_m + 0.5 * curvature_1pm * preview_m**2
-    c, s = math.cos(heading_rad), math.sin(heading_rad)
-    ahead_m = preview_m * c + lateral_m * s + center_ahead_m  # in the car's frame
-    left_m = lateral_m * c - preview_m * s
-    curvature = 2.0 * left_m / (ahead_m**2 + left_m**2)
+    x_m, y_m = path.point_at(path.car_s_m + preview_m, target_m)
+    ahead_m = x_m + vehicle.center_ahead_of_rear_axle_m  # from the rear axle
+    curvature = 2.0 * y_m / (ahead_m**2 + y_m**2)
     if speed_mps > 0:
         limit = max_lateral_accel_mps2 / speed_mps**2
         curvature = max(-limit, min(limit, curvature))
@@ -99,6 +82,15 @@ class AvoidController:
     ``avoid_right`` (out to the lateral target and holding it while passing),
     ``avoid_return`` (back to the lane centre), ``brake`` (no way round: slowing,
     up to a stop, behind the obstacle).
+
+    Moving into a lane (out to pass, or back): with a range image that covers the
+    rear (beams within ``rear_view_deg`` of straight behind on both sides) only
+    into a gap that stays open: the nearest vehicle behind in that lane, its
+    closing speed measured over ``rear_track_s``, is at least ``rear_min_gap_m``
+    plus ``rear_gap_time_s`` times its closing speed behind the car's rear (a lane
+    empty as far as the lidar reaches counts as open). Without a rear view, only
+    into a lane watched empty beside the car for a while (``lane_watch_s``,
+    ``traffic_memory_s``, ``return_watch_s``).
     """
 
     def __init__(self, params: dict):
@@ -107,17 +99,22 @@ class AvoidController:
         self.cruise_mps: float | None = self.params.cruise_speed_mps
         self.target_m = 0.0  # the lateral target, from the own lane's centre
         self.side = 0.0
-        self.odometer_m = 0.0
-        self.seen_at_m = 0.0  # odometer when the obstacle was last seen beside or ahead
+        self.obstacle_end_s = -math.inf  # how far along the lane what is passed reaches
         self.free_since_s: dict[float, float] = {}  # since when a lane was seen empty beside
         self.traffic_seen: set[float] = set()  # the lanes where something was seen beside
+        self.rear_tracks: dict[float, list[tuple[float, float]]] = {}  # (t, gap) behind
         self._cos_sin: np.ndarray | None = None
+        self._rear_view = False
 
     # ---- perception --------------------------------------------------------
-    def _frame(self, obs: Observation) -> LaneFrame:
+    def _frame(self, obs: Observation, path: LanePath) -> LaneFrame:
         if self._cos_sin is None or self._cos_sin.shape[1] != len(obs.beam_angles_rad):
-            self._cos_sin = np.array([np.cos(obs.beam_angles_rad), np.sin(obs.beam_angles_rad)])
-        return LaneFrame(obs, self._cos_sin, self.params.look_ahead_m)
+            angles = obs.beam_angles_rad
+            self._cos_sin = np.array([np.cos(angles), np.sin(angles)])
+            reach_rad = math.radians(self.params.rear_view_deg)
+            self._rear_view = bool(len(angles)) and (angles.max() >= reach_rad - 1e-9
+                                                     and angles.min() <= -reach_rad + 1e-9)
+        return LaneFrame(obs, self._cos_sin, path)
 
     def _side_blocked(self, frame: LaneFrame, side: float, target_m: float, obs: Observation,
                       reach_m: float) -> bool:
@@ -129,24 +126,65 @@ class AvoidController:
         lo, hi = sorted((side * inner_m, target_m + side * half_m))
         return bool(np.any(frame.within(lo, hi, -v.length_m / 2 - p.rear_margin_m, reach_m)))
 
+    def _lane_bands(self, obs: Observation):
+        """(side, lo, hi): the lanes left, right and own, inside their edges."""
+        w, tol = obs.lane_width_m, self.params.edge_tolerance_m
+        return ((LEFT, w / 2 + tol, 1.5 * w - tol), (RIGHT, -1.5 * w + tol, -w / 2 - tol),
+                (OWN, -w / 2 + tol, w / 2 - tol))
+
     def _watch_lanes(self, frame: LaneFrame, obs: Observation) -> None:
         """Note since when each lane (left, right, own) has been empty beside the car.
-        Traffic from behind is out of the lidar's view: a lane counts as free only
+        Without a rear view traffic from behind is unseen: a lane counts as free only
         after the car has watched it empty for a while (from the first step)."""
-        p, v, w = self.params, obs.vehicle, obs.lane_width_m
-        tol = p.edge_tolerance_m
-        for side, lo, hi in ((LEFT, w / 2 + tol, 1.5 * w - tol),
-                             (RIGHT, -1.5 * w + tol, -w / 2 - tol),
-                             (OWN, -w / 2 + tol, w / 2 - tol)):
+        p, v = self.params, obs.vehicle
+        for side, lo, hi in self._lane_bands(obs):
             seen = np.any(frame.within(lo, hi, -v.length_m / 2 - p.rear_margin_m, v.length_m))
             if seen or side not in self.free_since_s:
                 self.free_since_s[side] = obs.t_s
             if seen:
                 self.traffic_seen.add(side)
 
-    def _watched_free(self, side: float, obs: Observation, watch_s: float) -> bool:
-        """Has the lane been seen empty beside the car for ``watch_s`` (for
-        ``traffic_memory_s`` once something was ever seen there)?"""
+    def _track_rear(self, frame: LaneFrame, obs: Observation) -> None:
+        """The gap from the car's rear back to the nearest return behind it (or
+        beside it: negative) in each lane, over the last ``rear_track_s``. A track
+        starts afresh when the gap jumps open (another vehicle is now the nearest)
+        and ends when nothing was seen there for ``rear_track_s``."""
+        p, v = self.params, obs.vehicle
+        rear_m = -v.length_m / 2
+        for side, lo, hi in self._lane_bands(obs):
+            track = self.rear_tracks.setdefault(side, [])
+            behind = frame.within(lo, hi, -math.inf, v.length_m / 2)
+            if not behind.any():
+                if track and obs.t_s - track[-1][0] > p.rear_track_s:
+                    track.clear()
+                continue
+            gap_m = rear_m - float(frame.ahead_m[behind].max())
+            if track and gap_m > track[-1][1] + p.rear_jump_m:
+                track.clear()
+            track.append((obs.t_s, gap_m))
+            while obs.t_s - track[0][0] > p.rear_track_s + 1e-9:
+                track.pop(0)
+
+    def _rear_gap_open(self, side: float, obs: Observation) -> bool:
+        """Does the lane's gap behind the car stay open (the class's rule)?"""
+        p = self.params
+        track = self.rear_tracks.get(side)
+        if not track:
+            return True
+        t_s, gap_m = track[-1]
+        span_s = t_s - track[0][0]
+        if t_s < obs.t_s or span_s < p.rear_track_s / 2:
+            return False  # lost for a moment, or its speed not known yet
+        closing_mps = (track[0][1] - gap_m) / span_s
+        return gap_m >= p.rear_min_gap_m + max(closing_mps, 0.0) * p.rear_gap_time_s
+
+    def _lane_open(self, side: float, obs: Observation) -> bool:
+        """May the car move into that lane now (the class's rule)?"""
+        if self._rear_view:
+            return self._rear_gap_open(side, obs)
+        if side == OWN:
+            return obs.t_s - self.free_since_s[OWN] >= self.params.return_watch_s - 1e-9
+        watch_s = self.params.lane_watch_s
         if side in self.traffic_seen:
             watch_s = max(watch_s, self.params.traffic_memory_s)
         return obs.t_s - self.free_since_s[side] >= watch_s - 1e-9
@@ -156,30 +194,30 @@ class AvoidController:
                            obs: Observation) -> float:
         """How far the car travels while shifting ``shift_m`` sideways: bang-bang
         lateral acceleration plus the steering's lag, with a safety factor."""
-        v = obs.vehicle
-        accel = self.params.max_lateral_accel_mps2
+        p, v = self.params, obs.vehicle
+        accel = p.max_lateral_accel_mps2
         if speed_mps > 0:
             accel = min(accel, speed_mps**2 * math.tan(v.max_steer_rad) / v.wheelbase_m)
         if accel <= 0:
             return math.inf
         shift_m = max(shift_m, 0.0)
-        t_s = 2.0 * math.sqrt(shift_m / accel) + 2.0 * 0.5 / v.max_steer_rate_radps
-        t_s *= self.params.swerve_time_factor
+        t_s = 2.0 * math.sqrt(shift_m / accel) + 2.0 * p.swerve_steer_rad / v.max_steer_rate_radps
+        t_s *= p.swerve_time_factor
         t_stop = speed_mps / brake_mps2 if brake_mps2 > 0 else math.inf
         t_s = min(t_s, t_stop)
         # however slow, the turn is no tighter than the steering allows: an S of two
-        # arcs of the smallest radius
-        radius_m = v.wheelbase_m / math.tan(0.9 * v.max_steer_rad)
+        # arcs of the tightest radius
+        radius_m = v.wheelbase_m / math.tan(p.tightest_steer_fraction * v.max_steer_rad)
         half_m = min(shift_m / 2, radius_m)
         arcs_m = (2.0 * math.sqrt(half_m * (2 * radius_m - half_m))
                   + max(0.0, shift_m - 2 * radius_m))
         return max(speed_mps * t_s - 0.5 * brake_mps2 * t_s**2, arcs_m)
 
-    def _plan(self, frame: LaneFrame, obs: Observation, gap_m: float, in_lane: np.ndarray):
+    def _plan(self, frame: LaneFrame, obs: Observation, offset: float, gap_m: float,
+              in_lane: np.ndarray):
         """On an obstacle ahead: (phase, side, target) to swerve to, or brake."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
-        offset = obs.lane.offset_m if obs.lane else 0.0
         near = in_lane & (frame.ahead_m <= frame.ahead_m[in_lane].min() + p.obstacle_depth_m)
         lat = frame.lateral_m[near]
         reach = gap_m + v.length_m + p.obstacle_depth_m + speed * p.free_time_s
@@ -188,40 +226,70 @@ class AvoidController:
         can_stop = stop_m <= gap_m  # at the car's hardest braking, from now
         options = []
         for side, phase in ((LEFT, AVOID_LEFT), (RIGHT, AVOID_RIGHT)):
-            # a lane not watched long enough only to escape a collision braking cannot
-            if can_stop and not self._watched_free(side, obs, p.lane_watch_s):
+            # a lane not open only to escape a collision braking cannot
+            if can_stop and not self._lane_open(side, obs):
                 continue
             edge = lat.max() if side == LEFT else lat.min()
             clear_m = abs(edge) * (1 if side * edge > 0 else -1) + v.width_m / 2
             target = side * max(obs.lane_width_m, clear_m + p.lateral_clearance_m)
             if self._side_blocked(frame, side, target, obs, reach):
                 continue
-            shift = max(0.0, side * (side * (clear_m + 0.2) - offset))
+            shift = max(0.0, side * (side * (clear_m + p.shift_margin_m) - offset))
             options.append((phase, side, target, shift))
+        end_s = float(frame.s_m[near].max())
         for phase, side, target, shift in options:  # keeping speed
             if self._swerve_distance_m(shift, speed, 0.0, obs) <= gap_m:
-                return phase, side, target, 0.0
+                return phase, side, target, end_s, 0.0
         if can_stop:
-            return BRAKE, 0.0, 0.0, -brake
+            return BRAKE, 0.0, 0.0, end_s, -brake
         for phase, side, target, shift in options:  # braking meanwhile
             if self._swerve_distance_m(shift, speed, brake, obs) <= gap_m:
-                return phase, side, target, -brake
+                return phase, side, target, end_s, -brake
         if options:
             phase, side, target, _ = options[0]
-            return phase, side, target, -brake
-        return BRAKE, 0.0, 0.0, -brake
+            return phase, side, target, end_s, -brake
+        return BRAKE, 0.0, 0.0, end_s, -brake
+
+    def _passing(self, frame: LaneFrame, obs: Observation, path: LanePath,
+                 half_lane: float) -> None:
+        """While out of the lane: follow how far along the lane what is passed
+        reaches, and go back once the car's rear is ``return_gap_m`` past it and
+        the own lane is open.
+
+        What is passed: returns in the own lane (or out of it up to the car's near
+        side) no further than ``obstacle_depth_m`` beyond what was passed so far,
+        or within the car's stopping distance ahead of its front. Traffic further
+        ahead in the lane, and road edges, do not hold the car out."""
+        p, v = self.params, obs.vehicle
+        side, offset = self.side, path.offset_m
+        near_m = offset - side * (v.width_m / 2 + 0.05)
+        far_m = side * max(half_lane, side * near_m)
+        lo, hi = sorted((-side * half_lane, far_m))
+        stop_m = obs.speed_mps**2 / (2 * v.max_decel_mps2) + p.stop_margin_m
+        reach_s = max(self.obstacle_end_s + p.obstacle_depth_m,
+                      path.car_s_m + v.length_m / 2 + stop_m)
+        part = frame.within(lo, hi, -v.length_m / 2, math.inf) & (frame.s_m <= reach_s)
+        if part.any():
+            self.obstacle_end_s = max(self.obstacle_end_s, float(frame.s_m[part].max()))
+        rear_s = path.car_s_m - v.length_m / 2
+        if rear_s >= self.obstacle_end_s + p.return_gap_m and self._lane_open(OWN, obs):
+            self.phase, self.target_m = AVOID_RETURN, 0.0
 
     # ---- the step ----------------------------------------------------------
     def step(self, obs: Observation) -> Command:
         p, v = self.params, obs.vehicle
         if self.cruise_mps is None:
             self.cruise_mps = obs.speed_mps
-        self.odometer_m += obs.speed_mps * obs.step_s
-        frame = self._frame(obs)
-        self._watch_lanes(frame, obs)
         lane = obs.lane
-        offset = lane.offset_m if lane else 0.0
-        half_lane = obs.lane_width_m / 2 - p.edge_tolerance_m
+        path = LanePath.from_reading(lane, p.look_ahead_m) if lane else STRAIGHT_AHEAD
+        frame = self._frame(obs, path)
+        self._watch_lanes(frame, obs)
+        if self._rear_view:
+            self._track_rear(frame, obs)
+        offset = path.offset_m
+        # the car's path along its lane: its width and path_clearance_m each side
+        half_lane = min(obs.lane_width_m / 2 - p.edge_tolerance_m,
+                        v.width_m / 2 + p.path_clearance_m)
         front_m = v.length_m / 2
         in_lane = frame.within(-half_lane, half_lane, front_m - 0.5, math.inf)
         gap_lane = float(frame.ahead_m[in_lane].min()) - front_m if in_lane.any() else math.inf
@@ -238,26 +306,17 @@ class AvoidController:
             holding = self.phase == BRAKE and gap_lane < (
                 self.cruise_mps * p.detect_ttc_s + p.wait_gap_m)
             if ttc_lane < p.detect_ttc_s or gap_lane < p.wait_gap_m + 1.0 or holding:
-                phase, side, target, accel = self._plan(frame, obs, gap_lane, in_lane)
+                phase, side, target, end_s, accel = self._plan(frame, obs, offset, gap_lane,
+                                                               in_lane)
                 if phase != BRAKE:
                     self.phase, self.side, self.target_m = phase, side, target
-                    self.seen_at_m = self.odometer_m
+                    self.obstacle_end_s = end_s
                 else:
                     self.phase, accel = BRAKE, self._brake_accel(gap_lane, obs)
             elif self.phase == BRAKE:
                 self.phase = CRUISE
         if self.phase in (AVOID_LEFT, AVOID_RIGHT):
-            # the obstacle: anything in the own lane, or out of it up to the car's
-            # side, from beside the car onward
-            near_m = offset - self.side * (v.width_m / 2 + 0.05)
-            far_m = self.side * max(half_lane, self.side * near_m)
-            lo, hi = sorted((-self.side * half_lane, far_m))
-            if frame.within(lo, hi, -front_m, math.inf).any():
-                self.seen_at_m = self.odometer_m
-            passed_m = self.odometer_m - self.seen_at_m
-            if (passed_m > obs.lidar_ahead_m + v.rear_overhang_m + p.return_gap_m
-                    and obs.t_s - self.free_since_s[OWN] >= p.return_watch_s - 1e-9):
-                self.phase, self.target_m = AVOID_RETURN, 0.0
+            self._passing(frame, obs, path, half_lane)
         if self.phase == AVOID_RETURN and abs(offset) < p.settled_offset_m:
             self.phase = CRUISE
         if self.phase in (CRUISE, AVOID_RETURN):
@@ -265,12 +324,13 @@ class AvoidController:
 
         if accel is None:
             gap = gap_path if self.phase in (AVOID_LEFT, AVOID_RIGHT) else min(gap_lane, gap_path)
-            accel = self._speed_accel(gap, obs)
+            turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
+                                           v.max_decel_mps2 * p.gap_decel_fraction)
+            accel = self._speed_accel(gap, obs, turn_mps)
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, speed * p.preview_time_s)
-        steer = pursuit_steer_rad(self.target_m, offset, lane.heading_error_rad,
-                                  frame.curvature_1pm, preview_m, v, speed,
+        steer = pursuit_steer_rad(path, self.target_m, preview_m, v, speed,
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
 
@@ -290,13 +350,20 @@ class AvoidController:
             need = max(need, speed / obs.step_s)
         return -min(v.max_decel_mps2, p.brake_gain * need)
 
-    def _speed_accel(self, gap_m: float, obs: Observation) -> float:
+    def _speed_accel(self, gap_m: float, obs: Observation, turn_mps: float) -> float:
         """Toward the cruise speed, or slower when something ahead in the path
-        needs it (the speed from which the car still stops short of it)."""
+        needs it (the speed from which the car still stops short of it braking at
+        ``gap_decel_fraction`` of its hardest), or a bend of the lane ahead
+        (``turn_mps``)."""
         p, v = self.params, obs.vehicle
         room_m = gap_m - p.stop_margin_m
-        allowed = math.sqrt(2 * v.max_decel_mps2 * 0.5 * room_m) if room_m > 0 else 0.0
+        decel = v.max_decel_mps2 * p.gap_decel_fraction
+        allowed = math.sqrt(2 * decel * room_m) if room_m > 0 else 0.0
         if obs.speed_mps > allowed:
             return self._brake_accel(gap_m, obs)
-        accel = p.speed_gain_1ps * (min(self.cruise_mps, allowed) - obs.speed_mps)
+        target = min(self.cruise_mps, allowed, turn_mps)
+        if obs.speed_mps > turn_mps:  # braking for the bend as the limit falls
+            return max(-v.max_decel_mps2, p.speed_gain_1ps * (target - obs.speed_mps)
+                       - decel)
+        accel = p.speed_gain_1ps * (target - obs.speed_mps)
         return max(-v.max_decel_mps2, min(v.max_accel_mps2, accel))

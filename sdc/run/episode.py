@@ -83,7 +83,8 @@ class Simulation:
         self.vehicle = Vehicle(self.model, spec.vehicle.friction_mu)
         edges = self.road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
         self.lidar = Lidar(spec.lidar, edges, np.random.default_rng(spec.scenario.seed))
-        self.lane_sensor = LaneSensor(self.road, spec.ego.lane)
+        self.lane_sensor = LaneSensor(self.road, spec.ego.lane,
+                                      spec.lidar.max_range_m + self.model.length_m)
         self.road_frame = RoadFrame(self.road, self.lane_sensor.lane_d_m)
         self.lane_width_m = self.road.lane_width_m
         self.recorder = TraceRecorder()
@@ -136,7 +137,9 @@ class Simulation:
         if self.hit is not None:
             return COLLISION
         front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
-        if self.road.locate(float(front[0]), float(front[1]))[0] >= self.road.length_m:
+        front_s_m, _ = self.road.locate_near(float(front[0]), float(front[1]),
+                                             self.lane_sensor.s_m)
+        if front_s_m >= self.road.length_m:
             return ROUTE_END
         if self.k == self.n_steps:
             return DURATION

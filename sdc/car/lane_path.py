@@ -1,0 +1,118 @@
+"""The car's own lane as a controller measures with it: points to lane
+coordinates and back.
+
+A :class:`LanePath` holds the lane reading's path (``LaneReading.path_xy_m``: the
+lane's centre line around the car, in the car's frame from its body centre) and
+answers in lane coordinates: ``s`` metres along the lane from the road's start
+(the same for a point from step to step, so positions can be remembered) and
+``d`` metres to the left of its centre. Along a curve the frame follows the arc;
+through a junction it follows the route's lanes. A reading without a path (one
+made by hand) gives the arc through its offset, heading error and preview
+offset instead.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from scenarios import road_kernels
+
+#: the arc a reading without a path stands for: this many points ...
+ARC_POINTS = 41
+#: ... this far behind and ahead of the car [m]
+ARC_REACH_M = 100.0
+#: a bend's curvature is its turn over this length of lane [m]
+TURN_WINDOW_M = 3.0
+
+
+def arc_curvature_1pm(lane, look_ahead_m: float) -> float:
+    """The lane's curvature [1/m, + left] from a reading's offset, heading error and
+    the preview offset ``look_ahead_m`` ahead (0 without a usable preview)."""
+    if not look_ahead_m:
+        return 0.0
+    straight_m = lane.offset_m + look_ahead_m * math.sin(lane.heading_error_rad)
+    return 2.0 * (straight_m - lane.preview_offset_m) / look_ahead_m**2
+
+
+def arc_path(lane, look_ahead_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """A path (car frame, stations) for a reading without one: the arc of the
+    reading's curvature through the car's offset and heading error."""
+    curvature = arc_curvature_1pm(lane, look_ahead_m)
+    u = np.linspace(-ARC_REACH_M, ARC_REACH_M, ARC_POINTS)
+    if abs(curvature) > 1e-9:
+        along, left = np.sin(curvature * u) / curvature, (1 - np.cos(curvature * u)) / curvature
+    else:
+        along, left = u, np.zeros_like(u)
+    c, s = math.cos(lane.heading_error_rad), math.sin(lane.heading_error_rad)
+    left = left - lane.offset_m  # the lane frame, its origin under the car
+    xy = np.column_stack([along * c + left * s, left * c - along * s])
+    return xy, lane.s_m + u
+
+
+class LanePath:
+    """The lane around the car, from a lane reading (see the module)."""
+
+    def __init__(self, xy: np.ndarray, s_m: np.ndarray):
+        delta = np.diff(xy, axis=0)
+        lengths = np.hypot(delta[:, 0], delta[:, 1])
+        keep = lengths > 1e-9
+        self._starts = np.ascontiguousarray(xy[:-1][keep])
+        self._lengths = np.ascontiguousarray(lengths[keep])
+        self._dirs = np.ascontiguousarray(delta[keep] / self._lengths[:, None])
+        self._start_s = np.ascontiguousarray(s_m[:-1][keep], dtype=np.float64)
+        origin_s, origin_d = road_kernels.locate(0.0, 0.0, self._starts, self._dirs,
+                                                 self._lengths, self._start_s)
+        #: the body centre's station along the lane and its offset from the centre
+        self.car_s_m, self.offset_m = origin_s, origin_d
+
+    @classmethod
+    def from_reading(cls, lane, look_ahead_m: float) -> LanePath:
+        if len(lane.path_xy_m) >= 2:
+            return cls(lane.path_xy_m, lane.path_s_m)
+        return cls(*arc_path(lane, look_ahead_m))
+
+    def to_lane(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lane coordinates ``(s, d)`` of (K, 2) points in the car's frame (each on its
+        nearest segment; the path's first and last segments extended)."""
+        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
+        s_m, d_m, gaps = np.empty((3, len(xy)))
+        road_kernels.frenet(xy, self._starts, self._dirs, self._lengths, self._start_s,
+                            s_m, d_m, 0.0, 0.0, gaps)
+        return s_m, d_m
+
+    def turn_speed_mps(self, lateral_accel_mps2: float, decel_mps2: float,
+                       window_m: float = TURN_WINDOW_M) -> float:
+        """The highest speed from which the car, braking at ``decel_mps2``, takes
+        every bend of the lane ahead at no more than ``lateral_accel_mps2`` (inf on
+        a straight lane). At each vertex ahead the lane's curvature is its turn
+        between the segments ``window_m`` / 2 before and after it over the distance
+        between their middles (at least ``window_m``)."""
+        ahead = self._start_s > self.car_s_m
+        if not ahead.any():
+            return math.inf
+        heading = np.unwrap(np.arctan2(self._dirs[:, 1], self._dirs[:, 0]))
+        stations = self._start_s[ahead]
+        last = len(self._start_s) - 1
+        before = np.clip(np.searchsorted(self._start_s, stations - window_m / 2, "right") - 1,
+                         0, last)
+        after = np.clip(np.searchsorted(self._start_s, stations + window_m / 2, "right") - 1,
+                        0, last)
+        middle = self._start_s + self._lengths / 2
+        curvature = (np.abs(heading[after] - heading[before])
+                     / np.maximum(window_m, middle[after] - middle[before]))
+        bends = curvature > 1e-6
+        if not bends.any():
+            return math.inf
+        limit_sq = lateral_accel_mps2 / curvature[bends]
+        distance = stations[bends] - self.car_s_m
+        return float(np.sqrt(np.min(limit_sq + 2 * decel_mps2 * distance)))
+
+    def point_at(self, s_m: float, d_m: float) -> tuple[float, float]:
+        """The point of lane coordinates ``(s_m, d_m)`` in the car's frame."""
+        seg = int(np.clip(np.searchsorted(self._start_s, s_m, side="right") - 1,
+                          0, len(self._start_s) - 1))
+        along = s_m - self._start_s[seg]
+        (x0, y0), (dx, dy) = self._starts[seg], self._dirs[seg]
+        return float(x0 + along * dx - d_m * dy), float(y0 + along * dy + d_m * dx)
