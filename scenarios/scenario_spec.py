@@ -273,11 +273,13 @@ class AvoidParams(Spec):
     rear_view_deg: float = num(170.0, gt=90, le=180)
     #: with a rear view a lane is entered (out to pass, or back) only when the
     #: nearest vehicle behind in it is at least rear_min_gap_m plus its closing
-    #: speed times rear_gap_time_s behind the car's rear bumper; a lane empty as
-    #: far as the lidar reaches is open, so its range must cover the fastest
-    #: closing speed times rear_gap_time_s
+    #: speed times rear_gap_time_s behind the car's rear bumper (sdc.car.rear_watch)
     rear_gap_time_s: float = num(3.0, ge=0, le=30)
     rear_min_gap_m: float = num(10.0, ge=0, le=200)
+    #: ... and a lane seen empty only when it was seen so far back that a vehicle
+    #: just out of sight, as fast as the fastest seen in it so far or this fast,
+    #: would leave that gap (the lidar's range and shadows limit how far)
+    rear_unseen_speed_mps: float = num(15.0, ge=0, le=70)
     #: the closing speed is measured over this long (a vehicle seen for less than
     #: half of it, or lost for a moment, keeps its lane closed)
     rear_track_s: float = num(0.5, gt=0, le=10)

@@ -21,6 +21,7 @@ from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
 from sdc.car.controller_api import Command, Observation, VehicleModel
 from sdc.car.lane_path import LanePath
+from sdc.car.rear_watch import RearWatch
 
 CRUISE, BRAKE = "cruise", "brake"
 AVOID_LEFT, AVOID_RIGHT, AVOID_RETURN = "avoid_left", "avoid_right", "avoid_return"
@@ -84,13 +85,11 @@ class AvoidController:
     up to a stop, behind the obstacle).
 
     Moving into a lane (out to pass, or back): with a range image that covers the
-    rear (beams within ``rear_view_deg`` of straight behind on both sides) only
-    into a gap that stays open: the nearest vehicle behind in that lane, its
-    closing speed measured over ``rear_track_s``, is at least ``rear_min_gap_m``
-    plus ``rear_gap_time_s`` times its closing speed behind the car's rear (a lane
-    empty as far as the lidar reaches counts as open). Without a rear view, only
-    into a lane watched empty beside the car for a while (``lane_watch_s``,
-    ``traffic_memory_s``, ``return_watch_s``).
+    rear (beams ``rear_view_deg`` round from straight ahead on both sides) only
+    into a gap that stays open at the closing speed of what comes from behind
+    (:mod:`sdc.car.rear_watch`). Without a rear view, only into a lane watched
+    empty beside the car for a while (``lane_watch_s``, ``traffic_memory_s``,
+    ``return_watch_s``).
     """
 
     def __init__(self, params: dict):
@@ -102,7 +101,7 @@ class AvoidController:
         self.obstacle_end_s = -math.inf  # how far along the lane what is passed reaches
         self.free_since_s: dict[float, float] = {}  # since when a lane was seen empty beside
         self.traffic_seen: set[float] = set()  # the lanes where something was seen beside
-        self.rear_tracks: dict[float, list[tuple[float, float]]] = {}  # (t, gap) behind
+        self.rear = RearWatch(self.params)
         self._cos_sin: np.ndarray | None = None
         self._rear_view = False
 
@@ -144,44 +143,10 @@ class AvoidController:
             if seen:
                 self.traffic_seen.add(side)
 
-    def _track_rear(self, frame: LaneFrame, obs: Observation) -> None:
-        """The gap from the car's rear back to the nearest return behind it (or
-        beside it: negative) in each lane, over the last ``rear_track_s``. A track
-        starts afresh when the gap jumps open (another vehicle is now the nearest)
-        and ends when nothing was seen there for ``rear_track_s``."""
-        p, v = self.params, obs.vehicle
-        rear_m = -v.length_m / 2
-        for side, lo, hi in self._lane_bands(obs):
-            track = self.rear_tracks.setdefault(side, [])
-            behind = frame.within(lo, hi, -math.inf, v.length_m / 2)
-            if not behind.any():
-                if track and obs.t_s - track[-1][0] > p.rear_track_s:
-                    track.clear()
-                continue
-            gap_m = rear_m - float(frame.ahead_m[behind].max())
-            if track and gap_m > track[-1][1] + p.rear_jump_m:
-                track.clear()
-            track.append((obs.t_s, gap_m))
-            while obs.t_s - track[0][0] > p.rear_track_s + 1e-9:
-                track.pop(0)
-
-    def _rear_gap_open(self, side: float, obs: Observation) -> bool:
-        """Does the lane's gap behind the car stay open (the class's rule)?"""
-        p = self.params
-        track = self.rear_tracks.get(side)
-        if not track:
-            return True
-        t_s, gap_m = track[-1]
-        span_s = t_s - track[0][0]
-        if t_s < obs.t_s or span_s < p.rear_track_s / 2:
-            return False  # lost for a moment, or its speed not known yet
-        closing_mps = (track[0][1] - gap_m) / span_s
-        return gap_m >= p.rear_min_gap_m + max(closing_mps, 0.0) * p.rear_gap_time_s
-
     def _lane_open(self, side: float, obs: Observation) -> bool:
         """May the car move into that lane now (the class's rule)?"""
         if self._rear_view:
-            return self._rear_gap_open(side, obs)
+            return self.rear.open(side, obs)
         if side == OWN:
             return obs.t_s - self.free_since_s[OWN] >= self.params.return_watch_s - 1e-9
         watch_s = self.params.lane_watch_s
@@ -284,9 +249,9 @@ class AvoidController:
         path = LanePath.from_reading(lane, p.look_ahead_m) if lane else STRAIGHT_AHEAD
         frame = self._frame(obs, path)
         self._watch_lanes(frame, obs)
-        if self._rear_view:
-            self._track_rear(frame, obs)
         offset = path.offset_m
+        if self._rear_view:
+            self.rear.update(frame, obs, self._lane_bands(obs), offset)
         # the car's path along its lane: its width and path_clearance_m each side
         half_lane = min(obs.lane_width_m / 2 - p.edge_tolerance_m,
                         v.width_m / 2 + p.path_clearance_m)

@@ -16,6 +16,7 @@ given its observations: the trace of a run is compared bit for bit on replay.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple, Protocol
 
 import numpy as np
@@ -40,6 +41,7 @@ class Observation(NamedTuple):
     speed_mps: float
     steer_rad: float  # the road-wheel angle reached (the steering lags the command)
     vehicle: VehicleModel  # the car's size and actuator limits
+    lidar_range_m: float = math.inf  # the lidar's range: no return means nothing up to it
 
 
 class Controller(Protocol):

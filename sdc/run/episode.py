@@ -117,7 +117,8 @@ class Simulation:
         state = self.state
         return Observation(self.k * self.step_s, self.step_s, self.ranges,
                            self.lidar.angles_rad, self.spec.lidar.mount_ahead_m, self.lane,
-                           self.lane_width_m, state.speed_mps, state.steer_rad, self.model)
+                           self.lane_width_m, state.speed_mps, state.steer_rad, self.model,
+                           self.spec.lidar.max_range_m)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
