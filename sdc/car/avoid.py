@@ -20,7 +20,7 @@ import numpy as np
 from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
 from sdc.car.controller_api import Command, Observation, VehicleModel
-from sdc.car.lane_path import LanePath
+from sdc.car.lane_path import TURN_WINDOW_M, LanePath
 from sdc.car.rear_watch import RearWatch
 
 CRUISE, BRAKE = "cruise", "brake"
@@ -63,12 +63,23 @@ class LaneFrame:
 def pursuit_steer_rad(path: LanePath, target_m: float, preview_m: float,
                       vehicle: VehicleModel, speed_mps: float,
                       max_lateral_accel_mps2: float) -> float:
-    """Pure pursuit toward the point ``preview_m`` ahead along the lane at lateral
-    offset ``target_m``: the steering angle whose arc from the rear axle passes
-    through it, its curvature capped by the lateral acceleration."""
-    x_m, y_m = path.point_at(path.car_s_m + preview_m, target_m)
-    ahead_m = x_m + vehicle.center_ahead_of_rear_axle_m  # from the rear axle
-    curvature = 2.0 * y_m / (ahead_m**2 + y_m**2)
+    """The lane's own curvature at the rear axle plus pure pursuit, in the lane's
+    frame unrolled straight, from the rear axle toward the point ``preview_m``
+    ahead of the body centre along the lane at lateral offset ``target_m``: the
+    steering angle of that curvature (capped by the lateral acceleration).
+    Through a junction's turn the car turns where its lane turns instead of
+    cutting toward a point on the bend ahead; on a steady bend the rear axle
+    runs on the target line."""
+    rear_m = vehicle.center_ahead_of_rear_axle_m
+    axle_s_m, axle_d_m = path.locate(-rear_m, 0.0)
+    heading = path.heading_rad(axle_s_m)  # the lane's direction in the car's frame
+    lateral_m = target_m - axle_d_m
+    reach_m = preview_m + rear_m
+    c, s = math.cos(heading), math.sin(heading)
+    ahead_m = reach_m * c - lateral_m * s
+    left_m = reach_m * s + lateral_m * c
+    curvature = 2.0 * left_m / (ahead_m**2 + left_m**2)
+    curvature += path.curvature_1pm(axle_s_m, axle_s_m + TURN_WINDOW_M)
     if speed_mps > 0:
         limit = max_lateral_accel_mps2 / speed_mps**2
         curvature = max(-limit, min(limit, curvature))

@@ -62,16 +62,19 @@ class LanePath:
         self._lengths = np.ascontiguousarray(lengths[keep])
         self._dirs = np.ascontiguousarray(delta[keep] / self._lengths[:, None])
         self._start_s = np.ascontiguousarray(s_m[:-1][keep], dtype=np.float64)
-        origin_s, origin_d = road_kernels.locate(0.0, 0.0, self._starts, self._dirs,
-                                                 self._lengths, self._start_s)
         #: the body centre's station along the lane and its offset from the centre
-        self.car_s_m, self.offset_m = origin_s, origin_d
+        self.car_s_m, self.offset_m = self.locate(0.0, 0.0)
 
     @classmethod
     def from_reading(cls, lane, look_ahead_m: float) -> LanePath:
         if len(lane.path_xy_m) >= 2:
             return cls(lane.path_xy_m, lane.path_s_m)
         return cls(*arc_path(lane, look_ahead_m))
+
+    def locate(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """Lane coordinates ``(s, d)`` of one point in the car's frame."""
+        return road_kernels.locate(x_m, y_m, self._starts, self._dirs, self._lengths,
+                                   self._start_s)
 
     def to_lane(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lane coordinates ``(s, d)`` of (K, 2) points in the car's frame (each on its
@@ -109,10 +112,26 @@ class LanePath:
         distance = stations[bends] - self.car_s_m
         return float(np.sqrt(np.min(limit_sq + 2 * decel_mps2 * distance)))
 
+    def heading_rad(self, s_m: float) -> float:
+        """The lane's direction at ``s_m`` in the car's frame (0: where the car
+        points; minus the car's heading error there)."""
+        dx, dy = self._dirs[self._segment(s_m)]
+        return math.atan2(dy, dx)
+
+    def curvature_1pm(self, from_s_m: float, to_s_m: float) -> float:
+        """The lane's mean curvature [1/m, + left] between two stations: its turn
+        over the distance."""
+        turn = self.heading_rad(to_s_m) - self.heading_rad(from_s_m)
+        turn = (turn + math.pi) % (2 * math.pi) - math.pi
+        return turn / (to_s_m - from_s_m)
+
+    def _segment(self, s_m: float) -> int:
+        index = int(np.searchsorted(self._start_s, s_m, side="right")) - 1
+        return min(max(index, 0), len(self._start_s) - 1)
+
     def point_at(self, s_m: float, d_m: float) -> tuple[float, float]:
         """The point of lane coordinates ``(s_m, d_m)`` in the car's frame."""
-        seg = int(np.clip(np.searchsorted(self._start_s, s_m, side="right") - 1,
-                          0, len(self._start_s) - 1))
+        seg = self._segment(s_m)
         along = s_m - self._start_s[seg]
         (x0, y0), (dx, dy) = self._starts[seg], self._dirs[seg]
         return float(x0 + along * dx - d_m * dy), float(y0 + along * dy + d_m * dx)
