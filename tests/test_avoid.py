@@ -38,22 +38,23 @@ class FakeRoad:
     """A straight road along +x, its lanes' centres at y = k * LANE_W (the car's
     own lane at y = 0), ``lanes_left`` lanes left of it and ``lanes_right`` right."""
 
-    def __init__(self, boxes=(), lanes_left=2, lanes_right=0):
+    def __init__(self, boxes=(), lanes_left=2, lanes_right=0, angles=ANGLES):
         self.boxes = np.array(boxes, dtype=float).reshape(-1, 5)
         left, right = (lanes_left + 0.5) * LANE_W, -(lanes_right + 0.5) * LANE_W
         self.edges = np.array([[-100.0, left, 400.0, left], [-100.0, right, 400.0, right]])
+        self.angles = angles
 
     def observe(self, state: VehicleState, t_s: float = 3.2) -> Observation:
         yaw = state.yaw_rad
         origin = np.array([state.x_m + 3.85 * math.cos(yaw), state.y_m + 3.85 * math.sin(yaw)])
-        ranges = lidar_ranges_m(origin, yaw, ANGLES, self.boxes, self.edges, 80.0)
+        ranges = lidar_ranges_m(origin, yaw, self.angles, self.boxes, self.edges, 80.0)
         ranges.flags.writeable = False
         cx = state.x_m + CENTER_AHEAD_M * math.cos(yaw)
         cy = state.y_m + CENTER_AHEAD_M * math.sin(yaw)
         preview = cy + 5.0 * math.sin(yaw)
         lane = LaneReading(cy, yaw, preview, cx)
-        return Observation(t_s, STEP_S, ranges, ANGLES, 3.85, lane, LANE_W, state.speed_mps,
-                           state.steer_rad, MODEL)
+        return Observation(t_s, STEP_S, ranges, self.angles, 3.85, lane, LANE_W,
+                           state.speed_mps, state.steer_rad, MODEL, 80.0)
 
 
 def barrel(ahead_of_front_m: float, lateral_m: float = 0.0) -> list[float]:
@@ -172,6 +173,62 @@ def test_an_unwatched_lane_only_to_escape_a_collision_braking_cannot():
     controller = AvoidController({})
     command = controller.step(road.observe(at_speed(20.0), 0.0))  # 25 m to stop
     assert controller.phase == AVOID_LEFT and command.accel_mps2 < 0
+
+
+# ---- rear view -------------------------------------------------------------------
+
+ALL_ROUND = beam_angles_rad(360, 360.0)
+
+
+def waiting_behind_a_barrel(angles, passing_speed_mps: float = 20.0, queued: bool = False):
+    """The car stopped 7 m behind a barrel; a car passes in the left lane from 40 m
+    behind at ``passing_speed_mps`` (with ``queued``: another stands 2 m behind the
+    car in its own lane). The phases step by step, and the passing car's x."""
+    controller, state = AvoidController({}), at_speed(0.0)
+    phases, xs = [], []
+    for k in range(round(8.0 / STEP_S)):
+        passing_x = -40.0 + passing_speed_mps * k * STEP_S
+        boxes = [barrel(7.0), car_at(passing_x, LANE_W)]
+        if queued:
+            boxes.append(car_at(-MODEL.rear_overhang_m - 2.0 - 2.25, 0.0))
+        road = FakeRoad(boxes, lanes_left=1, lanes_right=0, angles=angles)
+        controller.step(road.observe(state, k * STEP_S))
+        phases.append(controller.phase)
+        xs.append(passing_x)
+    return phases, np.array(xs)
+
+
+def test_with_a_rear_view_the_car_pulls_out_only_once_the_gap_stays_open():
+    phases, xs = waiting_behind_a_barrel(ALL_ROUND)
+    out = phases.index(AVOID_LEFT)
+    assert all(p == BRAKE for p in phases[:out])
+    # the passing car's rear is ahead of the car's front: it has gone by
+    assert xs[out] - 2.25 > FRONT_AHEAD_M
+    # with the lesson's front lidar the car that went by keeps the lane closed
+    front_phases, _ = waiting_behind_a_barrel(ANGLES)
+    assert AVOID_LEFT not in front_phases
+
+
+def test_a_gap_too_short_for_the_closing_speed_keeps_the_lane_closed():
+    controller = AvoidController({})
+    for k in range(10):  # closing at 20 m/s: 10 m + 3 s x 20 m/s is 70 m, more than 60
+        x = -60.0 + 20.0 * k * STEP_S
+        road = FakeRoad([barrel(7.0), car_at(x, LANE_W)], 1, 0, ALL_ROUND)
+        controller.step(road.observe(at_speed(0.0), k * STEP_S))
+        assert controller.phase == BRAKE
+    slow = AvoidController({})  # the same gap closing at 2 m/s stays open long enough
+    for k in range(10):
+        x = -60.0 + 2.0 * k * STEP_S
+        road = FakeRoad([barrel(7.0), car_at(x, LANE_W)], 1, 0, ALL_ROUND)
+        slow.step(road.observe(at_speed(0.0), k * STEP_S))
+    assert slow.phase == AVOID_LEFT
+
+
+def test_a_car_queued_behind_hides_the_next_lane():
+    phases, _ = waiting_behind_a_barrel(ALL_ROUND, queued=True)
+    assert AVOID_LEFT not in phases  # the lane behind it unseen is not open
+    clear, _ = waiting_behind_a_barrel(ALL_ROUND)
+    assert AVOID_LEFT in clear
 
 
 # ---- feedback --------------------------------------------------------------------
