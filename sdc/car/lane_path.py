@@ -13,6 +13,7 @@ offset instead.
 
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -62,6 +63,7 @@ class LanePath:
         self._lengths = np.ascontiguousarray(lengths[keep])
         self._dirs = np.ascontiguousarray(delta[keep] / self._lengths[:, None])
         self._start_s = np.ascontiguousarray(s_m[:-1][keep], dtype=np.float64)
+        self._start_s_list = self._start_s.tolist()
         #: the body centre's station along the lane and its offset from the centre
         self.car_s_m, self.offset_m = self.locate(0.0, 0.0)
 
@@ -126,8 +128,8 @@ class LanePath:
         return turn / (to_s_m - from_s_m)
 
     def _segment(self, s_m: float) -> int:
-        index = int(np.searchsorted(self._start_s, s_m, side="right")) - 1
-        return min(max(index, 0), len(self._start_s) - 1)
+        index = bisect.bisect_right(self._start_s_list, s_m) - 1
+        return min(max(index, 0), len(self._start_s_list) - 1)
 
     def point_at(self, s_m: float, d_m: float) -> tuple[float, float]:
         """The point of lane coordinates ``(s_m, d_m)`` in the car's frame."""
