@@ -1,14 +1,17 @@
 """The closed-loop avoid-then-return controller (``avoid``).
 
-From what the car senses only: the range image, the lane reading, its own speed
-and steering, its vehicle model. Each step the returns become points in the
-lane's frame (:class:`LaneFrame`); an obstacle anywhere across the car's own
-lane whose time to collision falls under ``detect_ttc_s`` starts the maneuver.
-The car moves to a lateral target on the side whose corridor is free (left
-first), holds it until the obstacle is beside and behind, and comes back, all by
-feedback on the lane offset (:func:`pursuit_steer_rad`). It keeps a cruise speed
-and brakes, up to a stop, when no side is free or swerving cannot clear in time.
-Angles and offsets are ISO 8855: positive to the left.
+From what the car senses only: the range image, the lane reading (with its
+path: the lane's centre line around the car), its own speed and steering, its
+vehicle model. Each step the returns become points in the lane's own frame
+(:class:`LaneFrame` on a :class:`~sdc.car.lane_path.LanePath`: along the arc
+of a curve, through the route's lanes at a junction); an obstacle in the car's
+path along its lane whose time to collision falls under ``detect_ttc_s``
+starts the maneuver. The car moves to a lateral target on the side whose
+corridor is free and whose lane is open (left first), holds it until its rear
+is past what it passes, and comes back, all by feedback in the lane's frame
+(:func:`pursuit_steer_rad`). It keeps a cruise speed, slows for the lane's
+bends, and brakes, up to a stop, when no side is free or swerving cannot clear
+in time. Angles and offsets are ISO 8855: positive to the left.
 """
 
 from __future__ import annotations
@@ -191,7 +194,9 @@ class AvoidController:
 
     def _plan(self, frame: LaneFrame, obs: Observation, offset: float, gap_m: float,
               in_lane: np.ndarray):
-        """On an obstacle ahead: (phase, side, target) to swerve to, or brake."""
+        """On an obstacle ahead: ``(phase, side, target, end_s, accel)``, to swerve
+        to ``target`` or brake; ``end_s``: how far along the lane the obstacle's
+        returns reach."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
         near = in_lane & (frame.ahead_m <= frame.ahead_m[in_lane].min() + p.obstacle_depth_m)

@@ -133,7 +133,8 @@ class LaneSensor:
         if not 0.0 <= s_m <= road.length_m:
             return None
         _, preview_d_m = road.locate_near(cx + look_ahead_m * math.cos(yaw_rad),
-                                          cy + look_ahead_m * math.sin(yaw_rad), s_m)
+                                          cy + look_ahead_m * math.sin(yaw_rad),
+                                          s_m + look_ahead_m)
         heading_error = yaw_rad - self.road.heading_at_s(s_m)
         heading_error = (heading_error + math.pi) % (2 * math.pi) - math.pi
         path_xy, path_s = self._path(cx, cy, yaw_rad, s_m * self.lane_scale)
