@@ -104,6 +104,8 @@ class RoadGeometry:
         starts = self._seg_start_s_list
         first = max(0, bisect.bisect_right(starts, near_s_m - reach_m) - 1)
         last = max(first + 1, bisect.bisect_right(starts, near_s_m + reach_m))
+        if first == 0 and last == len(starts):
+            return self.locate(x_m, y_m)
         return road_kernels.locate(x_m, y_m, self._seg_start_xy[first:last],
                                    self._seg_dir[first:last], self._seg_len_m[first:last],
                                    self._seg_start_s_m[first:last])

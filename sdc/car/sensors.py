@@ -110,6 +110,7 @@ class LaneSensor:
         line = road.offset_polyline(self.lane_d_m)
         line = line[simplified_polyline(line, PATH_TOLERANCE_M)]
         self.path_xy_m = line
+        self._path_rows = np.column_stack([line, np.ones(len(line))])
         steps = np.hypot(*np.diff(line, axis=0).T)
         self.path_s_m = np.concatenate([[0.0], np.cumsum(steps)])
         self.path_s_m.flags.writeable = False
@@ -151,8 +152,9 @@ class LaneSensor:
         stations = self._path_s_list
         first = max(0, bisect.bisect_right(stations, lane_s_m - self.path_range_m) - 1)
         last = min(len(stations), bisect.bisect_left(stations, lane_s_m + self.path_range_m) + 1)
-        rel = self.path_xy_m[first:last] - (cx, cy)
         c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-        xy = np.column_stack([rel[:, 0] * c + rel[:, 1] * s, rel[:, 1] * c - rel[:, 0] * s])
+        # (x - cx, y - cy) turned by -yaw, as one product of the rows (x, y, 1)
+        to_car = np.array([[c, -s], [s, c], [-cx * c - cy * s, cx * s - cy * c]])
+        xy = self._path_rows[first:last] @ to_car
         xy.flags.writeable = False
         return xy, self.path_s_m[first:last]
