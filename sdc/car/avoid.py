@@ -264,10 +264,11 @@ class AvoidController:
         lane = obs.lane
         path = LanePath.from_reading(lane, p.look_ahead_m) if lane else STRAIGHT_AHEAD
         frame = self._frame(obs, path)
-        self._watch_lanes(frame, obs)
         offset = path.offset_m
-        if self._rear_view:
+        if self._rear_view:  # the lanes are watched behind, or beside (_lane_open)
             self.rear.update(frame, obs, self._lane_bands(obs), offset)
+        else:
+            self._watch_lanes(frame, obs)
         # the car's path along its lane: its width and path_clearance_m each side
         half_lane = min(obs.lane_width_m / 2 - p.edge_tolerance_m,
                         v.width_m / 2 + p.path_clearance_m)
