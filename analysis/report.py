@@ -167,7 +167,53 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
         "envelope": ([safe_envelope(counted, SPEED, c) for c in controllers]
                      if SPEED in counted.columns else []),
         "gate": None if fail_above is None else gate(counted, controllers, fail_above, method),
+        "traffic_model": manifest.get("traffic_model"),
+        "world": world_summary(counted),
     }
+
+
+def world_summary(results: pd.DataFrame) -> dict:
+    """The world audit (runs with ``world_overlaps``) and, per controller, its
+    collisions by who moved into whom and the part of the ego hit (sweeps made before
+    these columns: not recorded)."""
+    if "world_overlaps" not in results.columns:
+        return {"recorded": False}
+    ok = results[results.status == "ok"]
+    overlaps = ok.world_overlaps.fillna(0)
+    hits = ok[ok.collision.fillna(False).astype(bool) & ok.collision_role.notna()]
+    return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
+            "overlap_steps": int(overlaps.sum()),
+            "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
+                                                 by_role.collision_part.value_counts().items()}
+                                    for role, by_role in rows.groupby("collision_role")}
+                           for c, rows in hits.groupby("controller", sort=False)}}
+
+
+ROLE_TEXT = {"ran_into": "ran into", "was_hit": "was hit"}
+
+
+def world_lines(summary: dict) -> list[str]:
+    """The traffic model, the world audit (a WARNING when bodies other than the ego
+    overlapped: a world that made something up), and each controller's collisions
+    split into those it ran into and those in which it was hit."""
+    lines = [f"Traffic model: {summary.get('traffic_model') or 'not recorded'}."]
+    world = summary.get("world", {"recorded": False})
+    if not world["recorded"]:
+        return lines + ["World audit: not recorded (the sweep predates it)."]
+    if world["runs_with_overlaps"]:
+        lines.append(f"WARNING: in {_plural(world['runs_with_overlaps'], 'run')} two bodies "
+                     f"other than the ego overlapped ({world['overlap_steps']} steps in all, "
+                     "column world_overlaps): their world made something up, and their "
+                     "verdicts are suspect.")
+    else:
+        lines.append("World audit: no two bodies other than the ego overlapped in any run "
+                     "(world_overlaps 0).")
+    for controller, roles in world["collisions"].items():
+        parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
+                 + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
+                 for role, by_part in sorted(roles.items())]
+        lines.append(f"{controller}'s collisions by who moved into whom: {'; '.join(parts)}.")
+    return lines
 
 
 def shares_traffic(summary: dict) -> bool:
@@ -443,7 +489,7 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
     lines = [f"# Collision report: {summary['sweep']}", "", _count_line(summary), "",
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
-    for line in warm_state_lines(summary):  # paragraphs of their own
+    for line in [*warm_state_lines(summary), *world_lines(summary)]:  # paragraphs
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
     lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
               else [NOT_RECORDED, ""])
@@ -525,7 +571,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              "as safe.</p>",
              *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
              *(f'<p{_warn_class(line)}>{html.escape(line)}</p>'
-               for line in warm_state_lines(summary)),
+               for line in [*warm_state_lines(summary), *world_lines(summary)]),
              f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
              "</p>",
              _table_html(verdicts, "verdicts") if verdicts else "",

@@ -103,8 +103,10 @@ class HighwayWorld:
         self._next_depart_s = 0.0
         for _ in range(round(traffic.warm_up_s / self.spec.scenario.step_s)):
             self._advance()
-        blocking = in_start_zone(self.spec, self.road,
-                                 np.array([v.position for v in self._hw.vehicles]))
+        vehicles = self._hw.vehicles
+        blocking = in_start_zone(self.spec, self.road, np.array([v.position for v in vehicles]),
+                                 np.array([v.speed for v in vehicles]),
+                                 max((v.LENGTH / 2 for v in vehicles), default=0.0))
         self._hw.vehicles = [v for v, off in zip(self._hw.vehicles, blocking, strict=True)
                              if not off]
         self._ego = PushedVehicle(self._hw, ego_box[:2], float(ego_box[2]), ego_speed_mps)

@@ -10,6 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 
@@ -44,16 +45,39 @@ class Snapshot(NamedTuple):
 #: vehicles in the ego's lane or a neighbouring one (they may change into it as the ego
 #: appears), this far behind / ahead of its start, are taken off at entry [m]
 START_ZONE_BEHIND_M, START_ZONE_AHEAD_M = 30.0, 10.0
+#: how traffic brakes for a car appearing ahead of it: SUMO's defaults for a vType that
+#: sets none (our traffic's): it reacts in TAU, brakes at DECEL and stops MIN_GAP short
+TRAFFIC_TAU_S, TRAFFIC_DECEL_MPS2, TRAFFIC_MIN_GAP_M = 1.0, 4.5, 2.5
 
 
-def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray) -> np.ndarray:
-    """Which vehicle centres stand where the ego enters the road (a bool mask)."""
+def stop_need_m(speed_mps: np.ndarray, ego_speed_mps: float, ego_decel_mps2: float) -> np.ndarray:
+    """The gap [m] a follower at ``speed_mps`` needs behind the ego's rear to stop short
+    of it, should the ego brake at once as hard as it can."""
+    speed_mps = np.asarray(speed_mps, float)
+    brake_m = speed_mps**2 / (2 * TRAFFIC_DECEL_MPS2) - ego_speed_mps**2 / (2 * ego_decel_mps2)
+    return TRAFFIC_MIN_GAP_M + TRAFFIC_TAU_S * speed_mps + np.maximum(brake_m, 0.0)
+
+
+def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray,
+                  speeds_mps: np.ndarray | None = None, front_ahead_m: float = 0.0) -> np.ndarray:
+    """Which vehicles (points ``centers_xy``, their front bumpers ``front_ahead_m`` ahead
+    of them: 0 for SUMO's positions, half a length for centres) stand where the
+    ego enters the road, in its lane or a neighbouring one (a bool mask): within
+    :data:`START_ZONE_BEHIND_M` behind it or :data:`START_ZONE_AHEAD_M` ahead, and
+    with their ``speeds_mps``, any behind it too close to stop should it brake at once
+    (:func:`stop_need_m`)."""
     if len(centers_xy) == 0:
         return np.zeros(0, bool)
     s_m, d_m = road.to_frenet(np.asarray(centers_xy, float).reshape(-1, 2))
     ego = spec.ego
+    behind_m = np.full(len(s_m), START_ZONE_BEHIND_M)
+    if speeds_mps is not None:
+        model = VEHICLE_MODELS[spec.vehicle.model]
+        gap_m = stop_need_m(speeds_mps, ego.speed_mps,
+                            model.braking_decel_mps2(spec.vehicle.friction_mu))
+        behind_m = np.maximum(behind_m, gap_m + model.length_m / 2 + front_ahead_m)
     return ((np.abs(d_m - road.lane_center_d_m(ego.lane)) < 1.5 * road.lane_width_m)
-            & (s_m >= ego.start_m - START_ZONE_BEHIND_M)
+            & (s_m >= ego.start_m - behind_m)
             & (s_m <= ego.start_m + START_ZONE_AHEAD_M))
 
 

@@ -5,8 +5,11 @@ libsumo holds one simulation per process; a :class:`SumoWorld` owns it from
 and measures angles in degrees clockwise from north; this module converts to and
 from our boxes (body centre, yaw counter-clockwise from +x).
 
-SUMO traffic sees each obstacle as a vehicle stopped at its lane's centre; the
-obstacle's lateral offset exists only in our geometry (collisions are ours).
+SUMO's traffic sees the ego and each obstacle where they stand, the part of a body
+reaching into a neighbouring lane included, and changes lanes over time
+(:mod:`scenarios.traffic_model`); collisions are ours. Traffic enters one step
+after the ego, so SUMO's insertion checks see it; after a warm-up, the traffic that
+could not stop behind the entering ego is taken off.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios import road_kernels
+from scenarios import road_kernels, traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.errors import SdcError
@@ -51,7 +54,7 @@ from scenarios.warm_state import (
 EGO_ID = "ego"
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_PREFIX = "traffic."
-TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
+TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
 #: SUMO measures the context radius between front bumpers: a body centre within the
 #: sensing radius has its front bumper within it plus half of each body's length [m]
 SUBSCRIPTION_SLACK_M = 1.0 + (TRAFFIC_LENGTH_M
@@ -78,23 +81,23 @@ def _route_edges(road: RoadGeometry, s_m: float) -> list[str]:
 WARM_FLOW_END_S = 1e7
 
 
-def _flows(spec: ScenarioSpec, route: str, end_s: float) -> list[str]:
-    """A flow per lane entering at the road's start, until ``end_s``."""
+def _flows(spec: ScenarioSpec, route: str, end_s: float, begin_s: float = 0.0) -> list[str]:
+    """A flow per lane entering at the road's start, from ``begin_s`` until ``end_s``."""
     traffic = spec.traffic
     if traffic.flow_vph_per_lane == 0:
         return []
     return [
-        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="{route}" begin="0" '
+        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="{route}" begin="{begin_s!r}" '
         f'end="{end_s}" '
         f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
         for lane in range(spec.road.lane_count)
     ]
 
 
-def _trips(trips: list[tuple[str, str]]) -> list[str]:
-    """The first random trips across the network, all leaving at 0 s."""
+def _trips(trips: list[tuple[str, str]], depart_s: float = 0.0) -> list[str]:
+    """The first random trips across the network, all leaving at ``depart_s``."""
     return [
-        f'  <trip id="{TRAFFIC_PREFIX}{k}" type="traffic" depart="0" from="{start}" '
+        f'  <trip id="{TRAFFIC_PREFIX}{k}" type="traffic" depart="{depart_s!r}" from="{start}" '
         f'to="{end}" departLane="random" departPos="random_free" departSpeed="0"/>'
         for k, (start, end) in enumerate(trips)
     ]
@@ -110,8 +113,12 @@ def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
 
 
 def _ego_types(spec: ScenarioSpec) -> list[str]:
+    """The ego's vType (its size, acceleration and braking, so followers keep gaps for
+    the car it is) and the obstacles'."""
     model = VEHICLE_MODELS[spec.vehicle.model]
-    return [f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}"/>'] + [
+    decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
+    return [f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}" '
+            f'accel="{model.max_accel_mps2}" decel="{decel!r}" emergencyDecel="{decel!r}"/>'] + [
         f'  <vType id="obstacle_{kind}" length="{length}" width="{width}"/>'
         for kind, (length, width) in OBSTACLE_SIZES_M.items()
     ]
@@ -122,26 +129,58 @@ def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
     return f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>'
 
 
+def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
+    """The lanes of a built-in road in which SUMO must see an obstacle standing at
+    ``box``: the lane of its centre first, then each neighbouring lane it reaches into
+    too far for traffic to pass (:func:`scenarios.traffic_model.blocks_neighbour`)."""
+    (s_m,), (d_m,) = road.to_frenet(box[None, :2])
+    lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
+    width = road.lane_width_m
+    own = int(np.clip(np.floor((d_m + road.half_width_m) / width), 0, road.lanes - 1))
+    lanes = [own]
+    for lane in range(road.lanes):
+        centre_m = road.lane_center_d_m(lane)
+        reach_m = (hi_m - (centre_m - width / 2) if lane > own
+                   else (centre_m + width / 2) - lo_m)
+        if lane != own and traffic_model.blocks_neighbour(reach_m, width, TRAFFIC_WIDTH_M):
+            lanes.append(lane)
+    return lanes
+
+
+def _across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:
+    """How far across the road (lowest, highest ``d``) a box centred at ``d_m`` reaches,
+    the road heading ``heading_rad`` there."""
+    psi = float(box[2]) - heading_rad
+    half_m = abs(box[3] / 2 * math.sin(psi)) + abs(box[4] / 2 * math.cos(psi))
+    return d_m - half_m, d_m + half_m
+
+
 def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
                checks: str = "all") -> list[str]:
     """The obstacles as vehicles stopped for good where they stand, entering at
-    ``depart`` with SUMO's insertion ``checks``."""
+    ``depart`` with SUMO's insertion ``checks``. On a built-in road an obstacle that
+    blocks a neighbouring lane stands there too, as a second vehicle
+    (``obstacle.<i>.<lane>``)."""
     lines = []
     checked = "" if checks == "all" else f' insertionChecks="{checks}"'
-    for i, obstacle in enumerate(spec.obstacles):
+    for i, (obstacle, box) in enumerate(zip(spec.obstacles, obstacle_boxes(spec, road),
+                                            strict=True)):
         length_m = obstacle.size_m[0]
         s_m = road.place_s_m(obstacle.position_m, length_m)
-        edge, lane, front_m = _sumo_place(road, obstacle.lane, s_m + length_m / 2)
-        route = "r0" if edge == EDGE_ID else f"{OBSTACLE_PREFIX}{i}"
-        if route != "r0":
-            lines.append(f'  <route id="{route}" edges="{edge}"/>')
-        lines += [
-            f'  <vehicle id="{OBSTACLE_PREFIX}{i}" type="obstacle_{obstacle.kind}" '
-            f'route="{route}" depart="{depart}" departLane="{lane}" '
-            f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
-            f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
-            "  </vehicle>",
-        ]
+        lanes = [obstacle.lane] if isinstance(road, NetworkRoad) else obstacle_lanes(road, box)
+        for k, spec_lane in enumerate(lanes):
+            edge, lane, front_m = _sumo_place(road, spec_lane, s_m + length_m / 2)
+            vid = f"{OBSTACLE_PREFIX}{i}" if k == 0 else f"{OBSTACLE_PREFIX}{i}.{lane}"
+            route = "r0" if edge == EDGE_ID else vid
+            if route != "r0":
+                lines.append(f'  <route id="{route}" edges="{edge}"/>')
+            lines += [
+                f'  <vehicle id="{vid}" type="obstacle_{obstacle.kind}" '
+                f'route="{route}" depart="{depart}" departLane="{lane}" '
+                f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
+                f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
+                "  </vehicle>",
+            ]
     return lines
 
 
@@ -156,9 +195,11 @@ def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
     network the ``trips`` (from edge, to edge) leaving at 0 s)."""
     network = isinstance(road, NetworkRoad)
     end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
+    enter_s = spec.scenario.step_s  # after the ego, which enters in the first step
     return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
                     *_obstacles(spec, road),
-                    *(_trips(trips) if network else _flows(spec, "r0", end_s))])
+                    *(_trips(trips, enter_s) if network
+                      else _flows(spec, "r0", end_s, enter_s))])
 
 
 def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
@@ -212,6 +253,8 @@ class SumoWorld:
         self._demand: RandomTrips | None = None
         self._trips_made = 0
         self._radius_m = sensing_radius_m(spec)
+        self._model = VEHICLE_MODELS[spec.vehicle.model]
+        self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
         self.warm_state_key: str | None = None  # the key of the warm state it started from
@@ -244,6 +287,7 @@ class SumoWorld:
             "--step-length", repr(self.spec.scenario.step_s),
             "--seed", str(self.spec.scenario.seed if seed is None else seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
+            *traffic_model.SUMO_OPTIONS,
             "--no-step-log", "true", "--no-warnings", "true",
             *options,
         ])
@@ -357,20 +401,43 @@ class SumoWorld:
         settling["halting"].append(int((speeds < HALTING_SPEED_MPS).sum()))
 
     def _clear_start(self, obstacles: bool = False) -> None:
-        """Take the traffic off the ego's entry (after a warm-up), and with
+        """Take the traffic off the ego's entry (after a warm-up: also any behind it that
+        could not stop for it, :func:`~scenarios.snapshot.in_start_zone`), and with
         ``obstacles`` off the obstacles' spots too."""
         vehicle = self._sumo.vehicle
         ids = [v for v in vehicle.getIDList() if _is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
-        taken = in_start_zone(self.spec, self.road, fronts)
+        speeds = np.array([vehicle.getSpeed(v) for v in ids])
+        taken = in_start_zone(self.spec, self.road, fronts, speeds)
         if obstacles:
             taken |= near_obstacles(self.spec, self.road, fronts)
         for vid in np.array(ids)[taken]:
             vehicle.remove(str(vid))
 
+    def _ego_pose(self, box: np.ndarray) -> tuple[float, float, float]:
+        """SUMO's front-bumper x, y and angle for the ego at ``box``: its front bumper
+        moved across the road to the lateral position SUMO is to see
+        (:func:`scenarios.traffic_model.sumo_lateral_m`: the whole body, or just
+        inside its lane where what reaches over a lane line leaves room to pass)."""
+        x, y, angle_deg = _sumo_pose(box)
+        road, model = self.road, self._model
+        s_m, d_m = road.locate_near(float(box[0]), float(box[1]), self._ego_s_m)
+        self._ego_s_m = s_m
+        heading = road.heading_at_s(s_m)
+        lane = math.floor((d_m + road.half_width_m) / road.lane_width_m)
+        if not (0 <= lane < road.lanes and 0 <= s_m <= road.length_m):
+            return x, y, angle_deg
+        lo_m, hi_m = _across_m(box, heading, d_m)
+        lateral_m = traffic_model.sumo_lateral_m(
+            lo_m, hi_m, road.lane_center_d_m(lane), road.lane_width_m, model.width_m,
+            TRAFFIC_WIDTH_M)
+        front_d_m = d_m + model.length_m / 2 * math.sin(float(box[2]) - heading)
+        shift_m = lateral_m - front_d_m
+        return x - shift_m * math.sin(heading), y + shift_m * math.cos(heading), angle_deg
+
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
-        x, y, angle_deg = _sumo_pose(ego_box)
+        x, y, angle_deg = self._ego_pose(ego_box)
         sumo = self._sumo
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)

@@ -4,7 +4,8 @@ loaded by every run that shares it.
 A warm state is identified by everything the warm-up depends on (:func:`warm_key`):
 the network file's sha256, the traffic spec, the warm-up's seed
 (``traffic.warm_seed``, default the scenario's), ``warm_up_s``, the step length,
-SUMO's version and this file's format. The ego, its route and the obstacles are
+SUMO's version and the options of the traffic model it runs with
+(``scenarios/traffic_model.py``), and this file's format. The ego, its route and the obstacles are
 not part of it: they enter when a run loads it.
 
 One state is one file (:class:`WarmState`): a zip holding SUMO's own state
@@ -30,6 +31,7 @@ import zipfile
 from importlib import metadata
 from pathlib import Path
 
+from scenarios import traffic_model
 from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
 from scenarios.scenario_spec import ScenarioSpec
@@ -68,6 +70,7 @@ def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
     """The identity of ``spec``'s warm state, on the network whose file has ``net_sha256``."""
     traffic = {k: v for k, v in dataclasses.asdict(spec.traffic).items() if k != "warm_seed"}
     body = {"format": WARM_FORMAT, "sumo": sumo_version(), "net_sha256": net_sha256,
+            "sumo_options": list(traffic_model.SUMO_OPTIONS),
             "traffic": traffic, "seed": warm_seed(spec), "step_s": spec.scenario.step_s}
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 

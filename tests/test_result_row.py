@@ -52,7 +52,8 @@ def _metrics() -> dict:
 
 def _outcome() -> dict:
     return {"termination": "duration", "collision": False, "collision_with": "none",
-            "collision_time_s": None, "outcome": "completed", "progress_m": 1.2,
+            "collision_time_s": None, "collision_part": None, "collision_role": None,
+            "world_overlaps": 0, "outcome": "completed", "progress_m": 1.2,
             "time_lost_s": 0.0, "min_road_edge_gap_m": np.float64(0.7),
             "stop_gap_m": 27.275, "stop_possible": np.True_,
             "sim_time_s": 0.2, "steps": 3, "wall_time_s": 0.01, "network_vehicles": 0,

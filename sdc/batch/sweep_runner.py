@@ -22,6 +22,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from analysis.stats import STATUSES
+from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
@@ -140,6 +141,7 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int) -> dict
         "runs": runs,
         "samples": samples,
         "versions": package_versions(),
+        "traffic_model": traffic_model.description(),
         "controllers": controller_sources(sweep.controllers),
         "files": {},  # what travels with the job: driver path -> field, sha256
         "git": git_state(),

@@ -1,15 +1,30 @@
 """Our own collision test: the ego's body box against obstacles, traffic and the
-road edges, every step (SUMO does not see an ego that straddles two lanes)."""
+road edges, every step; and, for a collision, which part of the ego was hit and
+who moved into whom."""
 
 from __future__ import annotations
 
+import math
+from typing import NamedTuple
+
 import numpy as np
 
+from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
+from scenarios.snapshot import Snapshot
 from sdc.car.geometry import one_box_corners
 from sdc.car.geometry_kernels import Contacts
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
+FRONT, SIDE, REAR = "front", "side", "rear"
+#: the ego moved into the contact faster than the other body did / the other body did
+RAN_INTO, WAS_HIT = "ran_into", "was_hit"
+
+
+class Collision(NamedTuple):
+    with_: str  # OBSTACLE, VEHICLE or ROAD_EDGE
+    part: str  # FRONT, SIDE or REAR: the part of the ego's body that was hit
+    role: str  # RAN_INTO or WAS_HIT
 
 
 def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) -> str | None:
@@ -26,3 +41,67 @@ def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) 
     if road.off_road(one_box_corners(ego_box)).any():
         return ROAD_EDGE
     return None
+
+
+def _in_frame(box: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(K, 2) points in ``box``'s frame: along its length, across it (left positive)."""
+    c, s = math.cos(box[2]), math.sin(box[2])
+    d = np.asarray(points, float).reshape(-1, 2) - box[:2]
+    return np.column_stack([d[:, 0] * c + d[:, 1] * s, -d[:, 0] * s + d[:, 1] * c])
+
+
+def _inside(box: np.ndarray, points: np.ndarray) -> np.ndarray:
+    local = _in_frame(box, points)
+    return (np.abs(local[:, 0]) <= box[3] / 2) & (np.abs(local[:, 1]) <= box[4] / 2)
+
+
+def contact_point(ego_box: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Where two overlapping boxes touch: the mean of the corners of each inside the
+    other (the other box's centre when no corner is: a crossing through both sides)."""
+    ego_corners, other_corners = box_corners(ego_box)[0], box_corners(other)[0]
+    inside = np.vstack([other_corners[_inside(ego_box, other_corners)],
+                        ego_corners[_inside(other, ego_corners)]])
+    return inside.mean(axis=0) if len(inside) else np.asarray(other[:2], float)
+
+
+def hit_part(ego_box: np.ndarray, point_xy: np.ndarray) -> str:
+    """The part of the ego's body nearest to ``point_xy``: the edge whose line it is
+    closest to."""
+    (x, y), = _in_frame(ego_box, point_xy)
+    to_edge = {FRONT: ego_box[3] / 2 - x, REAR: ego_box[3] / 2 + x, SIDE: ego_box[4] / 2 - abs(y)}
+    return min(to_edge, key=to_edge.get)
+
+
+def _velocity(yaw_rad: float, speed_mps: float) -> np.ndarray:
+    return speed_mps * np.array([math.cos(yaw_rad), math.sin(yaw_rad)])
+
+
+def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Contacts,
+             snapshot: Snapshot, road: RoadGeometry | None, road_heading_rad: float
+             ) -> Collision:
+    """The :class:`Collision` of a step where the ego touched ``hit``: the part of its
+    body nearest the contact, and who moved into it, judged in the road's frame (the
+    road heading ``road_heading_rad`` there): for a side contact across the road, for a
+    front or rear one along it, the ego ``ran_into`` it when it closed in on the
+    contact faster than the other body did, else it ``was_hit``. Obstacles, road edges
+    and standing cars are always run into."""
+    ego_box = np.asarray(ego_box, float)
+    if hit == ROAD_EDGE:
+        corners = one_box_corners(ego_box)
+        point, other_mps = corners[road.off_road(corners)].mean(axis=0), np.zeros(2)
+    elif hit == OBSTACLE:
+        point = contact_point(ego_box, snapshot.obstacle_boxes[contacts.obstacle])
+        other_mps = np.zeros(2)
+    else:
+        other = snapshot.traffic_boxes[contacts.vehicle]
+        point = contact_point(ego_box, other)
+        other_mps = _velocity(float(other[2]),
+                              float(snapshot.traffic_speeds_mps[contacts.vehicle]))
+    part = hit_part(ego_box, point)
+    c, s = math.cos(road_heading_rad), math.sin(road_heading_rad)
+    axis = np.array([-s, c]) if part == SIDE else np.array([c, s])
+    toward = axis if float((point - ego_box[:2]) @ axis) >= 0 else -axis
+    ego_closing = float(_velocity(float(ego_box[2]), ego_speed_mps) @ toward)
+    other_closing = float(-other_mps @ toward)
+    moved_in = ego_closing > other_closing or not other_mps.any()  # what stands is hit
+    return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT)

@@ -19,12 +19,13 @@ from analysis import run_outcome
 from analysis.metrics import trace_metrics
 from analysis.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
 from analysis.trace_file import Trace
+from analysis.world_audit import world_overlaps
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.warm_state import warm_state_id
 from scenarios.world_backends import make_road, make_world
-from sdc.car.collision import collision_with
+from sdc.car.collision import Collision, collision_with, describe
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
 from sdc.car.road_frame import RoadFrame
@@ -91,6 +92,7 @@ class Simulation:
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
         self.hit: str | None = None
+        self.collision: Collision | None = None
         self.wall_start = time.perf_counter()
 
     def start(self) -> None:
@@ -136,6 +138,10 @@ class Simulation:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
         self.hit = collision_with(self.box, self.contacts, self.road)
         if self.hit is not None:
+            s_m, _ = self.road.locate_near(float(self.box[0]), float(self.box[1]),
+                                           self.lane_sensor.s_m)
+            self.collision = describe(self.hit, self.box, self.state.speed_mps, self.contacts,
+                                      self.snapshot, self.road, self.road.heading_at_s(s_m))
             return COLLISION
         front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
         front_s_m, _ = self.road.locate_near(float(front[0]), float(front[1]),
@@ -202,6 +208,9 @@ class Simulation:
             collision=hit is not None,
             collision_with=hit or "none",
             collision_time_s=t_end if hit else None,
+            collision_part=self.collision.part if self.collision else None,
+            collision_role=self.collision.role if self.collision else None,
+            world_overlaps=world_overlaps(trace.traffic, obstacles),
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
                                             floats["speed_mps"]),
             progress_m=round(progress_m, 6),

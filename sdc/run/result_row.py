@@ -57,6 +57,16 @@ COLUMNS: tuple[Column, ...] = (
     Column("collision", pa.bool_(), OUTCOME, "the ego's body touched something"),
     Column("collision_with", pa.string(), OUTCOME, "none | obstacle | vehicle | road_edge"),
     Column("collision_time_s", pa.float64(), OUTCOME, "simulated time of the collision [s]"),
+    Column("collision_part", pa.string(), OUTCOME,
+           "front | side | rear: the part of the ego's body nearest the contact (sdc.car."
+           "collision); None: no collision"),
+    Column("collision_role", pa.string(), OUTCOME,
+           "ran_into: the ego closed in on the contact faster than the other body | "
+           "was_hit: the other body did (obstacles and road edges stand still); None: no "
+           "collision"),
+    Column("world_overlaps", pa.int64(), OUTCOME,
+           "steps in which a traffic vehicle overlapped another one or an obstacle within "
+           "the sensing radius (analysis.world_audit); 0 in a consistent world"),
     Column("outcome", pa.string(), OUTCOME,
            "how the run ended (analysis/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under 0.1 m/s for "

@@ -1,0 +1,78 @@
+"""What the one-world traffic model costs (scenarios/traffic_model.py), as ratios in one run.
+
+For each scenario, paired measurements with the model's SUMO options and without
+(``--lanechange.duration`` off: SUMO's one-step lane changes, the world before the
+model), each a closed loop under lane keeping (bench_perf.closed_loop) and the
+bare SUMO step of the same scenario with the same options (bench_perf.bare_sumo_ms):
+
+- ``world.<name>.sumo_step_ratio``: SUMO's step inside our loop, with the model over
+  without;
+- ``world.<name>.step_ratio``: our whole closed-loop step, with over without;
+- ``world.<name>.overhead_vs_bare_sumo``: our step over bare SUMO's, both with the
+  model's options (``..._without``: both without);
+- ``world.audit_ms_per_step``: the world audit (analysis.world_audit) over a trace of
+  the 100-vehicle highway, per step.
+
+Scenarios: ``highway_100`` (3 lanes, about 100 vehicles, bench_perf's), ``highway_20``
+(about 20), ``town_2000`` (the catalog's grid-town, 2000 cars; its warm-up is
+computed once per option set and cached).
+
+    python benchmarks/bench_world.py
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+import bench_perf
+import numpy as np
+
+from analysis.world_audit import world_overlaps
+from scenarios import traffic_model
+from sdc.run.episode import run_episode
+
+PAIRS = 3
+
+
+def measured(spec, options: tuple[str, ...], bare: bool = True) -> dict:
+    traffic_model.SUMO_OPTIONS = options
+    loop = bench_perf.closed_loop(spec)
+    loop["bare_ms"] = bench_perf.bare_sumo_ms(spec) if bare else float("nan")
+    return loop
+
+
+def main() -> None:
+    model = traffic_model.SUMO_OPTIONS
+    scenarios = {"highway_100": (bench_perf.traffic_spec(3, 2500.0, 1100.0, 120.0), PAIRS),
+                 "highway_20": (bench_perf.traffic_spec(3, 2500.0, 240.0, 100.0), PAIRS),
+                 "town_2000": (bench_perf.town_spec(), 1)}
+    for name, (spec, pairs) in scenarios.items():
+        bare = name != "town_2000"  # the town's ego leaves its lane at junctions
+        runs = [(measured(spec, model, bare), measured(spec, (), bare)) for _ in range(pairs)]
+        traffic_model.SUMO_OPTIONS = model
+
+        def ratio(key: str, runs=runs) -> float:
+            return statistics.median(a[key] / b[key] for a, b in runs)
+
+        print(f"world.{name}.sumo_step_ratio {ratio('sumo_ms'):.2f}")
+        print(f"world.{name}.step_ratio {ratio('step_ms'):.2f}")
+        if bare:
+            over = statistics.median(a["step_ms"] / a["bare_ms"] for a, _ in runs)
+            over_without = statistics.median(b["step_ms"] / b["bare_ms"] for _, b in runs)
+            print(f"world.{name}.overhead_vs_bare_sumo {over:.2f}")
+            print(f"world.{name}.overhead_vs_bare_sumo_without {over_without:.2f}")
+        for key in ("vehicles", "step_ms", "sumo_ms", "bare_ms"):
+            print(f"raw.{name}.{key} {statistics.median(a[key] for a, _ in runs):.3f} "
+                  f"(without: {statistics.median(b[key] for _, b in runs):.3f})")
+    episode = run_episode(bench_perf.traffic_spec(3, 2500.0, 1100.0, 120.0))
+    start = time.perf_counter()
+    world_overlaps(episode.trace.traffic, np.zeros((0, 5)))
+    audit_s = time.perf_counter() - start
+    print(f"world.audit_ms_per_step {1e3 * audit_s / len(episode.trace):.4f}")
+    print(f"raw.audit_traffic_per_step "
+          f"{statistics.mean(len(r) // 5 for r in episode.trace.traffic):.1f}")
+
+
+if __name__ == "__main__":
+    main()

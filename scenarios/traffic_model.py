@@ -1,0 +1,76 @@
+"""How SUMO is told where our bodies are, so its traffic reacts to them as they stand.
+
+Without SUMO's sublane model a vehicle drives at its lane's centre and sees a
+leader only in the lanes it occupies. Measured on SUMO 1.28 (``docs/world.md``):
+
+- a ``moveToXY`` ego whose body reaches into the next lane is invisible there and
+  traffic drives through it; with continuous lane changes
+  (``--lanechange.duration``) SUMO does register the part of a body that reaches
+  across the lane line (a "shadow lane"), but any part at all, so a car 0.2 m over
+  the line stopped all traffic beside it;
+- a stopped obstacle moved sideways (``moveToXY``, ``departPosLat``) gets no
+  shadow lane: traffic drives through the part beyond the lane line;
+- the sublane model sees both but costs 3x per step and gridlocks beside a
+  standing ego.
+
+So SUMO runs with continuous lane changes over :data:`LANE_CHANGE_DURATION_S`
+(no vehicle jumps sideways), and a body is shown in a neighbouring lane exactly
+when the part reaching into it leaves a traffic car driving at that lane's centre
+less than :data:`PASS_CLEARANCE_M` to pass (:func:`blocks_neighbour`): the ego
+through the lateral position it is given (:func:`sumo_lateral_m`), an obstacle as a
+second stopped vehicle in that lane. A part that leaves room to pass is not shown,
+so traffic passes it with at least that clearance instead of queueing.
+"""
+
+from __future__ import annotations
+
+#: every SUMO lane change takes this long: sideways at a lane width per this [s]
+LANE_CHANGE_DURATION_S = 2.0
+#: a traffic car passes a body reaching into its lane only with this much room [m]
+PASS_CLEARANCE_M = 0.3
+#: the size of every background vehicle (the vType ``traffic``) [m]
+TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
+#: SUMO's options that make the traffic model (added to every SUMO start)
+SUMO_OPTIONS = ("--lanechange.duration", repr(LANE_CHANGE_DURATION_S))
+
+
+def description() -> str:
+    """The traffic model in one line, for the manifest and the report."""
+    return (f"on sumo, lane changes take {LANE_CHANGE_DURATION_S:g} s (--lanechange.duration "
+            f"{LANE_CHANGE_DURATION_S:g}) and a body reaching into a neighbouring lane so far "
+            f"that a {TRAFFIC_WIDTH_M:g} m wide car at that lane's centre has under "
+            f"{PASS_CLEARANCE_M:g} m to pass is shown to SUMO in that lane too (the ego by its "
+            "lateral position, an obstacle as a second stopped vehicle); traffic enters "
+            "behind the ego only where it can stop; on highway, highway-env's IDM and MOBIL")
+
+
+def pass_slack_m(lane_width_m: float, traffic_width_m: float) -> float:
+    """How far a body may reach into a lane before a car of ``traffic_width_m`` at its
+    centre has less than :data:`PASS_CLEARANCE_M` beside it [m] (negative: never)."""
+    return (lane_width_m - traffic_width_m) / 2 - PASS_CLEARANCE_M
+
+
+def blocks_neighbour(reach_m: float, lane_width_m: float, traffic_width_m: float) -> bool:
+    """Does a body reaching ``reach_m`` over a lane line block that lane's traffic?"""
+    return reach_m > 0 and reach_m > pass_slack_m(lane_width_m, traffic_width_m)
+
+
+def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float,
+                   body_width_m: float, traffic_width_m: float) -> float:
+    """The lateral position [m, across the road, left positive] to give SUMO for a body
+    spanning ``lo_m`` .. ``hi_m`` across the road whose centre is in the lane centred at
+    ``lane_d_m``: a part over a lane line that leaves room to pass is not shown (the
+    body is shown just inside its lane on that side), one that blocks is shown as far
+    as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane)."""
+    left_reach_m = hi_m - (lane_d_m + lane_width_m / 2)
+    right_reach_m = (lane_d_m - lane_width_m / 2) - lo_m
+    inside_m = max(0.0, (lane_width_m - body_width_m) / 2)
+    if left_reach_m > 0 and not blocks_neighbour(left_reach_m, lane_width_m, traffic_width_m):
+        return lane_d_m + inside_m
+    if right_reach_m > 0 and not blocks_neighbour(right_reach_m, lane_width_m, traffic_width_m):
+        return lane_d_m - inside_m
+    if left_reach_m > 0 and right_reach_m <= 0:
+        return hi_m - body_width_m / 2
+    if right_reach_m > 0 and left_reach_m <= 0:
+        return lo_m + body_width_m / 2
+    return (lo_m + hi_m) / 2
