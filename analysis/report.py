@@ -49,6 +49,7 @@ from analysis.verdicts import (
     verdict_sentence,
     verdict_summary,
 )
+from analysis.world_audit import ROLE_TEXT
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
 
@@ -187,9 +188,6 @@ def world_summary(results: pd.DataFrame) -> dict:
                                                  by_role.collision_part.value_counts().items()}
                                     for role, by_role in rows.groupby("collision_role")}
                            for c, rows in hits.groupby("controller", sort=False)}}
-
-
-ROLE_TEXT = {"ran_into": "ran into", "was_hit": "was hit"}
 
 
 def world_lines(summary: dict) -> list[str]:

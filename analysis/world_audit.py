@@ -14,6 +14,8 @@ import numpy as np
 
 from scenarios.boxes import as_boxes
 
+#: a collision's ``collision_role`` (sdc.car.collision) as the report and the CLI say it
+ROLE_TEXT = {"ran_into": "ran into", "was_hit": "was hit"}
 #: bodies overlapping by less than this are touching, not through each other [m]
 OVERLAP_TOLERANCE_M = 0.01
 

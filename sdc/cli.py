@@ -16,6 +16,7 @@ from pathlib import Path
 
 import click
 
+from analysis.world_audit import ROLE_TEXT
 from scenarios import CATALOG_DIR
 from scenarios.compiled_kernels import kernel_choice
 from scenarios.controller_ref import resolve_file
@@ -66,8 +67,12 @@ def _fmt(value, unit: str = "", digits: int = 2) -> str:
 def summary_lines(name: str, row: dict) -> list[str]:
     if row["status"] != "ok":
         return [f"{name}: run failed: {row['error']}"]
-    outcome = (f"COLLISION with {row['collision_with']} at {row['collision_time_s']:.2f} s"
+    outcome = (f"COLLISION with {row['collision_with']} at {row['collision_time_s']:.2f} s "
+               f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
                if row["collision"] else "no collision")
+    if row.get("world_overlaps"):
+        outcome += (f"; WARNING: bodies other than the ego overlapped in "
+                    f"{row['world_overlaps']} steps (world_overlaps)")
     maneuver = "not started"
     if row["maneuver_started"]:
         returned = (f"returned to lane after {row['return_time_s']:.2f} s"

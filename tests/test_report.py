@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html
 import io
 import json
 import re
@@ -17,9 +18,15 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
-from analysis.report import COLLISION_TITLE, NOT_RECORDED, VERDICT_TITLE, write_report
+from analysis.report import (
+    COLLISION_TITLE,
+    NOT_RECORDED,
+    VERDICT_TITLE,
+    world_lines,
+    write_report,
+)
 from analysis.stats import wilson_interval
-from scenarios import CATALOG_DIR
+from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
@@ -362,3 +369,45 @@ def test_fail_above_gates_a_ci_on_the_upper_bound(small_sweep):
     assert loose.exit_code == 0 and "--fail-above 1: passed" in loose.output
     bad = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1.5"])
     assert bad.exit_code == 2 and "--fail-above" in bad.output
+
+
+def test_the_report_states_the_traffic_model_the_audit_and_who_hit_whom(small_sweep, tmp_path):
+    report = write_report(small_sweep, html_path=tmp_path / "r.html")
+    page, markdown = report.html_path.read_text(), (small_sweep / "report.md").read_text()
+    model = f"Traffic model: {traffic_model.description()}."
+    audit = "World audit: no two bodies other than the ego overlapped in any run"
+    results = pd.read_parquet(small_sweep / "results.parquet")
+    hit = results[results.collision.fillna(False).astype(bool)]
+    lane_keep = hit[hit.controller == "lane-keep"]
+    # lane keeping drives into the barrel: every collision is a front one it ran into
+    split = f"lane-keep's collisions by who moved into whom: ran into {len(lane_keep)} (front "
+    for text, escape in ((page, html.escape), (markdown, str)):
+        assert escape(model) in text and audit in text and escape(split) in text
+    assert set(lane_keep.collision_part) == {"front"}
+    assert set(lane_keep.collision_role) == {"ran_into"}
+    assert report.summary["world"]["runs_with_overlaps"] == 0
+
+
+def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(small_sweep,
+                                                                              tmp_path):
+    bad = tmp_path / "bad"
+    shutil.copytree(small_sweep, bad)
+    table = pq.read_table(bad / "results.parquet")
+    overlaps = table.column("world_overlaps").to_pylist()
+    overlaps[0] = 7
+    table = table.set_column(table.schema.get_field_index("world_overlaps"), "world_overlaps",
+                             pyarrow.array(overlaps, pyarrow.int64()))
+    pq.write_table(table, bad / "results.parquet")
+    lines = world_lines(write_report(bad).summary)
+    assert lines[1].startswith("WARNING: in 1 run two bodies other than the ego overlapped "
+                               "(7 steps in all")
+    old = tmp_path / "old"
+    shutil.copytree(small_sweep, old)
+    pq.write_table(pq.read_table(old / "results.parquet").drop_columns(
+        ["world_overlaps", "collision_part", "collision_role"]), old / "results.parquet")
+    manifest = json.loads((old / "manifest.json").read_text())
+    manifest.pop("traffic_model")
+    (old / "manifest.json").write_text(json.dumps(manifest))
+    lines = world_lines(write_report(old).summary)
+    assert lines == ["Traffic model: not recorded.",
+                     "World audit: not recorded (the sweep predates it)."]

@@ -16,7 +16,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from scenarios import CATALOG_DIR
+from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
@@ -148,6 +148,7 @@ def test_traces_for_failures_only(tmp_path):
     assert manifest["counts"] == {"ok": 12, "error": 0, "timeout": 0, "missing": 0}
     assert manifest["collisions"] == int(results.collision.sum())
     assert manifest["versions"]["libsumo"] and manifest["versions"]["numpy"]
+    assert manifest["traffic_model"] == traffic_model.description()
     assert manifest["sweep"]["sweep"]["name"] == "tiny"
     assert len(manifest["git"]["commit"]) == 40
     assert not (out / "parts").exists()
