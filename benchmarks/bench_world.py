@@ -11,7 +11,9 @@ bare SUMO step of the same scenario with the same options (bench_perf.bare_sumo_
 - ``world.<name>.overhead_vs_bare_sumo``: our step over bare SUMO's, both with the
   model's options (``..._without``: both without);
 - ``world.audit_ms_per_step``: the world audit (analysis.world_audit) over a trace of
-  the 100-vehicle highway, per step.
+  the 100-vehicle highway, per step;
+- ``world.ego_pose_us``: telling SUMO where the ego is (``SumoWorld._ego_pose``: its
+  lateral position by the model's rule), per step, with the options or without.
 
 Scenarios: ``highway_100`` (3 lanes, about 100 vehicles, bench_perf's), ``highway_20``
 (about 20), ``town_2000`` (the catalog's grid-town, 2000 cars; its warm-up is
@@ -30,6 +32,8 @@ import numpy as np
 
 from analysis.world_audit import world_overlaps
 from scenarios import traffic_model
+from scenarios.sumo_world import SumoWorld
+from scenarios.world_backends import make_road
 from sdc.run.episode import run_episode
 
 PAIRS = 3
@@ -65,11 +69,22 @@ def main() -> None:
         for key in ("vehicles", "step_ms", "sumo_ms", "bare_ms"):
             print(f"raw.{name}.{key} {statistics.median(a[key] for a, _ in runs):.3f} "
                   f"(without: {statistics.median(b[key] for _, b in runs):.3f})")
-    episode = run_episode(bench_perf.traffic_spec(3, 2500.0, 1100.0, 120.0))
+    episode_spec = bench_perf.traffic_spec(3, 2500.0, 1100.0, 120.0)
+    episode = run_episode(episode_spec)
     start = time.perf_counter()
     world_overlaps(episode.trace.traffic, np.zeros((0, 5)))
     audit_s = time.perf_counter() - start
     print(f"world.audit_ms_per_step {1e3 * audit_s / len(episode.trace):.4f}")
+    road = make_road(episode_spec)
+    with SumoWorld(episode_spec, road) as world:
+        boxes = episode.trace.body_boxes(
+            world._model.center_ahead_of_rear_axle_m, world._model.length_m,
+            world._model.width_m)
+        start = time.perf_counter()
+        for box in boxes:
+            world._ego_pose(box)
+        pose_s = time.perf_counter() - start
+    print(f"world.ego_pose_us {1e6 * pose_s / len(boxes):.2f}")
     print(f"raw.audit_traffic_per_step "
           f"{statistics.mean(len(r) // 5 for r in episode.trace.traffic):.1f}")
 

@@ -13,7 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from analysis.world_audit import pairs_overlap, step_overlaps
+import analysis.world_audit as world_audit
+from analysis.world_audit import pairs_overlap, world_overlaps
 from scenarios import traffic_model
 from scenarios.boxes import as_boxes
 from scenarios.scenario_spec import ScenarioSpec
@@ -110,16 +111,43 @@ def test_the_pairwise_overlap_test_agrees_with_the_cars_one_against_many():
     assert 50 < ours.sum() < 450  # both kinds were tried
 
 
+def step_overlaps(traffic: list, obstacles: list) -> int:
+    return world_overlaps([np.asarray(traffic, float).ravel()], as_boxes(obstacles))
+
+
 def test_a_step_counts_traffic_through_traffic_and_obstacles_not_touching_or_the_far():
     car = [0.0, 0.0, 0.0, 4.5, 1.8]
     through = [2.0, 1.0, 0.3, 4.5, 1.8]
     behind = [-6.0, 0.0, 0.0, 4.5, 1.8]  # 1.5 m gap
     beside = [0.0, 1.8, 0.0, 4.5, 1.8]  # touching side to side
-    assert step_overlaps(as_boxes([car, behind, beside]), as_boxes([])) == 0
-    assert step_overlaps(as_boxes([car, through]), as_boxes([])) == 1
-    assert step_overlaps(as_boxes([behind]), as_boxes([[-4.0, 0.5, 0.0, 4.5, 2.5]])) == 1
+    assert step_overlaps([car, behind, beside], []) == 0
+    assert step_overlaps([car, through], []) == 1
+    assert step_overlaps([behind], [[-4.0, 0.5, 0.0, 4.5, 2.5]]) == 1
     # two obstacles on top of each other are the spec's, not the traffic's doing
-    assert step_overlaps(as_boxes([]), as_boxes([car, car])) == 0
+    assert step_overlaps([], [car, car]) == 0
+
+
+def test_the_audit_of_a_trace_counts_the_steps_a_brute_force_loop_counts(monkeypatch):
+    """Steps of different sizes, in chunks: every pair checked one by one agrees."""
+    rng = np.random.default_rng(11)
+    obstacles = as_boxes([[5.0, 0.0, 0.0, 12.0, 2.5], [-20.0, 3.0, 0.0, 0.6, 0.6]])
+    rows = []
+    for _ in range(300):
+        n = int(rng.integers(0, 9))
+        rows.append(np.column_stack([rng.uniform(-25, 25, n), rng.uniform(-5, 5, n),
+                                     rng.normal(0, 0.2, n), np.full(n, 4.5),
+                                     np.full(n, 1.8)]).ravel())
+
+    def brute(row: np.ndarray) -> bool:
+        boxes = row.reshape(-1, 5)
+        bodies = np.vstack([boxes, obstacles])
+        return any(pairs_overlap(boxes[i], bodies[j])[0]
+                   for i in range(len(boxes)) for j in range(i + 1, len(bodies)))
+
+    expected = sum(brute(row) for row in rows)
+    assert 30 < expected < 270  # steps of both kinds
+    monkeypatch.setattr(world_audit, "_PAIRS_PER_PASS", 500)  # many chunks
+    assert world_overlaps(rows, obstacles) == expected
 
 
 # ---------------------------------------------------------------- who hit whom
