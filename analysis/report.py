@@ -190,6 +190,14 @@ def world_summary(results: pd.DataFrame) -> dict:
                            for c, rows in hits.groupby("controller", sort=False)}}
 
 
+WORLD_TITLE = "## World"
+
+
+def world_warnings(summary: dict) -> list[str]:
+    """The world audit's WARNING, if any, for the top of the report."""
+    return [line for line in world_lines(summary) if line.startswith("WARNING")]
+
+
 def world_lines(summary: dict) -> list[str]:
     """The traffic model, the world audit (a WARNING when bodies other than the ego
     overlapped: a world that made something up), and each controller's collisions
@@ -420,15 +428,16 @@ def _aligned(rows: list[list[str]]) -> list[str]:
 
 
 def terminal_table(summary: dict) -> list[str]:
-    """Partial-sweep lines, the verdicts, the collision table, then the collision rates
-    where a stop was possible in the same columns."""
+    """Partial-sweep lines, the traffic model and world audit, the verdicts, the
+    collision table, then the collision rates where a stop was possible in the same
+    columns."""
     verdicts = verdict_rows(summary)
-    lines = [*coverage_lines(summary), *warm_state_lines(summary)]
+    lines = [*coverage_lines(summary), *warm_state_lines(summary), *world_warnings(summary)]
     lines += [VERDICT_TITLE, *_aligned(verdicts)] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
     return [*lines, COLLISION_TITLE, *table[:len(rows)], stop_title(summary),
-            *table[len(rows):]]
+            *table[len(rows):], *world_lines(summary)]
 
 
 def failures(results: pd.DataFrame) -> pd.DataFrame:
@@ -487,7 +496,7 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
     lines = [f"# Collision report: {summary['sweep']}", "", _count_line(summary), "",
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
-    for line in [*warm_state_lines(summary), *world_lines(summary)]:  # paragraphs
+    for line in [*warm_state_lines(summary), *world_warnings(summary)]:  # paragraphs
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
     lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
               else [NOT_RECORDED, ""])
@@ -495,6 +504,7 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
               f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
+    lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in world_lines(summary)]
     lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", "",
                                                           RANKING, ""]
     bad = ranked_runs(results)
@@ -569,7 +579,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              "as safe.</p>",
              *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
              *(f'<p{_warn_class(line)}>{html.escape(line)}</p>'
-               for line in [*warm_state_lines(summary), *world_lines(summary)]),
+               for line in [*warm_state_lines(summary), *world_warnings(summary)]),
              f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
              "</p>",
              _table_html(verdicts, "verdicts") if verdicts else "",
@@ -578,6 +588,8 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
               if summary["stop_possible"]["recorded"] else ""),
+             "<h2>World</h2>",
+             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in world_lines(summary)),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
     parts += [_figure_html(title, png) for title, png in images]
     deff = shares_traffic(summary)

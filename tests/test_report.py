@@ -381,7 +381,7 @@ def test_the_report_states_the_traffic_model_the_audit_and_who_hit_whom(small_sw
     lane_keep = hit[hit.controller == "lane-keep"]
     # lane keeping drives into the barrel: every collision is a front one it ran into
     split = f"lane-keep's collisions by who moved into whom: ran into {len(lane_keep)} (front "
-    for text, escape in ((page, html.escape), (markdown, str)):
+    for text, escape in ((page, html.escape), (markdown, str), ("\n".join(report.terminal), str)):
         assert escape(model) in text and audit in text and escape(split) in text
     assert set(lane_keep.collision_part) == {"front"}
     assert set(lane_keep.collision_role) == {"ran_into"}
