@@ -225,16 +225,45 @@ def test_traffic_brakes_behind_or_passes_clear_of_an_ego_reaching_into_its_lane(
 @pytest.mark.parametrize("kind", ["car", "truck"])
 def test_traffic_never_drives_through_an_offset_obstacle(lesson_plain, kind):
     """Obstacles offset up to 1.5 m toward the lane with traffic: ``world_overlaps`` 0
-    in every run, and traffic did pass by."""
+    in every run; traffic passes them with at least 0.3 m, and does pass where there is
+    room (no gridlock beside an obstacle)."""
     for offset_m in (0.6, 1.0, 1.5):
+        passed = 0
         for seed in range(3):
             obstacle = {"kind": kind, "lane": 0, "position_m": 300.0,
                         "lateral_offset_m": offset_m}
             spec = two_lanes(lesson_plain, seed=seed, obstacles=[obstacle], ego_start_m=240.0,
                              duration_s=50.0)
-            row = run_episode(spec).row
+            episode = run_episode(spec)
+            row, box = episode.row, np.array(episode.metadata["obstacle_boxes"][0])
             assert row["status"] == "ok" and row["collision"] is False
             assert row["world_overlaps"] == 0, (kind, offset_m, seed)
+            for traffic in episode.trace.traffic:
+                boxes = np.asarray(traffic, float).reshape(-1, 5)
+                beside = boxes[np.abs(boxes[:, 0] - box[0]) < (box[3] + 4.5) / 2]
+                if len(beside):
+                    passed += 1
+                    assert box_gap_m(box, beside).min() >= traffic_model.PASS_CLEARANCE_M - 1e-3
+        width_m = 2.5 if kind == "truck" else 1.8
+        if not traffic_model.blocks_neighbour(offset_m + width_m / 2 - 1.75, 3.5, 1.8):
+            assert passed > 0, (kind, offset_m)
+
+
+@pytest.mark.slow
+def test_traffic_passes_a_standing_ego_that_leaves_room(lesson_plain):
+    """No gridlock beside a standing ego: at its lane's centre, or 1.0 m off it toward
+    the traffic, the next lane's cars pass it (with 0.3 m at least)."""
+    for offset_m in (0.0, 1.0):
+        passed = 0
+        for seed in range(3):
+            spec = two_lanes(lesson_plain, seed=seed, ego_start_m=200.0)
+            for box, snapshot in drive_held(spec, offset_m, 0.0, 400):
+                traffic = snapshot.traffic_boxes
+                beside = traffic[np.abs(traffic[:, 0] - box[0]) < (X5_LENGTH_M + 4.5) / 2]
+                if len(beside):
+                    passed += 1
+                    assert box_gap_m(box, beside).min() >= traffic_model.PASS_CLEARANCE_M
+        assert passed > 50, offset_m
 
 
 @pytest.mark.slow
