@@ -39,22 +39,25 @@ from sdc.run.episode import run_episode
 PAIRS = 3
 
 
-def measured(spec, options: tuple[str, ...], bare: bool = True) -> dict:
-    traffic_model.SUMO_OPTIONS = options
+def measured(spec, options, bare: bool = True) -> dict:
+    """bench_perf's closed loop and bare step with ``options`` as the traffic model's
+    SUMO options function."""
+    traffic_model.sumo_options = options
     loop = bench_perf.closed_loop(spec)
     loop["bare_ms"] = bench_perf.bare_sumo_ms(spec) if bare else float("nan")
     return loop
 
 
 def main() -> None:
-    model = traffic_model.SUMO_OPTIONS
+    model = traffic_model.sumo_options
     scenarios = {"highway_100": (bench_perf.traffic_spec(3, 2500.0, 1100.0, 120.0), PAIRS),
                  "highway_20": (bench_perf.traffic_spec(3, 2500.0, 240.0, 100.0), PAIRS),
                  "town_2000": (bench_perf.town_spec(), 1)}
     for name, (spec, pairs) in scenarios.items():
         bare = name != "town_2000"  # the town's ego leaves its lane at junctions
-        runs = [(measured(spec, model, bare), measured(spec, (), bare)) for _ in range(pairs)]
-        traffic_model.SUMO_OPTIONS = model
+        runs = [(measured(spec, model, bare), measured(spec, lambda _: (), bare))
+                for _ in range(pairs)]
+        traffic_model.sumo_options = model
 
         def ratio(key: str, runs=runs) -> float:
             return statistics.median(a[key] / b[key] for a, b in runs)

@@ -99,7 +99,7 @@ class TrafficSpec(Spec):
 
     On a ``sumo_net`` road, ``vehicles`` cars drive random trips (from and to
     edges drawn in proportion to their length, like SUMO's ``randomTrips.py
-    -l``), the first ones departing at 0 s from free random places, each car that
+    -l``), the first ones departing one step after the ego from free random places, each car that
     arrives replaced by a new trip (``scenarios/sumo_net/random_trips.py``). They drive at each
     edge's speed limit times a factor ~ N(1, ``speed_dev``); ``flow_vph_per_lane`` and
     ``speed_mean_mps`` are for the built-in roads.
@@ -109,6 +109,9 @@ class TrafficSpec(Spec):
     inside traffic. On the sumo backend the warmed-up traffic is a warm state
     (``scenarios/warm_state.py``), computed once and loaded by every run that shares
     it: the same network, traffic, step and ``warm_seed`` (default: the scenario's seed).
+
+    On the sumo backend every lane change takes ``lane_change_s`` (sideways at a lane
+    width per that; ``scenarios/traffic_model.py``); highway-env steers its own.
     """
 
     flow_vph_per_lane: float = num(0.0, ge=0, le=3600)
@@ -117,6 +120,7 @@ class TrafficSpec(Spec):
     warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
     vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
     warm_seed: int | None = num(None, ge=0, lt=2**31)  # the warm-up's seed (None: scenario's)
+    lane_change_s: float = num(2.0, ge=1.0, le=10.0)  # sumo: how long a lane change takes
 
 
 @spec_class

@@ -287,7 +287,7 @@ class SumoWorld:
             "--step-length", repr(self.spec.scenario.step_s),
             "--seed", str(self.spec.scenario.seed if seed is None else seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
-            *traffic_model.SUMO_OPTIONS,
+            *traffic_model.sumo_options(self.spec.traffic.lane_change_s),
             "--no-step-log", "true", "--no-warnings", "true",
             *options,
         ])

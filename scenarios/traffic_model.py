@@ -13,31 +13,34 @@ leader only in the lanes it occupies. Measured on SUMO 1.28 (``docs/world.md``):
 - the sublane model sees both but costs 3x per step and gridlocks beside a
   standing ego.
 
-So SUMO runs with continuous lane changes over :data:`LANE_CHANGE_DURATION_S`
-(no vehicle jumps sideways), and a body is shown in a neighbouring lane exactly
-when the part reaching into it leaves a traffic car driving at that lane's centre
-less than :data:`PASS_CLEARANCE_M` to pass (:func:`blocks_neighbour`): the ego
-through the lateral position it is given (:func:`sumo_lateral_m`), an obstacle as a
-second stopped vehicle in that lane. A part that leaves room to pass is not shown,
-so traffic passes it with at least that clearance instead of queueing.
+So SUMO runs with continuous lane changes over ``traffic.lane_change_s`` (2 s
+unless the scenario says otherwise, 1 s at least: no vehicle jumps sideways), and a
+body is shown in a neighbouring lane exactly when the part reaching into it leaves a
+traffic car driving at that lane's centre less than :data:`PASS_CLEARANCE_M` to pass
+(:func:`blocks_neighbour`): the ego through the lateral position it is given
+(:func:`sumo_lateral_m`), an obstacle as a second stopped vehicle in that lane. A part
+that leaves room to pass is not shown, so traffic passes it with at least that
+clearance instead of queueing.
 """
 
 from __future__ import annotations
 
-#: every SUMO lane change takes this long: sideways at a lane width per this [s]
-LANE_CHANGE_DURATION_S = 2.0
 #: a traffic car passes a body reaching into its lane only with this much room [m]
 PASS_CLEARANCE_M = 0.3
 #: the size of every background vehicle (the vType ``traffic``) [m]
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
-#: SUMO's options that make the traffic model (added to every SUMO start)
-SUMO_OPTIONS = ("--lanechange.duration", repr(LANE_CHANGE_DURATION_S))
+
+
+def sumo_options(lane_change_s: float) -> tuple[str, ...]:
+    """SUMO's options that make the traffic model (added to every SUMO start):
+    lane changes over ``lane_change_s`` (``traffic.lane_change_s``)."""
+    return ("--lanechange.duration", repr(float(lane_change_s)))
 
 
 def description() -> str:
     """The traffic model in one line, for the manifest and the report."""
-    return (f"on sumo, lane changes take {LANE_CHANGE_DURATION_S:g} s (--lanechange.duration "
-            f"{LANE_CHANGE_DURATION_S:g}) and a body reaching into a neighbouring lane so far "
+    return ("on sumo, lane changes take traffic.lane_change_s (default 2 s; "
+            "--lanechange.duration) and a body reaching into a neighbouring lane so far "
             f"that a {TRAFFIC_WIDTH_M:g} m wide car at that lane's centre has under "
             f"{PASS_CLEARANCE_M:g} m to pass is shown to SUMO in that lane too (the ego by its "
             "lateral position, an obstacle as a second stopped vehicle); traffic enters "

@@ -70,7 +70,7 @@ def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
     """The identity of ``spec``'s warm state, on the network whose file has ``net_sha256``."""
     traffic = {k: v for k, v in dataclasses.asdict(spec.traffic).items() if k != "warm_seed"}
     body = {"format": WARM_FORMAT, "sumo": sumo_version(), "net_sha256": net_sha256,
-            "sumo_options": list(traffic_model.SUMO_OPTIONS),
+            "sumo_options": list(traffic_model.sumo_options(spec.traffic.lane_change_s)),
             "traffic": traffic, "seed": warm_seed(spec), "step_s": spec.scenario.step_s}
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 

@@ -17,6 +17,7 @@ import analysis.world_audit as world_audit
 from analysis.world_audit import pairs_overlap, world_overlaps
 from scenarios import traffic_model
 from scenarios.boxes import as_boxes
+from scenarios.errors import SpecError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import Snapshot
 from scenarios.sumo_world import TRAFFIC_WIDTH_M, SumoWorld, obstacle_lanes
@@ -267,19 +268,24 @@ def test_traffic_passes_a_standing_ego_that_leaves_room(lesson_plain):
 
 
 @pytest.mark.slow
-def test_no_traffic_vehicle_moves_sideways_faster_than_a_lane_change_allows(lesson_plain):
+@pytest.mark.parametrize("lane_change_s", [None, 4.0])
+def test_no_traffic_vehicle_moves_sideways_faster_than_a_lane_change_allows(lesson_plain,
+                                                                          lane_change_s):
     """Every traffic vehicle's speed across the road, followed by its SUMO ID over a
     minute of a three-lane road in dense traffic, stays within a lane width per
-    ``LANE_CHANGE_DURATION_S`` (it was a lane width in one step: 55 m/s)."""
+    ``traffic.lane_change_s`` (it was a lane width in one step: 55 m/s)."""
     plain = lesson_plain
     plain["road"].update(length_m=1000.0, lanes=3, speed_limit_mps=33.33)
     plain["traffic"] = {"flow_vph_per_lane": 1200.0, "speed_mean_mps": 25.0, "speed_dev": 0.2}
+    if lane_change_s is not None:
+        plain["traffic"]["lane_change_s"] = lane_change_s
     plain["obstacles"] = [{"kind": "car", "lane": 0, "position_m": 500.0}]
     plain["ego"].update(lane=2, start_m=30.0, speed_mps=10.0)
     plain["scenario"].update(seed=3)
     spec = ScenarioSpec.from_plain(plain)
     road = make_road(spec)
-    bound_mps = road.lane_width_m / traffic_model.LANE_CHANGE_DURATION_S
+    assert spec.traffic.lane_change_s == (lane_change_s or 2.0)  # 2 s by default
+    bound_mps = road.lane_width_m / spec.traffic.lane_change_s
     last: dict[str, float] = {}
     fastest_mps, changes = 0.0, 0
     s_m = spec.ego.start_m
@@ -300,7 +306,14 @@ def test_no_traffic_vehicle_moves_sideways_faster_than_a_lane_change_allows(less
                     changes += speed > 0.5
                 last[vid] = d
     assert changes > 0  # lane changes happened
-    assert fastest_mps <= bound_mps * 1.05, fastest_mps
+    assert bound_mps * 0.9 <= fastest_mps <= bound_mps * 1.05, fastest_mps
+
+
+@pytest.mark.parametrize("seconds", [0.0, 0.5, 11.0])
+def test_a_lane_change_shorter_than_a_second_is_bad_input(lesson_plain, seconds):
+    lesson_plain["traffic"]["lane_change_s"] = seconds
+    with pytest.raises(SpecError, match="traffic.lane_change_s"):
+        ScenarioSpec.from_plain(lesson_plain)
 
 
 @pytest.mark.slow
