@@ -65,15 +65,16 @@ def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: floa
     ``lane_d_m``: a part over a lane line that leaves room to pass is not shown (the
     body is shown just inside its lane on that side), one that blocks is shown as far
     as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane)."""
-    left_reach_m = hi_m - (lane_d_m + lane_width_m / 2)
-    right_reach_m = (lane_d_m - lane_width_m / 2) - lo_m
-    inside_m = max(0.0, (lane_width_m - body_width_m) / 2)
-    if left_reach_m > 0 and not blocks_neighbour(left_reach_m, lane_width_m, traffic_width_m):
-        return lane_d_m + inside_m
-    if right_reach_m > 0 and not blocks_neighbour(right_reach_m, lane_width_m, traffic_width_m):
-        return lane_d_m - inside_m
-    if left_reach_m > 0 and right_reach_m <= 0:
+    left_blocks = blocks_neighbour(hi_m - (lane_d_m + lane_width_m / 2), lane_width_m,
+                                   traffic_width_m)
+    right_blocks = blocks_neighbour((lane_d_m - lane_width_m / 2) - lo_m, lane_width_m,
+                                    traffic_width_m)
+    if left_blocks and not right_blocks:
         return hi_m - body_width_m / 2
-    if right_reach_m > 0 and left_reach_m <= 0:
+    if right_blocks and not left_blocks:
         return lo_m + body_width_m / 2
-    return (lo_m + hi_m) / 2
+    inside_m = max(0.0, (lane_width_m - body_width_m) / 2)
+    centre_m = (lo_m + hi_m) / 2
+    if left_blocks:  # and right: a body wider than its lane
+        return centre_m
+    return min(max(centre_m, lane_d_m - inside_m), lane_d_m + inside_m)
