@@ -69,6 +69,11 @@ class RoadGeometry:
     def lane_center_d_m(self, lane: int) -> float:
         return (lane - (self.lanes - 1) / 2) * self.lane_width_m
 
+    def lane_at_d(self, d_m: float) -> int:
+        """The lane holding offset ``d_m`` (the inverse of :meth:`lane_center_d_m`; below
+        0 or from ``lanes`` on: off the road's lanes)."""
+        return math.floor((d_m + self.half_width_m) / self.lane_width_m)
+
     def _project(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Road coordinates and edge gaps of (K, 2) points (:mod:`scenarios.road_kernels`,
         compiled where built): a step asks this of a few points, on polylines of up to

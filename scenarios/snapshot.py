@@ -13,6 +13,7 @@ import numpy as np
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
+from scenarios.traffic_model import TRAFFIC_DECEL_MPS2, TRAFFIC_MIN_GAP_M, TRAFFIC_TAU_S
 
 NO_BOXES = np.zeros((0, 5))
 #: traffic is reported within the lidar's range plus this, from the ego's body centre [m]
@@ -45,9 +46,6 @@ class Snapshot(NamedTuple):
 #: vehicles in the ego's lane or a neighbouring one (they may change into it as the ego
 #: appears), this far behind / ahead of its start, are taken off at entry [m]
 START_ZONE_BEHIND_M, START_ZONE_AHEAD_M = 30.0, 10.0
-#: how traffic brakes for a car appearing ahead of it: SUMO's defaults for a vType that
-#: sets none (our traffic's): it reacts in TAU, brakes at DECEL and stops MIN_GAP short
-TRAFFIC_TAU_S, TRAFFIC_DECEL_MPS2, TRAFFIC_MIN_GAP_M = 1.0, 4.5, 2.5
 
 
 def stop_need_m(speed_mps: np.ndarray, ego_speed_mps: float, ego_decel_mps2: float) -> np.ndarray:

@@ -136,7 +136,7 @@ def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
     (s_m,), (d_m,) = road.to_frenet(box[None, :2])
     lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
     width = road.lane_width_m
-    own = int(np.clip(np.floor((d_m + road.half_width_m) / width), 0, road.lanes - 1))
+    own = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
     lanes = [own]
     for lane in range(road.lanes):
         centre_m = road.lane_center_d_m(lane)
@@ -424,7 +424,7 @@ class SumoWorld:
         s_m, d_m = road.locate_near(float(box[0]), float(box[1]), self._ego_s_m)
         self._ego_s_m = s_m
         heading = road.heading_at_s(s_m)
-        lane = math.floor((d_m + road.half_width_m) / road.lane_width_m)
+        lane = road.lane_at_d(d_m)
         if not (0 <= lane < road.lanes and 0 <= s_m <= road.length_m):
             return x, y, angle_deg
         lo_m, hi_m = _across_m(box, heading, d_m)

@@ -29,6 +29,9 @@ from __future__ import annotations
 PASS_CLEARANCE_M = 0.3
 #: the size of every background vehicle (the vType ``traffic``) [m]
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = 4.5, 1.8
+#: how that vType brakes for a car appearing ahead of it, SUMO's defaults (it sets
+#: none): it reacts in TAU [s], brakes at DECEL [m/s^2] and stops MIN_GAP [m] short
+TRAFFIC_TAU_S, TRAFFIC_DECEL_MPS2, TRAFFIC_MIN_GAP_M = 1.0, 4.5, 2.5
 
 
 def sumo_options(lane_change_s: float) -> tuple[str, ...]:
