@@ -7,9 +7,11 @@ file's path and says what is wrong. ``what`` names the file in the message
 
 from __future__ import annotations
 
+import gzip
 import json
 import os
 import stat
+import zlib
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -52,6 +54,21 @@ def read_bytes(path: str | Path, what: str) -> bytes:
         return path.read_bytes()
     except (OSError, ValueError) as e:
         raise FileError(path, f"cannot read {what}: {_open_problem(e)}") from None
+
+
+GZIP_MAGIC = b"\x1f\x8b"
+
+
+def unzipped(path: str | Path, data: bytes, what: str) -> bytes:
+    """``data`` (the bytes of ``path``) gunzipped when they are gzip's, as SUMO reads
+    a ``.gz`` file (or any file whose bytes are gzip's) and a plain one alike."""
+    if not data.startswith(GZIP_MAGIC):
+        return data
+    try:
+        return gzip.decompress(data)
+    except (OSError, EOFError, zlib.error) as e:
+        raise FileError(path, f"{what} is gzip-compressed but cannot be unpacked "
+                              f"({_first_line(e)})") from None
 
 
 def read_text(path: str | Path, what: str) -> str:

@@ -60,8 +60,8 @@ class RoadSpec(Spec):
     ``curve``), or a route through a SUMO network (``sumo_net``).
 
     ``curve_radius_m`` (curve only) is signed: positive turns left, negative right.
-    For ``sumo_net``, ``net_file`` names any SUMO ``.net.xml`` (relative to the
-    scenario file), ``length_m`` is the length of the ego's route, drawn from the
+    For ``sumo_net``, ``net_file`` names any SUMO ``.net.xml`` or ``.net.xml.gz``
+    (relative to the scenario file), ``length_m`` is the length of the ego's route, drawn from the
     seed, and the road is that route's lane: ``lanes`` is not given, positions
     are along the route and every lane index is 0. ``lane_width_m`` and
     ``speed_limit_mps`` come from the network.

@@ -158,6 +158,8 @@ class Simulation:
         self.box = self.vehicle.body_box(self.state)
         self.snapshot = self.world.step(self.box, self.state.speed_mps)
         self.k += 1
+        if self.k == 1:  # SUMO's traffic enters one step after the ego
+            self.network_vehicles = self.world.vehicle_count()
         self._sense()
 
     def decide(self, controller) -> tuple[Command, str]:

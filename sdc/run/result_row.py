@@ -113,7 +113,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("wall_time_s", pa.float64(), OUTCOME,
            "wall time of the run [s] (of a timeout: until it was stopped)"),
     Column("network_vehicles", pa.int64(), OUTCOME,
-           "traffic in the whole network as the ego entered"),
+           "traffic in the whole network as it entered, one step after the ego"),
     Column("warm_state", pa.string(), OUTCOME,
            "the warm state the run's traffic started from (its key's first 16 hex "
            "digits); runs that share one share their traffic; None: no warm-up"),
