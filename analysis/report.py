@@ -182,12 +182,17 @@ def world_summary(results: pd.DataFrame) -> dict:
     ok = results[results.status == "ok"]
     overlaps = ok.world_overlaps.fillna(0)
     hits = ok[ok.collision.fillna(False).astype(bool) & ok.collision_role.notna()]
+    classes = (hits[hits.collision_vclass.notna()] if "collision_vclass" in hits.columns
+               else hits.iloc[:0].assign(collision_vclass=None))
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
             "overlap_steps": int(overlaps.sum()),
             "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
                                                  by_role.collision_part.value_counts().items()}
                                     for role, by_role in rows.groupby("collision_role")}
-                           for c, rows in hits.groupby("controller", sort=False)}}
+                           for c, rows in hits.groupby("controller", sort=False)},
+            "vehicle_classes": {str(c): {str(k): int(n) for k, n in
+                                         rows.collision_vclass.value_counts().items()}
+                                for c, rows in classes.groupby("controller", sort=False)}}
 
 
 WORLD_TITLE = "## World"
@@ -219,6 +224,9 @@ def world_lines(summary: dict) -> list[str]:
                  + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
                  for role, by_part in sorted(roles.items())]
         lines.append(f"{controller}'s collisions by who moved into whom: {'; '.join(parts)}.")
+    for controller, classes in world.get("vehicle_classes", {}).items():
+        hit = ", ".join(f"{vclass} {n}" for vclass, n in sorted(classes.items()))
+        lines.append(f"{controller}'s collisions with vehicles by vehicle class: {hit}.")
     return lines
 
 

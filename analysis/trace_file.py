@@ -29,6 +29,9 @@ FLOAT_COLUMNS = (
 )
 #: list-of-float32 columns: the range image and the traffic boxes (N x 5, flattened)
 LIST_COLUMNS = ("lidar", "traffic")
+#: list-of-string column: each traffic box's vehicle class; a trace written before it
+#: had only cars (SUMO's vClass "passenger")
+CLASS_COLUMN = "traffic_class"
 METADATA_KEY = b"sdc"
 
 
@@ -36,12 +39,15 @@ METADATA_KEY = b"sdc"
 class Trace:
     """One row per step. ``x_m, y_m`` is the rear-axle centre; ``phase`` is the
     controller's phase; ``lidar`` the range image (``inf`` = no return);
-    ``traffic`` the other vehicles' boxes ``[cx, cy, yaw, length, width]``."""
+    ``traffic`` the other vehicles' boxes ``[cx, cy, yaw, length, width]``,
+    ``traffic_class`` their SUMO vehicle classes (passenger, truck, bus, ...), box by
+    box."""
 
     floats: dict[str, np.ndarray]
     phase: list[str]
     lidar: list[np.ndarray]
     traffic: list[np.ndarray]
+    traffic_class: list[list[str]]
 
     def __len__(self) -> int:
         return len(self.phase)
@@ -58,6 +64,9 @@ class Trace:
             for row in rows:
                 h.update(len(row).to_bytes(4, "little"))
                 h.update(np.ascontiguousarray(row, dtype="<f4").tobytes())
+        h.update(CLASS_COLUMN.encode())
+        for classes in self.traffic_class:
+            h.update((" ".join(classes) + "\n").encode())
         return h.hexdigest()
 
     def body_boxes(self, ahead_m: float, length_m: float, width_m: float) -> np.ndarray:
@@ -74,6 +83,7 @@ class Trace:
         for name, rows in (("lidar", self.lidar), ("traffic", self.traffic)):
             columns[name] = pa.array([np.asarray(r, np.float32) for r in rows],
                                      pa.list_(pa.float32()))
+        columns[CLASS_COLUMN] = pa.array(self.traffic_class, pa.list_(pa.string()))
         table = pa.table(columns)
         return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
 
@@ -115,9 +125,15 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
     """A trace and its metadata (spec, road, run) from a Parquet file; a file that
     is not one of this sdc version is a :class:`FileError`."""
     path = Path(path)
-    table = read_parquet(path, "the trace", schema=TRACE_SCHEMA)
+    table = read_parquet(path, "the trace", schema=TRACE_SCHEMA, optional=pa.schema(
+        [(CLASS_COLUMN, pa.list_(pa.string()))]))
     metadata = _metadata(table, path)
     floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
     lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]
              for name in LIST_COLUMNS}
-    return Trace(floats, table.column("phase").to_pylist(), **lists), metadata
+    if CLASS_COLUMN in table.column_names:
+        classes = table.column(CLASS_COLUMN).to_pylist()
+    else:
+        classes = [["passenger"] * (len(row) // 5) for row in lists["traffic"]]
+    return Trace(floats, table.column("phase").to_pylist(), **lists,
+                 traffic_class=classes), metadata

@@ -60,7 +60,7 @@ import traci.constants as tc
 
 from scenarios import CATALOG_DIR
 from scenarios.scenario_spec import LidarSpec, ScenarioSpec
-from scenarios.sumo_world import EGO_ID, SUBSCRIPTION_SLACK_M
+from scenarios.sumo_world import EGO_ID
 from scenarios.toml_io import load_spec, read_toml
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_plugins import make_controller
@@ -141,7 +141,7 @@ def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
     with make_world(spec, road) as world:
         Simulation(spec, world, 0.0).start()
         libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
-                                           world._radius_m + SUBSCRIPTION_SLACK_M)
+                                           world._subscribed_m)
         if ego:  # its speed mode and lane change mode stay off: it keeps speed and lane
             libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
         else:

@@ -96,44 +96,70 @@ static PyObject *locate(PyObject *self, PyObject *args) {
 static int read_double(PyObject *values, PyObject *key, double *out) {
     PyObject *value = PyDict_GetItemWithError(values, key);
     if (value == NULL) {
-        if (!PyErr_Occurred()) PyErr_SetString(PyExc_KeyError, "a subscribed variable is missing");
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "a subscribed variable is missing");
         return -1;
     }
     *out = PyFloat_AsDouble(value);
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-/* traffic(nearby, keys, ego_id, skip_prefix, length, width, cx, cy, radius, boxes,
- * speeds): writes the boxes [cx, cy, yaw, length, width] and speeds of the
- * vehicles in `nearby` (vehicle id -> {position key: front (x, y), angle key: SUMO
- * degrees, speed key: m/s}, keys = (position key, angle key, speed key)) other than ego_id and ids starting with skip_prefix whose body
- * centre lies within radius of (cx, cy), in the dict's order; returns how many */
+/* A vehicle's (length, width, class index): sizes[vehicle_id], or a KeyError holding
+ * the vehicle's id (the caller adds it and asks again). */
+static int vehicle_size(PyObject *sizes, PyObject *vehicle_id, double *length, double *width,
+                        double *kind) {
+    PyObject *entry = PyDict_GetItemWithError(sizes, vehicle_id);
+    if (entry == NULL) {
+        if (!PyErr_Occurred()) PyErr_SetObject(PyExc_KeyError, vehicle_id);
+        return -1;
+    }
+    if (!PyTuple_Check(entry) || PyTuple_GET_SIZE(entry) != 3) {
+        PyErr_SetString(PyExc_TypeError, "sizes: vehicle id -> (length, width, class index)");
+        return -1;
+    }
+    *length = PyFloat_AsDouble(PyTuple_GET_ITEM(entry, 0));
+    *width = PyFloat_AsDouble(PyTuple_GET_ITEM(entry, 1));
+    *kind = PyFloat_AsDouble(PyTuple_GET_ITEM(entry, 2));
+    return PyErr_Occurred() ? -1 : 0;
+}
+
+/* traffic(nearby, keys, ego_id, skip_prefix, sizes, cx, cy, radius, boxes, speeds,
+ * kinds): writes the boxes [cx, cy, yaw, length, width], speeds and class indexes of
+ * the vehicles in `nearby` (vehicle id -> {position key: front (x, y), angle key:
+ * SUMO degrees, speed key: m/s}, keys = (position key, angle key, speed key)) other
+ * than ego_id and ids starting with skip_prefix whose body centre lies within radius
+ * of (cx, cy), in the dict's order; a vehicle's length, width and class index are
+ * sizes[its id], an id not there a KeyError of it. Returns how many. */
 static PyObject *traffic(PyObject *self, PyObject *args) {
-    PyObject *nearby, *key_position, *key_angle, *key_speed, *ego_id, *skip_prefix, *b_obj,
-        *s_obj;
-    double length, width, cx, cy, radius;
-    if (!PyArg_ParseTuple(args, "O!(OOO)UUdddddOO", &PyDict_Type, &nearby, &key_position,
-                          &key_angle, &key_speed, &ego_id, &skip_prefix, &length, &width, &cx,
-                          &cy, &radius, &b_obj, &s_obj))
+    PyObject *nearby, *key_position, *key_angle, *key_speed, *ego_id, *skip_prefix, *sizes,
+        *out_objs[3];
+    double cx, cy, radius;
+    if (!PyArg_ParseTuple(args, "O!(OOO)UUO!dddOOO", &PyDict_Type, &nearby, &key_position,
+                          &key_angle, &key_speed, &ego_id, &skip_prefix, &PyDict_Type, &sizes,
+                          &cx, &cy, &radius, &out_objs[0], &out_objs[1], &out_objs[2]))
         return NULL;
-    Py_ssize_t n = PyDict_Size(nearby), n_boxes, n_speeds;
-    Py_buffer bv, sv;
-    if (get_doubles(b_obj, &bv, 1, 5, &n_boxes, "boxes") < 0) return NULL;
-    if (get_doubles(s_obj, &sv, 1, 1, &n_speeds, "speeds") < 0) {
-        PyBuffer_Release(&bv);
-        return NULL;
+    static const char *names[3] = {"boxes", "speeds", "kinds"};
+    static const Py_ssize_t widths[3] = {5, 1, 1};
+    Py_ssize_t n = PyDict_Size(nearby), rows;
+    Py_buffer views[3];
+    int got = 0, failed = 0;
+    for (; got < 3; got++) {
+        if (get_doubles(out_objs[got], &views[got], 1, widths[got], &rows, names[got]) < 0) {
+            failed = 1;
+            break;
+        }
+        if (rows < n) {
+            PyErr_Format(PyExc_ValueError, "%s: room for every vehicle of nearby", names[got]);
+            PyBuffer_Release(&views[got]);
+            failed = 1;
+            break;
+        }
     }
-    if (n_boxes < n || n_speeds < n) {
-        PyErr_SetString(PyExc_ValueError, "boxes, speeds: room for every vehicle of nearby");
-        PyBuffer_Release(&sv);
-        PyBuffer_Release(&bv);
-        return NULL;
-    }
-    double *boxes = bv.buf, *speeds = sv.buf;
     Py_ssize_t pos = 0, count = 0;
     PyObject *vid, *values;
-    int failed = 0;
-    while (PyDict_Next(nearby, &pos, &vid, &values)) {
+    double *boxes = failed ? NULL : views[0].buf, *speeds = failed ? NULL : views[1].buf,
+           *kinds = failed ? NULL : views[2].buf;
+    while (!failed && PyDict_Next(nearby, &pos, &vid, &values)) {
         if (!PyUnicode_Check(vid) || !PyDict_Check(values)) {
             PyErr_SetString(PyExc_TypeError, "nearby: vehicle id -> dict of variables");
             failed = 1;
@@ -147,7 +173,7 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
         }
         if (skip) continue;
         PyObject *front = PyDict_GetItemWithError(values, key_position);
-        double x, y, angle_deg, speed;
+        double x, y, angle_deg, speed, length, width, kind;
         if (front == NULL || !PyTuple_Check(front) || PyTuple_GET_SIZE(front) != 2) {
             if (!PyErr_Occurred()) PyErr_SetString(PyExc_TypeError, "a position is not (x, y)");
             failed = 1;
@@ -156,23 +182,24 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
         x = PyFloat_AsDouble(PyTuple_GET_ITEM(front, 0));
         y = PyFloat_AsDouble(PyTuple_GET_ITEM(front, 1));
         if (PyErr_Occurred() || read_double(values, key_angle, &angle_deg) < 0
-            || read_double(values, key_speed, &speed) < 0) {
+            || read_double(values, key_speed, &speed) < 0
+            || vehicle_size(sizes, vid, &length, &width, &kind) < 0) {
             failed = 1;
             break;
         }
         if (!traffic_box(x, y, angle_deg, length, width, cx, cy, radius, boxes + 5 * count))
             continue;
-        speeds[count++] = speed;
+        speeds[count] = speed;
+        kinds[count++] = kind;
     }
-    PyBuffer_Release(&sv);
-    PyBuffer_Release(&bv);
+    while (got-- > 0) PyBuffer_Release(&views[got]);
     return failed ? NULL : PyLong_FromSsize_t(count);
 }
 
 static PyMethodDef methods[] = {
     {"frenet", frenet, METH_VARARGS, "Road coordinates of points on a polyline."},
     {"locate", locate, METH_VARARGS, "Road coordinates of one point on a polyline."},
-    {"traffic", traffic, METH_VARARGS, "Traffic boxes and speeds from context results."},
+    {"traffic", traffic, METH_VARARGS, "Traffic boxes, speeds and classes from context results."},
     {NULL, NULL, 0, NULL},
 };
 

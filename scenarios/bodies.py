@@ -6,6 +6,7 @@ dynamics. Lengths and widths are full body dimensions in metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 GRAVITY_MPS2 = 9.81
@@ -46,6 +47,12 @@ class VehicleModel:
     def center_ahead_of_rear_axle_m(self) -> float:
         """Distance from the rear axle forward to the body centre [m]."""
         return self.length_m / 2 - self.rear_overhang_m
+
+    @property
+    def min_turn_radius_m(self) -> float:
+        """The radius of the tightest circle its rear axle can drive: the
+        bicycle's at full steering lock [m]."""
+        return self.wheelbase_m / math.tan(self.max_steer_rad)
 
     @property
     def front_ahead_of_rear_axle_m(self) -> float:

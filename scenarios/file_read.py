@@ -94,10 +94,12 @@ def _first_line(error: Exception) -> str:
 
 
 def read_parquet(path: str | Path, what: str, *, required: Iterable[str] = (),
-                 schema: pa.Schema | None = None) -> pa.Table:
+                 schema: pa.Schema | None = None, optional: pa.Schema | None = None
+                 ) -> pa.Table:
     """The Parquet file's table. A column of ``required`` that it lacks is an error
     (a file of another sdc version); with ``schema``, the table has exactly its
-    columns, in its order and cast to its types."""
+    columns, in its order and cast to its types, then those of ``optional`` the file
+    has (a column added since older files were written)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -117,6 +119,8 @@ def read_parquet(path: str | Path, what: str, *, required: Iterable[str] = (),
                               f"({_first_line(e)})") from None
     if schema is None:
         return table
+    if optional is not None:
+        schema = pa.schema([*schema, *(f for f in optional if f.name in table.column_names)])
     try:  # the file's metadata kept
         return table.select(schema.names).cast(schema.with_metadata(table.schema.metadata))
     except (pa.ArrowException, ValueError) as e:

@@ -20,9 +20,11 @@ from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
     NO_BOXES,
+    NO_CLASSES,
     Snapshot,
     in_start_zone,
     obstacle_boxes,
+    passenger_classes,
     sensing_radius_m,
     within_m,
 )
@@ -169,11 +171,12 @@ class HighwayWorld:
     def _snapshot(self) -> Snapshot:
         others = [v for v in self._hw.vehicles if v is not self._ego]
         if not others:
-            return Snapshot(self.t_s, NO_BOXES, self._obstacle_boxes, np.zeros(0))
+            return Snapshot(self.t_s, NO_BOXES, self._obstacle_boxes, np.zeros(0), NO_CLASSES)
         boxes = np.array([(*v.position, v.heading, v.LENGTH, v.WIDTH) for v in others])
         keep = within_m(boxes, self._ego.position, self._radius_m)
         return Snapshot(self.t_s, boxes[keep], self._obstacle_boxes,
-                        np.array([v.speed for v in others])[keep])
+                        np.array([v.speed for v in others])[keep],
+                        passenger_classes(int(keep.sum())))
 
     def vehicle_count(self) -> int:
         """Traffic vehicles on the whole road (not only within the sensing radius)."""

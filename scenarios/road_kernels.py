@@ -8,8 +8,8 @@ was built, else their numpy twins below, chosen once at import
 - :func:`place_numpy`: boxes and their velocities in the road frame of a lane, in
   numpy only: the compiled placement is part of the car's step
   (``sdc.car.geometry_kernels.step``, through ``scenarios/_polyline.h``);
-- :func:`traffic`: SUMO's context subscription results as traffic boxes and speeds
-  (:meth:`scenarios.sumo_world.SumoWorld._traffic`).
+- :func:`traffic`: SUMO's context subscription results as traffic boxes, speeds
+  and vehicle classes (:meth:`scenarios.sumo_world.SumoWorld._traffic`).
 
 Each twin takes the compiled function's arguments, writes the same outputs and
 computes in the same order (no fused multiply-adds), so the answers agree to the
@@ -93,29 +93,32 @@ def place_numpy(ego: np.ndarray, ego_speed_mps: float, obstacles: np.ndarray,
     out_velocities[:] = np.column_stack([along, speeds * np.sin(yaw)])
 
 
-def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, length_m: float,
-                  width_m: float, cx_m: float, cy_m: float, radius_m: float, boxes: np.ndarray,
-                  speeds_mps: np.ndarray) -> int:
-    """Into ``boxes`` and ``speeds_mps``: the vehicles of ``nearby`` (id -> {position key:
-    front bumper (x, y), angle key: SUMO degrees clockwise from north, speed key: m/s},
-    ``keys`` = (position, angle, speed)) other than ``ego_id`` and the ids starting with
-    ``skip_prefix``, whose body centre lies within ``radius_m`` of (cx, cy), in the dict's
-    order; returns how many. A box is ``[cx, cy, yaw, length, width]``, its yaw
-    ``(90 - angle) * pi / 180`` and its centre half a length behind the front bumper."""
+def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes: dict,
+                  cx_m: float, cy_m: float, radius_m: float, boxes: np.ndarray,
+                  speeds_mps: np.ndarray, kinds: np.ndarray) -> int:
+    """Into ``boxes``, ``speeds_mps`` and ``kinds``: the vehicles of ``nearby`` (id ->
+    {position key: front bumper (x, y), angle key: SUMO degrees clockwise from north,
+    speed key: m/s}, ``keys`` = (position, angle, speed)) other than ``ego_id`` and the
+    ids starting with ``skip_prefix``, whose body centre lies within ``radius_m`` of
+    (cx, cy), in the dict's order; returns how many. A box is ``[cx, cy, yaw, length,
+    width]``, its yaw ``(90 - angle) * pi / 180`` and its centre half a length behind
+    the front bumper; a vehicle's length, width and class index (``kinds``) are
+    ``sizes[its id]``, an id not there a ``KeyError`` of it."""
     position, angle, speed = keys
-    rows = np.array([(*values[position], values[angle], values[speed])
+    rows = np.array([(*values[position], values[angle], values[speed], *sizes[vid])
                      for vid, values in nearby.items()
                      if vid != ego_id and not vid.startswith(skip_prefix)],
-                    dtype=np.float64).reshape(-1, 4)
+                    dtype=np.float64).reshape(-1, 7)
     yaw = (90.0 - rows[:, 2]) * (math.pi / 180.0)
+    length_m = rows[:, 4]
     centre_x = rows[:, 0] - length_m / 2 * np.cos(yaw)
     centre_y = rows[:, 1] - length_m / 2 * np.sin(yaw)
     dx, dy = centre_x - cx_m, centre_y - cy_m
     keep = dx * dx + dy * dy <= radius_m * radius_m
     count = int(np.count_nonzero(keep))
-    boxes[:count] = np.column_stack([centre_x, centre_y, yaw, np.full(len(rows), length_m),
-                                     np.full(len(rows), width_m)])[keep]
+    boxes[:count] = np.column_stack([centre_x, centre_y, yaw, length_m, rows[:, 5]])[keep]
     speeds_mps[:count] = rows[keep, 3]
+    kinds[:count] = rows[keep, 6]
     return count
 
 

@@ -16,6 +16,7 @@ from scenarios.scenario_spec import ScenarioSpec
 from scenarios.traffic_model import TRAFFIC_DECEL_MPS2, TRAFFIC_MIN_GAP_M, TRAFFIC_TAU_S
 
 NO_BOXES = np.zeros((0, 5))
+NO_CLASSES = np.zeros(0, dtype=object)
 #: traffic is reported within the lidar's range plus this, from the ego's body centre [m]
 SENSING_MARGIN_M = 25.0
 #: and at least this far, for the time to collision with traffic closing in from beyond
@@ -41,6 +42,16 @@ class Snapshot(NamedTuple):
     traffic_boxes: np.ndarray  # (N, 5) moving vehicles within the sensing radius
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order
     traffic_speeds_mps: np.ndarray  # (N,) speeds of the traffic boxes, along their headings
+    traffic_classes: np.ndarray  # (N,) their SUMO vehicle classes (vClass): passenger, truck...
+
+
+#: the vehicle class of a car (SUMO's vClass), the only kind highway-env drives
+PASSENGER = "passenger"
+
+
+def passenger_classes(count: int) -> np.ndarray:
+    """``count`` cars' vehicle classes."""
+    return np.full(count, PASSENGER, dtype=object)
 
 
 #: vehicles in the ego's lane or a neighbouring one (they may change into it as the ego

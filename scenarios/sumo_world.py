@@ -38,6 +38,7 @@ from scenarios.snapshot import (
 from scenarios.sumo_net.build import EDGE_ID, network_file, sumo_binary
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
+from scenarios.vehicle_types import VehicleTypes
 from scenarios.warm_state import (
     HALTING_SPEED_MPS,
     SAVE_OPTIONS,
@@ -52,16 +53,20 @@ from scenarios.warm_state import (
 )
 
 EGO_ID = "ego"
+EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_PREFIX = "traffic."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
-#: SUMO measures the context radius between front bumpers: a body centre within the
-#: sensing radius has its front bumper within it plus half of each body's length [m]
-SUBSCRIPTION_SLACK_M = 1.0 + (TRAFFIC_LENGTH_M
-                              + max(model.length_m for model in VEHICLE_MODELS.values())) / 2
-#: what is read of each nearby vehicle; every traffic vehicle is of our type "traffic",
-#: so its size is known (each variable read costs, and a step may read dozens)
+#: what is read of each nearby vehicle every step (each variable read costs, and a step
+#: may read dozens); its size and class are read once (scenarios.vehicle_types)
 _TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+
+
+def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
+    """SUMO measures the context radius between front bumpers: a body centre within
+    the sensing radius has its front bumper within it plus half of each body's length
+    (the longest vehicle type's for the other's) [m]."""
+    return 1.0 + (longest_m + ego_length_m) / 2
 
 
 def _sumo_place(road: RoadGeometry, lane: int, s_m: float) -> tuple[str, int, float]:
@@ -117,9 +122,9 @@ def _ego_types(spec: ScenarioSpec) -> list[str]:
     the car it is) and the obstacles'."""
     model = VEHICLE_MODELS[spec.vehicle.model]
     decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
-    return [f'  <vType id="ego" length="{model.length_m}" width="{model.width_m}" '
+    return [f'  <vType id="{EGO_TYPE}" length="{model.length_m}" width="{model.width_m}" '
             f'accel="{model.max_accel_mps2}" decel="{decel!r}" emergencyDecel="{decel!r}"/>'] + [
-        f'  <vType id="obstacle_{kind}" length="{length}" width="{width}"/>'
+        f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
         for kind, (length, width) in OBSTACLE_SIZES_M.items()
     ]
 
@@ -175,7 +180,7 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
             if route != "r0":
                 lines.append(f'  <route id="{route}" edges="{edge}"/>')
             lines += [
-                f'  <vehicle id="{vid}" type="obstacle_{obstacle.kind}" '
+                f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.kind}" '
                 f'route="{route}" depart="{depart}" departLane="{lane}" '
                 f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
                 f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
@@ -255,6 +260,8 @@ class SumoWorld:
         self._radius_m = sensing_radius_m(spec)
         self._model = VEHICLE_MODELS[spec.vehicle.model]
         self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
+        self._types = VehicleTypes()
+        self._subscribed_m = 0.0  # the context subscription's radius
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
         self.warm_state_key: str | None = None  # the key of the warm state it started from
@@ -331,14 +338,24 @@ class SumoWorld:
         # inserted where it starts, so traffic knows of it from the first step
         model = VEHICLE_MODELS[self.spec.vehicle.model]
         _, lane, front_m = _sumo_place(self.road, ego.lane, ego.start_m + model.length_m / 2)
-        sim.vehicle.add(EGO_ID, "r0", typeID="ego", depart="now", departLane=str(lane),
+        sim.vehicle.add(EGO_ID, "r0", typeID=EGO_TYPE, depart="now", departLane=str(lane),
                         departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
-        # only the vehicles around the ego are read, whatever the size of the network
-        sim.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
-                                     self._radius_m + SUBSCRIPTION_SLACK_M, _TRAFFIC_VARS)
+        self._watch_types()
         return self.step(ego_box, ego_speed_mps)
+
+    def _watch_types(self) -> None:
+        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles around
+        the ego (only those are read, whatever the size of the network) within a radius
+        that holds the longest type's."""
+        self._types.refresh(self._sumo.vehicletype, (EGO_TYPE, OBSTACLE_TYPE_PREFIX))
+        radius_m = self._radius_m + subscription_slack_m(self._types.longest_m,
+                                                         self._model.length_m)
+        if radius_m > self._subscribed_m:
+            self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE, radius_m,
+                                                _TRAFFIC_VARS)
+            self._subscribed_m = radius_m
 
     def warm_state(self, net: Path) -> WarmState:
         """The spec's warm state on network file ``net``: the one given, else the
@@ -444,8 +461,9 @@ class SumoWorld:
         sumo.simulationStep()
         t_s = sumo.simulation.getTime()
         self._renew_trips()
-        boxes, speeds = self._traffic(ego_box)
-        return Snapshot(t_s, boxes, self._obstacle_boxes, speeds)
+        boxes, speeds, classes = self._traffic(ego_box)
+        self._watch_types()
+        return Snapshot(t_s, boxes, self._obstacle_boxes, speeds, classes)
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""
@@ -468,9 +486,10 @@ class SumoWorld:
                                    departLane="random", departPos="random_free",
                                    departSpeed="0")
 
-    def _traffic(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Boxes and speeds of the vehicles within the sensing radius, ego and
-        obstacles aside, in SUMO's order.
+    def _traffic(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Boxes, speeds and vehicle classes of the vehicles within the sensing radius,
+        ego and obstacles aside, in SUMO's order; each vehicle's size and class its
+        type's (:mod:`scenarios.vehicle_types`).
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
         half a length behind its front bumper, along the yaw. The read of the dict of
@@ -478,11 +497,20 @@ class SumoWorld:
         (compiled where built: in Python it cost more than the step's geometry).
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
-        boxes, speeds = np.empty((len(nearby), 5)), np.empty(len(nearby))
-        count = road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                     TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]),
-                                     float(ego_box[1]), self._radius_m, boxes, speeds)
-        return boxes[:count], speeds[:count]
+        n = len(nearby)
+        boxes, speeds, kinds = np.empty((n, 5)), np.empty(n), np.empty(n)
+        try:
+            count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
+        except KeyError:  # vehicles met for the first time
+            self._types.add([v for v in nearby if _is_traffic(v)], self._sumo)
+            count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
+        return boxes[:count], speeds[:count], self._types.names(kinds[:count])
+
+    def _read_traffic(self, nearby: dict, ego_box: np.ndarray, boxes: np.ndarray,
+                      speeds: np.ndarray, kinds: np.ndarray) -> int:
+        return road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+                                    self._types.sizes, float(ego_box[0]), float(ego_box[1]),
+                                    self._radius_m, boxes, speeds, kinds)
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""

@@ -67,7 +67,10 @@ def _fmt(value, unit: str = "", digits: int = 2) -> str:
 def summary_lines(name: str, row: dict) -> list[str]:
     if row["status"] != "ok":
         return [f"{name}: run failed: {row['error']}"]
-    outcome = (f"COLLISION with {row['collision_with']} at {row['collision_time_s']:.2f} s "
+    what = row["collision_with"]
+    if row.get("collision_vclass"):
+        what += f" ({row['collision_vclass']})"
+    outcome = (f"COLLISION with {what} at {row['collision_time_s']:.2f} s "
                f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
                if row["collision"] else "no collision")
     if row.get("world_overlaps"):

@@ -208,7 +208,7 @@ def _trace_file(path: Path) -> None:
                 "vehicle": {"length_m": 4.9, "width_m": 1.9,
                             "center_ahead_of_rear_axle_m": 1.4}}
     Trace(floats, ["lane_keep"] * n, [np.full(4, 10.0, np.float32)] * n,
-          [np.zeros(5, np.float32)] * n).write(path, metadata)
+          [np.zeros(5, np.float32)] * n, [["passenger"]] * n).write(path, metadata)
 
 
 def parquet_another_version(path: Path, good: bytes) -> None:

@@ -19,7 +19,7 @@ from scenarios import traffic_model
 from scenarios.boxes import as_boxes
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import Snapshot
+from scenarios.snapshot import Snapshot, passenger_classes
 from scenarios.sumo_world import TRAFFIC_WIDTH_M, SumoWorld, obstacle_lanes
 from scenarios.world_backends import make_road
 from sdc.car.collision import FRONT, RAN_INTO, REAR, SIDE, WAS_HIT, describe, hit_part
@@ -162,7 +162,8 @@ def test_the_part_hit_is_the_edge_nearest_the_contact():
 
 
 def contact(ego_box, other_box, ego_mps, other_mps):
-    snapshot = Snapshot(0.0, as_boxes([other_box]), as_boxes([]), np.array([other_mps]))
+    snapshot = Snapshot(0.0, as_boxes([other_box]), as_boxes([]), np.array([other_mps]),
+                        passenger_classes(1))
     return describe("vehicle", np.asarray(ego_box, float), ego_mps, Contacts(-1, 0, 0.0),
                     snapshot, None, 0.0)
 
@@ -170,17 +171,18 @@ def contact(ego_box, other_box, ego_mps, other_mps):
 def test_rear_ended_side_swiped_and_running_into_a_slower_car():
     ego = [0.0, 0.0, 0.0, 4.85, 1.93]
     rear_ender = [-4.6, 0.0, 0.0, 4.5, 1.8]
-    assert contact(ego, rear_ender, 5.0, 12.0)[1:] == (REAR, WAS_HIT)
-    assert contact(ego, rear_ender, 0.0, 3.0)[1:] == (REAR, WAS_HIT)
+    assert contact(ego, rear_ender, 5.0, 12.0)[1:3] == (REAR, WAS_HIT)
+    assert contact(ego, rear_ender, 0.0, 3.0)[1:3] == (REAR, WAS_HIT)
     cutting_in = [-1.0, 2.0, -0.35, 4.5, 1.8]  # from the left, heading right
-    assert contact(ego, cutting_in, 20.0, 20.0)[1:] == (SIDE, WAS_HIT)
+    assert contact(ego, cutting_in, 20.0, 20.0)[1:3] == (SIDE, WAS_HIT)
     swerving = [0.0, 0.0, 0.05, 4.85, 1.93]  # the ego, heading left into a car beside it
     beside = [-1.0, 1.85, 0.0, 4.5, 1.8]
-    assert contact(swerving, beside, 20.0, 20.0)[1:] == (SIDE, RAN_INTO)
+    assert contact(swerving, beside, 20.0, 20.0)[1:3] == (SIDE, RAN_INTO)
     standing = [0.0, 1.85, 0.0, 4.5, 1.8]  # grazed while the ego drives straight on
-    assert contact(ego, standing, 20.0, 0.0)[1:] == (SIDE, RAN_INTO)
+    assert contact(ego, standing, 20.0, 0.0)[1:3] == (SIDE, RAN_INTO)
     slower = [4.6, 0.2, 0.0, 4.5, 1.8]
-    assert contact(ego, slower, 20.0, 10.0)[1:] == (FRONT, RAN_INTO)
+    assert contact(ego, slower, 20.0, 10.0)[1:3] == (FRONT, RAN_INTO)
+    assert contact(ego, slower, 20.0, 10.0).vehicle_class == "passenger"
 
 
 # ---------------------------------------------------------------- SUMO, in a real libsumo

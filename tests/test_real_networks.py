@@ -79,3 +79,78 @@ def test_a_broken_gzipped_network_is_bad_input_naming_the_file(tmp_path):
     broken.write_bytes((GAME_DIR / "fkk_in" / "ingolstadt.net.xml.gz").read_bytes()[:500])
     with pytest.raises(FileError, match="x.net.xml.gz.*gzip-compressed but cannot be unpacked"):
         read_net(broken)
+
+
+@pytest.mark.parametrize("radius_m", [3.0, 5.0, 12.0, 40.0])
+def test_the_tightest_radius_of_an_arc_is_its_radius(radius_m):
+    from scenarios.sumo_net.route_road import tightest_radius_m
+
+    angle = np.linspace(0.0, np.pi / 2, 200)
+    arc = np.column_stack([radius_m * np.sin(angle), radius_m * (1 - np.cos(angle))])
+    lead_in = np.array([[-20.0, 0.0]])
+    assert tightest_radius_m(np.vstack([lead_in, arc]), 3.2) == pytest.approx(radius_m, rel=0.03)
+
+
+def test_a_kink_is_a_turn_as_tight_as_its_angle_over_the_window():
+    from scenarios.sumo_net.route_road import tightest_radius_m
+
+    corner = np.array([[0.0, 0.0], [50.0, 0.0], [50.0, 50.0]])
+    assert tightest_radius_m(corner, 3.0) == pytest.approx(3.0 / (np.pi / 2), rel=0.01)
+    assert tightest_radius_m(np.array([[0.0, 0.0], [10.0, 0.0], [30.0, 0.0]]), 3.0) == np.inf
+
+
+def turn_radii(net, lane, min_radius_m):
+    """Each turn out of ``lane`` onto passenger lanes (no U-turn) with its tightest
+    radius, measured as the route drawing measures it."""
+    from scenarios.sumo_net.net_xml import U_TURN
+    from scenarios.sumo_net.route_road import (
+        TURN_REACH_M,
+        TURN_WINDOW_M,
+        tightest_radius_m,
+        turn_path,
+    )
+
+    window_m = max(min_radius_m, TURN_WINDOW_M)
+    return [(turn, tightest_radius_m(turn_path(net, lane, turn, TURN_REACH_M), window_m))
+            for turn in net.turns.get(lane.id, ()) if turn.direction != U_TURN
+            and all(net.lanes[v].passenger for v in (*turn.via, turn.to))]
+
+
+X5_TURN_RADIUS_M = 2.995 / np.tan(0.75)  # wheelbase over the tangent of full lock
+
+
+@pytest.mark.parametrize("name", REAL_NETWORKS)
+def test_routes_on_real_networks_take_only_turns_and_lanes_a_car_can(name):
+    """Drawn routes use lanes open to passenger cars only, and every turn on them is
+    no tighter than the X5's turning circle."""
+    from scenarios.bodies import VEHICLE_MODELS
+    from scenarios.sumo_net.route_road import ROUTE, draw_route, scenario_stream
+
+    net = read_net(GAME_DIR / name)
+    min_radius_m = VEHICLE_MODELS["x5-road"].min_turn_radius_m
+    assert min_radius_m == pytest.approx(X5_TURN_RADIUS_M)
+    for seed in range(10):
+        route = draw_route(net, scenario_stream(seed, ROUTE), 300.0, "any", min_radius_m)
+        assert all(lane.passenger for lane in route)
+        normal = [i for i, lane in enumerate(route) if not lane.internal]
+        for a, b in zip(normal, normal[1:], strict=False):
+            via = tuple(lane.id for lane in route[a + 1:b])
+            (radius_m,) = [r for t, r in turn_radii(net, route[a], min_radius_m)
+                           if t.to == route[b].id and t.via == via]
+            assert radius_m >= min_radius_m
+
+
+@pytest.mark.parametrize("name", ["A10KW/osm.net.xml", "bs3d/bs.net.xml"])
+def test_turns_tighter_than_the_car_can_drive_are_left_out(name):
+    """The OSM networks hold junction paths tighter than an X5's turning circle
+    (hairpins, kinked junction lanes); the route drawing leaves out exactly those."""
+    from scenarios.sumo_net.route_road import drivable_turns
+
+    net = read_net(GAME_DIR / name)
+    tight = 0
+    for lane in net.normal_lanes():
+        kept = drivable_turns(net, lane, X5_TURN_RADIUS_M)
+        for turn, radius_m in turn_radii(net, lane, X5_TURN_RADIUS_M):
+            assert (turn in kept) == (radius_m >= X5_TURN_RADIUS_M)
+            tight += radius_m < X5_TURN_RADIUS_M
+    assert tight >= 10

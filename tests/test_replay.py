@@ -46,7 +46,7 @@ def fake_trace(n: int = 6) -> Trace:
                "drac_mps2", "headway_s")}
     floats["lane_offset_m"][:] = np.nan
     return Trace(floats, ["lane_keep"] * n, [np.full(4, np.inf, np.float32)] * n,
-                 [np.zeros(5, np.float32)] * n)
+                 [np.zeros(5, np.float32)] * n, [["passenger"]] * n)
 
 
 def altered(trace: Trace, **floats) -> Trace:
@@ -69,7 +69,7 @@ def test_first_divergence_names_the_earliest_step_and_field():
     d = first_divergence(a, dataclasses.replace(a, phase=["lane_keep"] * 3 + ["avoid_left"] * 3))
     assert (d.step, d.field) == (3, "phase")
     shorter = Trace({k: v[:5] for k, v in a.floats.items()}, a.phase[:5], a.lidar[:5],
-                    a.traffic[:5])
+                    a.traffic[:5], a.traffic_class[:5])
     d = first_divergence(a, shorter)
     assert (d.step, d.field, d.recorded, d.replayed) == (5, "steps", 6, 5)
 

@@ -23,6 +23,7 @@ from analysis.report import (
     NOT_RECORDED,
     VERDICT_TITLE,
     world_lines,
+    world_summary,
     write_report,
 )
 from analysis.stats import wilson_interval
@@ -411,3 +412,18 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
     lines = world_lines(write_report(old).summary)
     assert lines == ["Traffic model: not recorded.",
                      "World audit: not recorded (the sweep predates it)."]
+
+
+def test_collisions_with_vehicles_are_counted_by_the_class_of_what_was_hit():
+    rows = pd.DataFrame({
+        "status": ["ok"] * 5, "controller": ["avoid"] * 4 + ["seed"],
+        "world_overlaps": [0] * 5, "collision": [True, True, True, False, True],
+        "collision_part": ["front", "side", "front", None, "front"],
+        "collision_role": ["ran_into", "was_hit", "ran_into", None, "ran_into"],
+        "collision_vclass": ["truck", "passenger", "truck", None, None]})
+    summary = world_summary(rows)
+    assert summary["vehicle_classes"] == {"avoid": {"truck": 2, "passenger": 1}}
+    lines = world_lines({"world": summary})
+    assert "avoid's collisions with vehicles by vehicle class: passenger 1, truck 2." in lines
+    older = world_summary(rows.drop(columns="collision_vclass"))
+    assert older["vehicle_classes"] == {}

@@ -53,6 +53,7 @@ def _metrics() -> dict:
 def _outcome() -> dict:
     return {"termination": "duration", "collision": False, "collision_with": "none",
             "collision_time_s": None, "collision_part": None, "collision_role": None,
+            "collision_vclass": None,
             "world_overlaps": 0, "outcome": "completed", "progress_m": 1.2,
             "time_lost_s": 0.0, "min_road_edge_gap_m": np.float64(0.7),
             "stop_gap_m": 27.275, "stop_possible": np.True_,

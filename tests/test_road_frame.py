@@ -10,7 +10,7 @@ import pytest
 
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec
-from scenarios.snapshot import NO_BOXES, Snapshot
+from scenarios.snapshot import NO_BOXES, Snapshot, passenger_classes
 from sdc.car.geometry_kernels import contacts_numpy
 from sdc.car.road_frame import RoadFrame
 
@@ -30,7 +30,8 @@ def body(road: RoadGeometry, s_m: float, d_m: float, size=CAR, yaw_offset_rad=0.
 
 def measure(road, lane_d_m, ego, ego_speed, boxes, speeds):
     """The conflicts with boxes of traffic at speeds."""
-    snapshot = Snapshot(0.0, np.array(boxes).reshape(-1, 5), NO_BOXES, np.asarray(speeds, float))
+    snapshot = Snapshot(0.0, np.array(boxes).reshape(-1, 5), NO_BOXES, np.asarray(speeds, float),
+                        passenger_classes(len(speeds)))
     return RoadFrame(road, lane_d_m).measure(ego, ego_speed, snapshot)[1]
 
 

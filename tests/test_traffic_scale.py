@@ -10,7 +10,6 @@ from scenarios import road_kernels
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import in_start_zone, sensing_radius_m
-from scenarios.sumo_world import TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M
 from scenarios.world_backends import make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import Simulation, run_episode
@@ -44,15 +43,16 @@ def every_vehicle_within(world, ego_box, radius_m) -> int:
     return count
 
 
-def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, np.ndarray]:
-    """The traffic boxes and speeds of the subscription's results, read by one
-    implementation of the kernel."""
+def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, ...]:
+    """The traffic boxes, speeds and class indexes of the subscription's results, read
+    by one implementation of the kernel."""
     nearby = world._sumo.vehicle.getContextSubscriptionResults("ego")
-    boxes, speeds = np.full((len(nearby), 5), np.nan), np.full(len(nearby), np.nan)
-    count = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED), "ego", "obstacle.",
-                    TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M, float(ego_box[0]), float(ego_box[1]),
-                    radius_m, boxes, speeds)
-    return boxes[:count], speeds[:count]
+    n = len(nearby)
+    boxes, speeds, kinds = np.full((n, 5), np.nan), np.full(n, np.nan), np.full(n, np.nan)
+    count = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED), "ego",
+                    "obstacle.", world._types.sizes, float(ego_box[0]), float(ego_box[1]),
+                    radius_m, boxes, speeds, kinds)
+    return boxes[:count], speeds[:count], kinds[:count]
 
 
 @pytest.mark.parametrize("backend", ["sumo", "highway"])
@@ -75,10 +75,11 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
                 assert len(sim.snapshot.traffic_boxes) == every_vehicle_within(world, sim.box,
                                                                                 radius)
                 # and the read of its results is the numpy twin's, bit for bit
-                boxes, speeds = traffic_read_by(road_kernels.traffic_numpy, world, sim.box,
-                                                radius)
+                boxes, speeds, kinds = traffic_read_by(road_kernels.traffic_numpy, world,
+                                                       sim.box, radius)
                 assert sim.snapshot.traffic_boxes.tobytes() == boxes.tobytes()
                 assert sim.snapshot.traffic_speeds_mps.tobytes() == speeds.tobytes()
+                assert list(sim.snapshot.traffic_classes) == list(world._types.names(kinds))
             sim.advance(Command(0.0))
         assert world.vehicle_count() > 2 * len(sim.snapshot.traffic_boxes)  # the rest unread
 

@@ -92,8 +92,8 @@ def _passenger(element: ET.Element) -> bool:
 
 
 def read_net(path: str | Path) -> NetFile:
-    """Parse ``path`` (plain or gzipped; ``sha256`` is of the file's bytes); a file that cannot be read, is not XML or not a SUMO network
-    is a :class:`FileError`."""
+    """Parse ``path`` (plain or gzipped; ``sha256`` is of the file's bytes); a file
+    that cannot be read, is not XML or not a SUMO network is a :class:`FileError`."""
     path = Path(path)
     data = read_bytes(path, "the SUMO network")
     try:

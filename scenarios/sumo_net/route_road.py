@@ -1,11 +1,14 @@
 """A SUMO network as the ego's road: its route's lane as the road, the network's
 drivable area for road edges.
 
-The route is drawn from the seed: a lane outside junctions (chance in
-proportion to its length), then at every junction one of the lane's turns
-(straight on where it can with ``road.route_turns = "straight"``; U-turns
-never), through the junction's own lanes, until the route is ``road.length_m``
-long. Along it, the ego's lane is the road of
+The route is drawn from the seed: a lane outside junctions open to passenger
+cars (chance in proportion to its length), then at every junction one of the
+lane's turns (straight on where it can with ``road.route_turns = "straight"``),
+through the junction's own lanes, until the route is ``road.length_m`` long.
+Never a U-turn, a lane closed to passenger cars (rail, footway, bike or bus
+lanes), or a turn tighter than the car's turning circle (its model's
+``min_turn_radius_m``, measured on the turn's lanes over
+:data:`TURN_WINDOW_M` stretches). Along it, the ego's lane is the road of
 :class:`~scenarios.road_geometry.RoadGeometry` (one lane: ``s`` along the route, ``d``
 from its centre), so lane sensing, positions and route end work as on the
 built-in roads; road edges come from the whole network
@@ -14,23 +17,32 @@ built-in roads; road edges come from the whole network
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from scenarios.atomic_write import write_atomic
+from scenarios.bodies import VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
-from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, NetFile, NetLane, read_net
+from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, NetFile, NetLane, Turn, read_net
 
 #: tries at drawing a route that long before giving up (dead ends cut walks short)
 ROUTE_TRIES = 50
 #: the road edges kept in a trace for drawing: those within this of the route [m]
 DRAW_MARGIN_M = 120.0
+#: a turn's path: its junction lanes and this much of the lanes before and after [m]
+TURN_REACH_M = 5.0
+#: a turn's tightness is measured over stretches at least this long (a polyline's
+#: kink spread over it) [m]
+TURN_WINDOW_M = 3.0
+#: ... on the polyline sampled this finely [m]
+RADIUS_SAMPLE_M = 0.25
 
 
 @dataclass(frozen=True)
@@ -53,18 +65,67 @@ def scenario_stream(seed: int, purpose: int) -> np.random.Generator:
     return np.random.default_rng([seed, purpose])
 
 
+def tightest_radius_m(points: np.ndarray, window_m: float) -> float:
+    """The tightest turning radius along a polyline: the least arc length over heading
+    change of any stretch ``window_m`` long (a kink counts as a turn spread over it;
+    the whole line when it is shorter), the line sampled every
+    :data:`RADIUS_SAMPLE_M` [m]; inf for a straight line."""
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    if along[-1] <= RADIUS_SAMPLE_M:
+        return math.inf
+    at = np.arange(0.0, along[-1], RADIUS_SAMPLE_M)
+    sampled = np.column_stack([np.interp(at, along, points[:, 0]),
+                               np.interp(at, along, points[:, 1])])
+    step = np.diff(sampled, axis=0)
+    heading = np.unwrap(np.arctan2(step[:, 1], step[:, 0]))
+    span = int(min(round(window_m / RADIUS_SAMPLE_M), len(heading) - 1))
+    if span < 1:
+        return math.inf
+    turn = np.abs(heading[span:] - heading[:-span])
+    most = float(turn.max())
+    return span * RADIUS_SAMPLE_M / most if most > 1e-9 else math.inf
+
+
+def turn_path(net: NetFile, lane: NetLane, turn: Turn, reach_m: float) -> np.ndarray:
+    """The path of ``turn`` out of ``lane``: the last ``reach_m`` of the lane, the
+    junction's lanes, the first ``reach_m`` of the lane it leads to."""
+    before, after = lane.shape_xy, net.lanes[turn.to].shape_xy
+    return _joined([_tail(before, reach_m), *(net.lanes[v].shape_xy for v in turn.via),
+                    _tail(after[::-1], reach_m)[::-1]])
+
+
+def _tail(points: np.ndarray, reach_m: float) -> np.ndarray:
+    """The last ``reach_m`` of a polyline (its whole when shorter)."""
+    back = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points[::-1], axis=0).T))])
+    return points[len(points) - 1 - int(np.searchsorted(back, reach_m)):]
+
+
+def drivable_turns(net: NetFile, lane: NetLane, min_radius_m: float) -> list[Turn]:
+    """The turns out of ``lane`` a car may take: no U-turn, onto lanes open to
+    passenger cars, and none tighter than ``min_radius_m``, the car's turning radius."""
+    turns = []
+    for turn in net.turns.get(lane.id, ()):
+        if turn.direction == U_TURN or not all(
+                net.lanes[v].passenger for v in (*turn.via, turn.to)):
+            continue
+        path = turn_path(net, lane, turn, TURN_REACH_M)
+        if tightest_radius_m(path, max(min_radius_m, TURN_WINDOW_M)) >= min_radius_m:
+            turns.append(turn)
+    return turns
+
+
 def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
-               turns: str = "straight") -> list[NetLane]:
+               turns: str = "straight", min_radius_m: float = 0.0) -> list[NetLane]:
     """Lanes (junction lanes included) of a route at least ``length_m`` long;
-    ``turns`` is ``road.route_turns``."""
+    ``turns`` is ``road.route_turns``; no turn on it is tighter than ``min_radius_m``
+    (:func:`drivable_turns`)."""
     starts = net.normal_lanes()
     weights = np.array([lane.length_m for lane in starts])
     for _ in range(ROUTE_TRIES):
         lane = starts[rng.choice(len(starts), p=weights / weights.sum())]
         route, total_m = [lane], lane.length_m
         while total_m < length_m:
-            options = [t for t in net.turns.get(lane.id, ()) if t.direction != U_TURN
-                       and net.lanes[t.to].passenger]
+            options = drivable_turns(net, lane, min_radius_m)
             if turns == "straight":
                 options = [t for t in options if t.direction == STRAIGHT] or options
             if not options:
@@ -202,7 +263,8 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     net = read_network_file(spec)
     try:
         route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
-                           spec.road.route_turns)
+                           spec.road.route_turns,
+                           VEHICLE_MODELS[spec.vehicle.model].min_turn_radius_m)
     except SdcError as e:
         raise SpecError("road.length_m", str(e)) from None
     road = NetworkRoad(net, route, network_area(net, cache_dir))

@@ -115,10 +115,11 @@ def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
         k = _first_float_mismatch(a, b)
         if k is not None:
             found.append(Divergence(k, name, float(a[k]), float(b[k])))
-    for k in range(n):
-        if recorded.phase[k] != replayed.phase[k]:
-            found.append(Divergence(k, "phase", recorded.phase[k], replayed.phase[k]))
-            break
+    for name in ("phase", "traffic_class"):
+        rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
+        k = next((k for k in range(n) if rows_a[k] != rows_b[k]), None)
+        if k is not None:
+            found.append(Divergence(k, name, str(rows_a[k]), str(rows_b[k])))
     for name in ("lidar", "traffic"):
         rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
         for k in range(n):

@@ -25,6 +25,7 @@ class Collision(NamedTuple):
     with_: str  # OBSTACLE, VEHICLE or ROAD_EDGE
     part: str  # FRONT, SIDE or REAR: the part of the ego's body that was hit
     role: str  # RAN_INTO or WAS_HIT
+    vehicle_class: str | None = None  # a vehicle's SUMO vClass (passenger, truck, ...)
 
 
 def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) -> str | None:
@@ -84,8 +85,9 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     road heading ``road_heading_rad`` there): for a side contact across the road, for a
     front or rear one along it, the ego ``ran_into`` it when it closed in on the
     contact faster than the other body did, else it ``was_hit``. Obstacles, road edges
-    and standing cars are always run into."""
+    and standing cars are always run into. A vehicle's class comes with it."""
     ego_box = np.asarray(ego_box, float)
+    vehicle_class = None
     if hit == ROAD_EDGE:
         corners = one_box_corners(ego_box)
         point, other_mps = corners[road.off_road(corners)].mean(axis=0), np.zeros(2)
@@ -97,6 +99,7 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
         point = contact_point(ego_box, other)
         other_mps = _velocity(float(other[2]),
                               float(snapshot.traffic_speeds_mps[contacts.vehicle]))
+        vehicle_class = str(snapshot.traffic_classes[contacts.vehicle])
     part = hit_part(ego_box, point)
     c, s = math.cos(road_heading_rad), math.sin(road_heading_rad)
     axis = np.array([-s, c]) if part == SIDE else np.array([c, s])
@@ -104,4 +107,4 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     ego_closing = float(_velocity(float(ego_box[2]), ego_speed_mps) @ toward)
     other_closing = float(-other_mps @ toward)
     moved_in = ego_closing > other_closing or not other_mps.any()  # what stands is hit
-    return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT)
+    return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT, vehicle_class)

@@ -132,7 +132,7 @@ class Simulation:
             lane.heading_error_rad if lane else math.nan,
             lane.s_m if lane else math.nan,
             contacts.obstacle_gap_m, conflicts.ttc_s, conflicts.drac_mps2, conflicts.headway_s,
-        ), phase, self.ranges, self.snapshot.traffic_boxes)
+        ), phase, self.ranges, self.snapshot.traffic_boxes, self.snapshot.traffic_classes)
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
@@ -212,6 +212,7 @@ class Simulation:
             collision_time_s=t_end if hit else None,
             collision_part=self.collision.part if self.collision else None,
             collision_role=self.collision.role if self.collision else None,
+            collision_vclass=self.collision.vehicle_class if self.collision else None,
             world_overlaps=world_overlaps(trace.traffic, obstacles),
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
                                             floats["speed_mps"]),

@@ -64,6 +64,9 @@ COLUMNS: tuple[Column, ...] = (
            "ran_into: the ego closed in on the contact faster than the other body | "
            "was_hit: the other body did (obstacles and road edges stand still); None: no "
            "collision"),
+    Column("collision_vclass", pa.string(), OUTCOME,
+           "the SUMO vehicle class (vClass) of the vehicle hit: passenger, truck, bus, "
+           "motorcycle, bicycle, ...; None unless collision_with is vehicle"),
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle overlapped another one or an obstacle within "
            "the sensing radius (analysis.world_audit); 0 in a consistent world"),

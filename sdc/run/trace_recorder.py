@@ -15,19 +15,23 @@ class TraceRecorder:
         self._phase: list[str] = []
         self._lidar: list[np.ndarray] = []
         self._traffic: list[np.ndarray] = []
+        self._classes: list[list[str]] = []
 
     def add(self, floats: tuple[float, ...], phase: str, lidar: np.ndarray,
-            traffic: np.ndarray) -> None:
-        """One step's row; ``floats`` holds the values of ``FLOAT_COLUMNS``, in order."""
+            traffic: np.ndarray, traffic_classes: np.ndarray) -> None:
+        """One step's row; ``floats`` holds the values of ``FLOAT_COLUMNS``, in order;
+        ``traffic_classes`` the vehicle class of each traffic box."""
         if len(floats) != len(FLOAT_COLUMNS):
             raise ValueError(f"a row has {len(FLOAT_COLUMNS)} floats, not {len(floats)}")
         self._floats.append(floats)
         self._phase.append(phase)
         self._lidar.append(np.asarray(lidar, np.float32))
         self._traffic.append(np.asarray(traffic, np.float32).ravel())
+        self._classes.append(list(traffic_classes))
 
     def finish(self) -> Trace:
         columns = np.array(self._floats, dtype=float).reshape(-1, len(FLOAT_COLUMNS)).T
         floats = {name: np.ascontiguousarray(column)
                   for name, column in zip(FLOAT_COLUMNS, columns, strict=True)}
-        return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic))
+        return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic),
+                     list(self._classes))

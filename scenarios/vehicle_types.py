@@ -1,0 +1,65 @@
+"""What sdc sees of each traffic vehicle besides its pose: its vehicle type's length,
+width and vehicle class (SUMO's ``vClass``: passenger, truck, bus, motorcycle,
+bicycle, ...), so that a truck is seen, hit and measured as the 16.5 m it is and a
+bicycle as the bicycle.
+
+Read from SUMO once per vehicle (its type id) and once per type (its size and
+class), not every step: a subscribed variable costs on every vehicle at every step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: the vehicle types SUMO always has (DEFAULT_VEHTYPE, DEFAULT_BIKETYPE, ...): no
+#: vehicle of them unless a demand names them (then they are read with the vehicle)
+SUMO_DEFAULT_PREFIX = "DEFAULT_"
+
+
+class VehicleTypes:
+    """The vehicles and types met so far: ``sizes`` (vehicle id -> (length, width,
+    class index), as :func:`scenarios.road_kernels.traffic` reads it), ``classes``
+    (class index -> vClass) and ``longest_m``, the longest traffic type loaded or met."""
+
+    def __init__(self):
+        self.sizes: dict[str, tuple[float, float, float]] = {}
+        self.classes = np.zeros(0, dtype=object)
+        self.longest_m = 0.0
+        self._types: dict[str, tuple[float, float, float]] = {}
+        self._listed = 0  # how many types SUMO listed when last asked
+
+    def _type(self, type_id: str, vehicletype) -> tuple[float, float, float]:
+        """(length, width, class index) of type ``type_id``, from SUMO's first time."""
+        if type_id not in self._types:
+            vclass = vehicletype.getVehicleClass(type_id)
+            found = np.flatnonzero(self.classes == vclass)
+            index = int(found[0]) if len(found) else len(self.classes)
+            if not len(found):
+                self.classes = np.append(self.classes, np.array([vclass], dtype=object))
+            length_m = float(vehicletype.getLength(type_id))
+            self._types[type_id] = (length_m, float(vehicletype.getWidth(type_id)),
+                                    float(index))
+            self.longest_m = max(self.longest_m, length_m)
+        return self._types[type_id]
+
+    def add(self, vehicle_ids, sumo) -> None:
+        """Read the vehicles of ``vehicle_ids`` not met yet from ``sumo`` (libsumo or
+        traci)."""
+        for vid in vehicle_ids:
+            if vid not in self.sizes:
+                self.sizes[vid] = self._type(sumo.vehicle.getTypeID(vid), sumo.vehicletype)
+
+    def refresh(self, vehicletype, not_traffic: tuple[str, ...]) -> None:
+        """Read the types SUMO has loaded since last asked (``longest_m`` with them),
+        but SUMO's own defaults and those whose id starts with one of ``not_traffic``
+        (the ego's, the obstacles')."""
+        listed = vehicletype.getIDCount()
+        if listed != self._listed:
+            self._listed = listed
+            for type_id in vehicletype.getIDList():
+                if not type_id.startswith((SUMO_DEFAULT_PREFIX, *not_traffic)):
+                    self._type(type_id, vehicletype)
+
+    def names(self, kinds: np.ndarray) -> np.ndarray:
+        """The vClass of each class index in ``kinds``."""
+        return self.classes[kinds.astype(np.intp)]
