@@ -107,8 +107,8 @@ class HighwayWorld:
             self._advance()
         vehicles = self._hw.vehicles
         blocking = in_start_zone(self.spec, self.road, np.array([v.position for v in vehicles]),
-                                 np.array([v.speed for v in vehicles]),
-                                 max((v.LENGTH / 2 for v in vehicles), default=0.0))
+                                 np.array([v.LENGTH for v in vehicles]),
+                                 np.array([v.speed for v in vehicles]))
         self._hw.vehicles = [v for v, off in zip(self._hw.vehicles, blocking, strict=True)
                              if not off]
         self._ego = PushedVehicle(self._hw, ego_box[:2], float(ego_box[2]), ego_speed_mps)

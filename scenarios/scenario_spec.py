@@ -54,30 +54,46 @@ class ScenarioMeta(Spec):
                             f"more than the {MAX_STEPS:,} a run may take")
 
 
+#: the road kinds that are a route through a SUMO network
+NETWORK_KINDS = ("sumo_net", "sumo_config")
+#: a file path starting with this is inside SUMO's installation (``sumo.SUMO_HOME``):
+#: the scenarios its package ships, wherever it is installed (``sumo:tools/game/...``)
+SUMO_HOME_PREFIX = "sumo:"
+
+
 @spec_class
 class RoadSpec(Spec):
     """A one-way N-lane road starting at the origin heading +x (``straight``,
-    ``curve``), or a route through a SUMO network (``sumo_net``).
+    ``curve``), or a route through a SUMO network (``sumo_net``, ``sumo_config``).
 
     ``curve_radius_m`` (curve only) is signed: positive turns left, negative right.
     For ``sumo_net``, ``net_file`` names any SUMO ``.net.xml`` or ``.net.xml.gz``
     (relative to the scenario file), ``length_m`` is the length of the ego's route, drawn from the
     seed, and the road is that route's lane: ``lanes`` is not given, positions
     are along the route and every lane index is 0. ``lane_width_m`` and
-    ``speed_limit_mps`` come from the network.
+    ``speed_limit_mps`` come from the network. For ``sumo_config``, ``config_file``
+    names a SUMO configuration (``.sumocfg``, relative to the scenario file): its
+    network is the road's, as for ``sumo_net``, and its own demand is the traffic
+    (``scenarios/sumo_net/sumo_config.py``).
     """
 
-    kind: Literal["straight", "curve", "sumo_net"] = "straight"
+    kind: Literal["straight", "curve", "sumo_net", "sumo_config"] = "straight"
     length_m: float = num(gt=0, le=50_000)
     lanes: int | None = num(None, ge=1, le=8)  # required for straight and curve
     lane_width_m: float = num(3.5, ge=2.0, le=6.0)
     speed_limit_mps: float = num(33.33, gt=0, le=70)
     curve_radius_m: float | None = None
     net_file: str | None = None  # sumo_net only
+    config_file: str | None = None  # sumo_config only
     #: sumo_net: "straight" goes straight on at every junction where its lane can
     #: (turning only where it must), "any" takes a random turn at each
     route_turns: Literal["straight", "any"] = "straight"
     see_edges: bool = True
+
+    @property
+    def on_network(self) -> bool:
+        """Is the road a route through a SUMO network (``sumo_net``, ``sumo_config``)?"""
+        return self.kind in NETWORK_KINDS
 
     @property
     def lane_count(self) -> int:
@@ -110,6 +126,10 @@ class TrafficSpec(Spec):
     (``scenarios/warm_state.py``), computed once and loaded by every run that shares
     it: the same network, traffic, step and ``warm_seed`` (default: the scenario's seed).
 
+    On a ``sumo_config`` road the configuration's own demand is the traffic: the ego
+    enters at SUMO's time ``enter_s`` (at least one step after the configuration's
+    begin), and the demand before it is the warm-up, a warm state as above.
+
     On the sumo backend every lane change takes ``lane_change_s`` (sideways at a lane
     width per that; ``scenarios/traffic_model.py``); highway-env steers its own.
     """
@@ -121,6 +141,7 @@ class TrafficSpec(Spec):
     vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
     warm_seed: int | None = num(None, ge=0, lt=2**31)  # the warm-up's seed (None: scenario's)
     lane_change_s: float = num(2.0, ge=1.0, le=10.0)  # sumo: how long a lane change takes
+    enter_s: float = num(0.0, ge=0, le=86_400)  # sumo_config: SUMO's time the ego enters at
 
 
 @spec_class
@@ -522,7 +543,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 f"{road.length_m} m road",
             )
         d_m = road.lane_center_d_m(obstacle.lane) + obstacle.lateral_offset_m
-        if abs(d_m) > road.half_width_m and road.kind != "sumo_net":  # the network decides
+        if abs(d_m) > road.half_width_m and not road.on_network:  # the network decides
             raise SpecError(
                 f"{path}.lateral_offset_m",
                 f"{obstacle.lateral_offset_m} puts the {obstacle.kind}'s centre off the road",
@@ -537,7 +558,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
 def _check_speed_factor(spec: ScenarioSpec) -> None:
     """SUMO refuses a traffic type (even with no traffic) whose speed factor, mean
     ``speed_mean_mps / speed_limit_mps``, stays 3 deviations outside its bounds."""
-    if spec.road.kind == "sumo_net":  # the network's limits, factor 1
+    if spec.road.on_network:  # the network's limits, factor 1
         return
     traffic, lo, hi = spec.traffic, *SPEED_FACTOR_BOUNDS
     factor = traffic.speed_mean_mps / spec.road.speed_limit_mps
@@ -552,24 +573,35 @@ def _check_speed_factor(spec: ScenarioSpec) -> None:
 def _check_road_kind(spec: ScenarioSpec) -> None:
     """What a built-in road needs, and what a SUMO network road must not be given."""
     road, traffic = spec.road, spec.traffic
-    if road.kind != "sumo_net":
+    own = {"road.net_file": ("sumo_net",), "traffic.vehicles": ("sumo_net",),
+           "road.config_file": ("sumo_config",), "traffic.enter_s": ("sumo_config",),
+           "road.route_turns": NETWORK_KINDS}
+    given = {"road.net_file": road.net_file is not None, "traffic.vehicles": traffic.vehicles > 0,
+             "road.config_file": road.config_file is not None,
+             "traffic.enter_s": traffic.enter_s > 0,
+             "road.route_turns": road.route_turns != "straight"}
+    for field, kinds in own.items():
+        if given[field] and road.kind not in kinds:
+            names = " or ".join(f'"{k}"' for k in kinds)
+            raise SpecError(field, f"only applies to road kind {names}")
+    if not road.on_network:
         if road.lanes is None:
             raise SpecError("road.lanes", f'is required for kind "{road.kind}"')
-        for field, given in (("road.net_file", road.net_file is not None),
-                             ("road.route_turns", road.route_turns != "straight"),
-                             ("traffic.vehicles", traffic.vehicles > 0)):
-            if given:
-                raise SpecError(field, 'only applies to road kind "sumo_net"')
         return
-    if road.net_file is None:
-        raise SpecError("road.net_file", 'is required for kind "sumo_net"')
+    file_field = "road.net_file" if road.kind == "sumo_net" else "road.config_file"
+    if not given[file_field]:
+        raise SpecError(file_field, f'is required for kind "{road.kind}"')
     if road.lanes is not None:
-        raise SpecError("road.lanes", 'a "sumo_net" road is its route\'s own lane: leave '
+        raise SpecError("road.lanes", f'a "{road.kind}" road is its route\'s own lane: leave '
                         "lanes out (every lane index is 0)")
     if traffic.flow_vph_per_lane > 0:
+        demand = "traffic.vehicles" if road.kind == "sumo_net" else "its configuration's demand"
         raise SpecError("traffic.flow_vph_per_lane",
-                        'is for the built-in roads; a "sumo_net" road takes traffic.vehicles')
+                        f'is for the built-in roads; a "{road.kind}" road takes {demand}')
+    if road.kind == "sumo_config" and traffic.warm_up_s > 0:
+        raise SpecError("traffic.warm_up_s", 'a "sumo_config" road warms up on its '
+                        "configuration's demand until traffic.enter_s")
     if spec.scenario.backend != "sumo":
         raise SpecError("scenario.backend",
                         f'{spec.scenario.backend} cannot load a SUMO network '
-                        '(road.kind "sumo_net")')
+                        f'(road.kind "{road.kind}")')

@@ -55,7 +55,8 @@ def passenger_classes(count: int) -> np.ndarray:
 
 
 #: vehicles in the ego's lane or a neighbouring one (they may change into it as the ego
-#: appears), this far behind / ahead of its start, are taken off at entry [m]
+#: appears) whose body comes this far behind its rear / ahead of its front at least are
+#: taken off at entry [m]
 START_ZONE_BEHIND_M, START_ZONE_AHEAD_M = 30.0, 10.0
 
 
@@ -67,27 +68,39 @@ def stop_need_m(speed_mps: np.ndarray, ego_speed_mps: float, ego_decel_mps2: flo
     return TRAFFIC_MIN_GAP_M + TRAFFIC_TAU_S * speed_mps + np.maximum(brake_m, 0.0)
 
 
+def ego_stop_need_m(ego_speed_mps: float, ego_decel_mps2: float,
+                    speed_mps: np.ndarray) -> np.ndarray:
+    """The gap [m] the ego needs behind a vehicle at ``speed_mps`` to stop short of it,
+    braking at once as hard as it can, should that vehicle brake at SUMO's default."""
+    brake_m = (ego_speed_mps**2 / (2 * ego_decel_mps2)
+               - np.asarray(speed_mps, float)**2 / (2 * TRAFFIC_DECEL_MPS2))
+    return TRAFFIC_MIN_GAP_M + np.maximum(brake_m, 0.0)
+
+
 def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray,
-                  speeds_mps: np.ndarray | None = None, front_ahead_m: float = 0.0) -> np.ndarray:
-    """Which vehicles (points ``centers_xy``, their front bumpers ``front_ahead_m`` ahead
-    of them: 0 for SUMO's positions, half a length for centres) stand where the
-    ego enters the road, in its lane or a neighbouring one (a bool mask): within
-    :data:`START_ZONE_BEHIND_M` behind it or :data:`START_ZONE_AHEAD_M` ahead, and
-    with their ``speeds_mps``, any behind it too close to stop should it brake at once
-    (:func:`stop_need_m`)."""
+                  lengths_m: np.ndarray, speeds_mps: np.ndarray | None = None) -> np.ndarray:
+    """Which vehicles (body centres ``centers_xy``, ``lengths_m`` long) stand where the
+    ego enters the road, in its lane or a neighbouring one (a bool mask): their body
+    within :data:`START_ZONE_BEHIND_M` behind the ego's rear or
+    :data:`START_ZONE_AHEAD_M` ahead of its front, or overlapping it; and with their
+    ``speeds_mps``, any behind it too close to stop should it brake at once
+    (:func:`stop_need_m`) or ahead of it too close for it to stop should they
+    (:func:`ego_stop_need_m`)."""
     if len(centers_xy) == 0:
         return np.zeros(0, bool)
     s_m, d_m = road.to_frenet(np.asarray(centers_xy, float).reshape(-1, 2))
-    ego = spec.ego
+    half_m = np.asarray(lengths_m, float) / 2
+    ego, model = spec.ego, VEHICLE_MODELS[spec.vehicle.model]
     behind_m = np.full(len(s_m), START_ZONE_BEHIND_M)
+    ahead_m = np.full(len(s_m), START_ZONE_AHEAD_M)
     if speeds_mps is not None:
-        model = VEHICLE_MODELS[spec.vehicle.model]
-        gap_m = stop_need_m(speeds_mps, ego.speed_mps,
-                            model.braking_decel_mps2(spec.vehicle.friction_mu))
-        behind_m = np.maximum(behind_m, gap_m + model.length_m / 2 + front_ahead_m)
+        decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
+        behind_m = np.maximum(behind_m, stop_need_m(speeds_mps, ego.speed_mps, decel))
+        ahead_m = np.maximum(ahead_m, ego_stop_need_m(ego.speed_mps, decel, speeds_mps))
+    ego_rear_m, ego_front_m = ego.start_m - model.length_m / 2, ego.start_m + model.length_m / 2
     return ((np.abs(d_m - road.lane_center_d_m(ego.lane)) < 1.5 * road.lane_width_m)
-            & (s_m >= ego.start_m - behind_m)
-            & (s_m <= ego.start_m + START_ZONE_AHEAD_M))
+            & (s_m + half_m >= ego_rear_m - behind_m)
+            & (s_m - half_m <= ego_front_m + ahead_m))
 
 
 #: after a warm-up, traffic in an obstacle's lane this far behind / ahead of its centre

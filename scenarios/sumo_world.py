@@ -35,9 +35,10 @@ from scenarios.snapshot import (
     obstacle_boxes,
     sensing_radius_m,
 )
-from scenarios.sumo_net.build import EDGE_ID, network_file, sumo_binary
+from scenarios.sumo_net.build import EDGE_ID, network_file, source_sha256, sumo_binary
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
+from scenarios.sumo_net.sumo_config import load_bundle
 from scenarios.vehicle_types import VehicleTypes
 from scenarios.warm_state import (
     HALTING_SPEED_MPS,
@@ -46,10 +47,10 @@ from scenarios.warm_state import (
     SETTLING_SAMPLE_S,
     WarmState,
     cached_path,
-    file_sha256,
     uses_warm_state,
     warm_key,
     warm_seed,
+    warm_up_steps,
 )
 
 EGO_ID = "ego"
@@ -262,13 +263,29 @@ class SumoWorld:
         self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
         self._types = VehicleTypes()
         self._subscribed_m = 0.0  # the context subscription's radius
+        # a sumo_config road's configuration (its files are written into the scratch folder)
+        self._config = (load_bundle(spec.road.config_file) if spec.road.kind == "sumo_config"
+                        else None)
+        self._config_paths: dict[str, Path] | None = None
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
         self.warm_state_key: str | None = None  # the key of the warm state it started from
 
     def net_path(self) -> Path:
         """The network file SUMO runs on."""
+        if self._config is not None:
+            return self._written_config()[self._config.net_name]
         return network_file(self.spec.road, self.cache_dir)
+
+    def _written_config(self) -> dict[str, Path]:
+        """The configuration's files, written into the scratch folder: their paths."""
+        if self._config_paths is None:
+            self._config_paths = self._config.write(self._scratch() / "config")
+        return self._config_paths
+
+    def warm_key(self) -> str:
+        """The key of the spec's warm state (``scenarios/warm_state.py``)."""
+        return warm_key(self.spec, source_sha256(self.spec.road, self.cache_dir))
 
     def _new_demand(self, seed: int) -> RandomTrips | None:
         """The random trips of a network's traffic, drawn from ``seed``'s stream."""
@@ -281,14 +298,17 @@ class SumoWorld:
             self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
         return Path(self._tmp.name)
 
-    def _start_sumo(self, sim, command: list[str], net: Path, routes: str,
-                    *options: str, seed: int | None = None) -> None:
-        """Start SUMO on ``net`` and ``routes`` (text) with ``options``, its random
-        generators seeded with ``seed`` (default: the scenario's)."""
-        path = self._scratch() / "scenario.rou.xml"
-        path.write_text(routes)
-        sim.start([
-            *command, "--net-file", str(net), "--route-files", str(path),
+    def _start_sumo(self, sim, command: list[str], routes: str | None, *options: str,
+                    seed: int | None = None, fresh: bool = True) -> None:
+        """Start SUMO on the road's network with ``routes`` (text; a configuration's
+        own files before them) and ``options``, its random generators seeded with
+        ``seed`` (default: the scenario's); ``fresh``: from the configuration's begin
+        (not from a saved state)."""
+        path = None
+        if routes is not None:
+            path = self._scratch() / "scenario.rou.xml"
+            path.write_text(routes)
+        ours = [
             # a random trip with no way to its end is dropped, not fatal
             *(["--ignore-route-errors", "true"] if isinstance(self.road, NetworkRoad) else []),
             "--step-length", repr(self.spec.scenario.step_s),
@@ -297,7 +317,13 @@ class SumoWorld:
             *traffic_model.sumo_options(self.spec.traffic.lane_change_s),
             "--no-step-log", "true", "--no-warnings", "true",
             *options,
-        ])
+        ]
+        if self._config is not None:
+            inputs = self._config.sumo_arguments(self._written_config(), path, fresh,
+                                                 set_already=ours)
+        else:
+            inputs = ["--net-file", str(self.net_path()), "--route-files", str(path)]
+        sim.start([*command, *inputs, *ours])
         self._sumo = sim
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
@@ -315,13 +341,12 @@ class SumoWorld:
         else:
             import libsumo as sim  # imported here: only this backend needs the simulator
             command = ["sumo"]
-        net = self.net_path()
         if uses_warm_state(self.spec):
-            state = self.warm_state(net)
+            state = self.warm_state()
             state_file = self._scratch() / "warm-state.xml.gz"
             state_file.write_bytes(state.sumo_state)
-            self._start_sumo(sim, command, net, warm_run_routes_xml(self.spec, self.road),
-                             "--load-state", str(state_file), *self.sumo_options)
+            self._start_sumo(sim, command, warm_run_routes_xml(self.spec, self.road),
+                             "--load-state", str(state_file), *self.sumo_options, fresh=False)
             self._demand = self._new_demand(warm_seed(self.spec))
             if self._demand is not None:  # it goes on where the warm-up left it
                 self._demand.restore(state.demand["rng"])
@@ -332,7 +357,7 @@ class SumoWorld:
             self._demand = self._new_demand(self.spec.scenario.seed)
             trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
             self._trips_made = len(trips)
-            self._start_sumo(sim, command, net, routes_xml(self.spec, self.road, trips),
+            self._start_sumo(sim, command, routes_xml(self.spec, self.road, trips),
                              *self.sumo_options)
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
@@ -343,7 +368,10 @@ class SumoWorld:
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
         self._watch_types()
-        return self.step(ego_box, ego_speed_mps)
+        self._push(ego_box, ego_speed_mps)
+        # what departed in this step entered beside the ego, not after it: checked here
+        taken = self._clear_start(among=self._sumo.simulation.getDepartedIDList())
+        return self._snapshot(ego_box, taken)
 
     def _watch_types(self) -> None:
         """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles around
@@ -357,14 +385,14 @@ class SumoWorld:
                                                 _TRAFFIC_VARS)
             self._subscribed_m = radius_m
 
-    def warm_state(self, net: Path) -> WarmState:
-        """The spec's warm state on network file ``net``: the one given, else the
-        cached one, else computed now (and cached). A given or cached file made for
-        other traffic is an :class:`SdcError`, never a run on it."""
-        key = warm_key(self.spec, file_sha256(net))
+    def warm_state(self) -> WarmState:
+        """The spec's warm state: the one given, else the cached one, else computed
+        now (and cached). A given or cached file made for other traffic is an
+        :class:`SdcError`, never a run on it."""
+        key = self.warm_key()
         path = self.warm_state_path or cached_path(key)
         if self.warm_state_path is None and not path.is_file():
-            state = self.compute_warm_state(net, key)
+            state = self.compute_warm_state(key)
             path.parent.mkdir(parents=True, exist_ok=True)
             write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))
             return state
@@ -374,7 +402,7 @@ class SumoWorld:
                            f"{state.key[:12]}..., this run's {key[:12]}...)")
         return state
 
-    def compute_warm_state(self, net: Path, key: str,
+    def compute_warm_state(self, key: str,
                            on_sample: Callable[[float], None] | None = None) -> WarmState:
         """Warm the traffic up in a SUMO of its own (libsumo, also for a GUI run) and
         save it, recording how the network's traffic settles on the way (each
@@ -385,10 +413,10 @@ class SumoWorld:
         demand = self._new_demand(warm_seed(spec))
         trips = demand.draw(spec.traffic.vehicles) if demand else []
         self._demand, self._trips_made = demand, len(trips)
-        self._start_sumo(libsumo, ["sumo"], net, warm_up_routes_xml(spec, self.road, trips),
-                         *SAVE_OPTIONS, seed=warm_seed(spec))
+        own = None if self._config is not None else warm_up_routes_xml(spec, self.road, trips)
+        self._start_sumo(libsumo, ["sumo"], own, *SAVE_OPTIONS, seed=warm_seed(spec))
         try:
-            steps = round(spec.traffic.warm_up_s / spec.scenario.step_s)
+            steps = warm_up_steps(spec, self._config.begin_s if self._config else 0.0)
             every = max(1, round(SETTLING_SAMPLE_S / spec.scenario.step_s))
             settling: dict[str, list[float]] = {c: [] for c in SETTLING_COLUMNS}
             for k in range(1, steps + 1):
@@ -417,19 +445,26 @@ class SumoWorld:
         settling["mean_speed_mps"].append(float(speeds.mean()) if len(speeds) else 0.0)
         settling["halting"].append(int((speeds < HALTING_SPEED_MPS).sum()))
 
-    def _clear_start(self, obstacles: bool = False) -> None:
-        """Take the traffic off the ego's entry (after a warm-up: also any behind it that
-        could not stop for it, :func:`~scenarios.snapshot.in_start_zone`), and with
-        ``obstacles`` off the obstacles' spots too."""
+    def _clear_start(self, obstacles: bool = False,
+                     among: list[str] | None = None) -> frozenset[str]:
+        """Take the traffic (``among`` those, default all) off the ego's entry
+        (:func:`~scenarios.snapshot.in_start_zone`: on or near it, or too close to stop
+        for it or for it to stop), and with ``obstacles`` off the obstacles' spots too;
+        the ids taken off."""
         vehicle = self._sumo.vehicle
-        ids = [v for v in vehicle.getIDList() if _is_traffic(v)]
+        ids = [v for v in (vehicle.getIDList() if among is None else among) if _is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
+        lengths = np.array([vehicle.getLength(v) for v in ids])
+        yaws = np.radians(90.0 - np.array([vehicle.getAngle(v) for v in ids]))
+        centers = fronts - (lengths / 2)[:, None] * np.column_stack([np.cos(yaws), np.sin(yaws)])
         speeds = np.array([vehicle.getSpeed(v) for v in ids])
-        taken = in_start_zone(self.spec, self.road, fronts, speeds)
+        taken = in_start_zone(self.spec, self.road, centers, lengths, speeds)
         if obstacles:
             taken |= near_obstacles(self.spec, self.road, fronts)
-        for vid in np.array(ids)[taken]:
-            vehicle.remove(str(vid))
+        removed = frozenset(str(vid) for vid in np.array(ids)[taken])
+        for vid in sorted(removed, key=ids.index):
+            vehicle.remove(vid)
+        return removed
 
     def _ego_pose(self, box: np.ndarray) -> tuple[float, float, float]:
         """SUMO's front-bumper x, y and angle for the ego at ``box``: its front bumper
@@ -454,16 +489,24 @@ class SumoWorld:
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
+        self._push(ego_box, ego_speed_mps)
+        return self._snapshot(ego_box)
+
+    def _push(self, ego_box: np.ndarray, ego_speed_mps: float) -> None:
+        """Place the ego at ``ego_box`` and advance SUMO one step."""
         x, y, angle_deg = self._ego_pose(ego_box)
         sumo = self._sumo
         sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
         sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
         sumo.simulationStep()
-        t_s = sumo.simulation.getTime()
         self._renew_trips()
-        boxes, speeds, classes = self._traffic(ego_box)
+
+    def _snapshot(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()) -> Snapshot:
+        """The state after a step, without the vehicles ``taken`` off since."""
+        boxes, speeds, classes = self._traffic(ego_box, taken)
         self._watch_types()
-        return Snapshot(t_s, boxes, self._obstacle_boxes, speeds, classes)
+        return Snapshot(self._sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds,
+                        classes)
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""
@@ -486,7 +529,8 @@ class SumoWorld:
                                    departLane="random", departPos="random_free",
                                    departSpeed="0")
 
-    def _traffic(self, ego_box: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _traffic(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Boxes, speeds and vehicle classes of the vehicles within the sensing radius,
         ego and obstacles aside, in SUMO's order; each vehicle's size and class its
         type's (:mod:`scenarios.vehicle_types`).
@@ -497,6 +541,8 @@ class SumoWorld:
         (compiled where built: in Python it cost more than the step's geometry).
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
+        if taken:  # the results are the step's, from before they were taken off
+            nearby = {vid: values for vid, values in nearby.items() if vid not in taken}
         n = len(nearby)
         boxes, speeds, kinds = np.empty((n, 5)), np.empty(n), np.empty(n)
         try:

@@ -10,7 +10,7 @@ from typing import Any
 from scenarios.controller_ref import resolve_file
 from scenarios.errors import FileError, SpecError
 from scenarios.file_read import read_text
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scenario_spec import SUMO_HOME_PREFIX, ScenarioSpec
 
 
 def read_toml(path: str | Path, what: str = "the TOML file") -> dict:
@@ -22,21 +22,24 @@ def read_toml(path: str | Path, what: str = "the TOML file") -> dict:
         raise FileError(path, f"{what} is invalid TOML ({e})") from None
 
 
-def _resolved(path: Path, spec_path: str | Path) -> str:
+def _resolved(path: Path, spec_path: str | Path, field: str) -> str:
     try:
         return str(path.resolve())
     except (OSError, ValueError, RuntimeError) as e:  # a NUL byte, a symlink loop
-        raise SpecError("road.net_file", f"is not a usable path ({e})", spec_path) from None
+        raise SpecError(field, f"is not a usable path ({e})", spec_path) from None
 
 
 def load_spec(path: str | Path) -> ScenarioSpec:
-    """The scenario in a TOML file; a relative ``road.net_file`` or controller file
-    is taken from the file's folder (and kept absolute, so the spec runs from
-    anywhere). Every error names the file."""
+    """The scenario in a TOML file; a relative ``road.net_file``, ``road.config_file``
+    or controller file is taken from the file's folder (and kept absolute, so the
+    spec runs from anywhere); ``sumo:<path>`` is inside SUMO's installation. Every
+    error names the file."""
     data = read_toml(path, "the scenario file")
     road = data.get("road")
-    if isinstance(road, dict) and isinstance(road.get("net_file"), str) and road["net_file"]:
-        road["net_file"] = _resolved(Path(path).parent / road["net_file"], path)
+    for name in ("net_file", "config_file"):
+        value = road.get(name) if isinstance(road, dict) else None
+        if isinstance(value, str) and value and not value.startswith(SUMO_HOME_PREFIX):
+            road[name] = _resolved(Path(path).parent / value, path, f"road.{name}")
     try:
         controller = data.get("controller")
         if isinstance(controller, dict) and "name" in controller:

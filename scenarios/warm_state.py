@@ -58,8 +58,20 @@ def warm_seed(spec: ScenarioSpec) -> int:
 
 
 def uses_warm_state(spec: ScenarioSpec) -> bool:
-    """Does a run of ``spec`` start from a warm state (a SUMO run with a warm-up)?"""
-    return spec.scenario.backend == "sumo" and spec.traffic.warm_up_s > 0
+    """Does a run of ``spec`` start from a warm state (a SUMO run with a warm-up; a
+    ``sumo_config`` road always: its demand runs until ``traffic.enter_s``)?"""
+    return spec.scenario.backend == "sumo" and (spec.traffic.warm_up_s > 0
+                                                or spec.road.kind == "sumo_config")
+
+
+def warm_up_steps(spec: ScenarioSpec, begin_s: float = 0.0) -> int:
+    """SUMO steps of ``spec``'s warm-up: ``warm_up_s``, or on a ``sumo_config`` road
+    from its configuration's ``begin_s`` to ``traffic.enter_s``, one step at least
+    (the demand departing at its begin is in before the ego enters)."""
+    step_s = spec.scenario.step_s
+    if spec.road.kind == "sumo_config":
+        return max(1, round((spec.traffic.enter_s - begin_s) / step_s))
+    return round(spec.traffic.warm_up_s / step_s)
 
 
 def sumo_version() -> str:
@@ -67,7 +79,9 @@ def sumo_version() -> str:
 
 
 def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
-    """The identity of ``spec``'s warm state, on the network whose file has ``net_sha256``."""
+    """The identity of ``spec``'s warm state, on the network whose file has ``net_sha256``
+    (a ``sumo_config`` road: the configuration's content,
+    :func:`scenarios.sumo_net.build.source_sha256`)."""
     traffic = {k: v for k, v in dataclasses.asdict(spec.traffic).items() if k != "warm_seed"}
     body = {"format": WARM_FORMAT, "sumo": sumo_version(), "net_sha256": net_sha256,
             "sumo_options": list(traffic_model.sumo_options(spec.traffic.lane_change_s)),

@@ -15,15 +15,15 @@ from pathlib import Path
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import build_network, network_file, sumo_load_error
-from scenarios.warm_state import cached_path, file_sha256, uses_warm_state, warm_key
+from scenarios.sumo_net.build import build_network, source_sha256, sumo_load_error
+from scenarios.warm_state import cached_path, uses_warm_state, warm_key
 
 BACKENDS = ("sumo", "highway")
 
 
 def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
     """The road of ``spec``: a built-in road, or the route drawn through a SUMO network."""
-    if spec.road.kind == "sumo_net":
+    if spec.road.on_network:
         from scenarios.sumo_net.route_road import network_road
 
         return network_road(spec, cache_dir)
@@ -33,7 +33,13 @@ def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry
 def check_inputs(spec: ScenarioSpec) -> None:
     """Check what a run of ``spec`` reads besides the spec (a network file) and the
     road it draws there, so a bad one is reported as bad input before anything runs."""
-    if spec.road.kind == "sumo_net":
+    if spec.road.kind == "sumo_config":
+        from scenarios.sumo_net.route_road import network_road
+        from scenarios.sumo_net.sumo_config import check_config
+
+        network_road(spec)
+        check_config(spec.road.config_file, spec.traffic.enter_s)
+    elif spec.road.kind == "sumo_net":
         from scenarios.sumo_net.random_trips import trip_edges
         from scenarios.sumo_net.route_road import network_road
 
@@ -50,21 +56,20 @@ def prepare_network(road: RoadSpec, cache_dir: Path | None = None) -> None:
     """Build and cache what SUMO runs on ``road`` need (its network; a network
     file's road edges), so parallel runs find it ready. A network file that cannot
     be read is left to the runs to report."""
-    if road.kind != "sumo_net":
+    if not road.on_network:
         build_network(road, cache_dir)
         return
-    from scenarios.sumo_net.net_xml import read_net
-    from scenarios.sumo_net.route_road import network_area
+    from scenarios.sumo_net.route_road import network_area, road_network
 
     with contextlib.suppress(SdcError):
-        network_area(read_net(road.net_file), cache_dir)
+        network_area(road_network(road), cache_dir)
 
 
 def warm_state_path(spec: ScenarioSpec, cache_dir: Path | None = None) -> Path | None:
     """Where ``spec``'s warm state is cached on this machine (None: it has no warm-up)."""
     if not uses_warm_state(spec):
         return None
-    return cached_path(warm_key(spec, file_sha256(network_file(spec.road, cache_dir))))
+    return cached_path(warm_key(spec, source_sha256(spec.road, cache_dir)))
 
 
 def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:
@@ -73,7 +78,7 @@ def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:
     from scenarios.sumo_world import SumoWorld
 
     with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
-        return world.warm_state(world.net_path()).to_bytes()
+        return world.warm_state().to_bytes()
 
 
 def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | None = None,
@@ -82,12 +87,15 @@ def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | Non
     the series a warm state records (``scenarios.warm_state.SETTLING_COLUMNS``)."""
     from scenarios.sumo_world import SumoWorld
 
-    spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
-                                                                 warm_up_s=duration_s))
+    if spec.road.kind == "sumo_config":  # from its begin
+        from scenarios.sumo_net.sumo_config import load_bundle
+
+        longer = {"enter_s": load_bundle(spec.road.config_file).begin_s + duration_s}
+    else:
+        longer = {"warm_up_s": duration_s}
+    spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic, **longer))
     with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
-        net = world.net_path()
-        return world.compute_warm_state(net, warm_key(spec, file_sha256(net)),
-                                        on_sample).settling
+        return world.compute_warm_state(world.warm_key(), on_sample).settling
 
 
 def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,

@@ -243,7 +243,8 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
               help="Print the suggestion as one JSON object on the last line.")
 def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
            as_json: bool) -> None:
-    """Watch a scenario's traffic warm up and suggest traffic.warm_up_s.
+    """Watch a scenario's traffic warm up and suggest traffic.warm_up_s (on a
+    sumo_config road: traffic.enter_s, on the configuration's clock).
 
     SUMO runs the scenario's background traffic alone (no ego, no obstacles) for
     --for seconds, recording every simulated second the vehicles in the network,
@@ -282,27 +283,32 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
         sys.exit(EXIT_INTERRUPTED)
     frame = pd.DataFrame(series)
     suggestion = suggest_warm_up_s(frame)
+    # a configuration's warm-up runs on SUMO's clock to traffic.enter_s
+    field = "enter_s" if spec.road.kind == "sumo_config" else "warm_up_s"
+    current_s = getattr(spec.traffic, field)
     out = out or Path(f"{spec.scenario.name}-settling.png")
     out.write_bytes(settling_figure(frame, suggestion, f"{spec.scenario.name}: traffic "
-                                    "warming up", current_warm_up_s=spec.traffic.warm_up_s))
+                                    "warming up", current_warm_up_s=current_s))
     frame.to_csv(out.with_suffix(".csv"), index=False)
-    for line in settle_lines(suggestion, spec.traffic.warm_up_s):
+    for line in settle_lines(suggestion, current_s, f"traffic.{field}"):
         click.echo(line)
     click.echo(f"plot: {out}; the series: {out.with_suffix('.csv')}")
     if as_json:
         click.echo(json.dumps(suggestion))
 
 
-def settle_lines(suggestion: dict, current_s: float) -> list[str]:
-    """What ``sdc settle`` prints: each measure's settling time and the suggestion."""
+def settle_lines(suggestion: dict, current_s: float,
+                 field: str = "traffic.warm_up_s") -> list[str]:
+    """What ``sdc settle`` prints: each measure's settling time and the suggestion for
+    ``field`` (``traffic.enter_s`` on a configuration's clock)."""
     lines = [f"{name}: settled after {m['truncation_s']:.0f} s"
              if m["settled"] else f"{name}: still changing" for name, m in
              suggestion["measures"].items()]
     if suggestion["settled"]:
-        lines.append(f"suggested traffic.warm_up_s = {suggestion['warm_up_s']:.0f} "
+        lines.append(f"suggested {field} = {suggestion['warm_up_s']:.0f} "
                      f"({suggestion['rule']}; the spec has {current_s:g})")
     else:
-        lines.append(f"not settled within {suggestion['observed_s']:.0f} s: warm_up_s of at "
+        lines.append(f"not settled within {suggestion['observed_s']:.0f} s: {field} of at "
                      f"least {suggestion['warm_up_at_least_s']:.0f}; watch longer (--for)")
     return lines
 

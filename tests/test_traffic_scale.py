@@ -66,7 +66,7 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
         first = sim.snapshot.traffic_boxes
         assert len(first) >= 4  # traffic on every side from the first step
         ego_lane = np.abs(first[:, 1] - road.lane_center_d_m(1)) < 1.75
-        assert not in_start_zone(spec, road, first[ego_lane, :2]).any()
+        assert not in_start_zone(spec, road, first[ego_lane, :2], first[ego_lane, 3]).any()
         radius = sensing_radius_m(spec)
         for _ in range(60):
             distances = np.hypot(*(sim.snapshot.traffic_boxes[:, :2] - sim.box[:2]).T)

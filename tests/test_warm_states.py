@@ -114,11 +114,11 @@ def test_a_warm_state_made_for_other_traffic_is_refused(tmp_path, monkeypatch):
     spec = town(warm_seed=2)
     world = SumoWorld(spec, make_road(spec), warm_state=other)
     with pytest.raises(SdcError, match="made for other traffic"):
-        world.warm_state(TOWN_NET)
+        world.warm_state()
     broken = tmp_path / "broken.zip"
     broken.write_bytes(b"not a zip")
     with pytest.raises(SdcError, match="broken.zip: cannot be read"):
-        SumoWorld(spec, make_road(spec), warm_state=broken).warm_state(TOWN_NET)
+        SumoWorld(spec, make_road(spec), warm_state=broken).warm_state()
 
 
 SWEEP = """[sweep]

@@ -18,7 +18,7 @@ from pathlib import Path
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError
 from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import RoadSpec
+from scenarios.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
 
 EDGE_ID = "road"
 
@@ -28,6 +28,16 @@ def sumo_binary(name: str) -> str:
     import sumo  # the eclipse-sumo package
 
     return str(Path(sumo.SUMO_HOME) / "bin" / name)
+
+
+def input_path(text: str) -> Path:
+    """The file a spec's path names: ``sumo:<path>`` inside SUMO's installation, else
+    the path itself."""
+    if text.startswith(SUMO_HOME_PREFIX):
+        import sumo  # the eclipse-sumo package
+
+        return Path(sumo.SUMO_HOME) / text.removeprefix(SUMO_HOME_PREFIX)
+    return Path(text)
 
 
 def sumo_load_error(net_path: Path) -> str | None:
@@ -84,7 +94,17 @@ def network_file_name(road: RoadSpec) -> str:
 def network_file(road: RoadSpec, cache_dir: Path | None = None) -> Path:
     """The ``.net.xml`` SUMO runs ``road`` on: a ``sumo_net`` road's own file, or the
     network built for a built-in road (:func:`build_network`)."""
-    return Path(road.net_file) if road.kind == "sumo_net" else build_network(road, cache_dir)
+    return input_path(road.net_file) if road.kind == "sumo_net" else build_network(road, cache_dir)
+
+
+def source_sha256(road: RoadSpec, cache_dir: Path | None = None) -> str:
+    """The sha256 of what SUMO runs ``road`` on, the identity of its warm states: a
+    configuration's content (``sumo_config``), else its network file's."""
+    if road.kind == "sumo_config":
+        from scenarios.sumo_net.sumo_config import load_bundle
+
+        return load_bundle(road.config_file).sha256
+    return hashlib.sha256(network_file(road, cache_dir).read_bytes()).hexdigest()
 
 
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:

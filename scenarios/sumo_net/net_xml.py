@@ -95,7 +95,11 @@ def read_net(path: str | Path) -> NetFile:
     """Parse ``path`` (plain or gzipped; ``sha256`` is of the file's bytes); a file
     that cannot be read, is not XML or not a SUMO network is a :class:`FileError`."""
     path = Path(path)
-    data = read_bytes(path, "the SUMO network")
+    return parse_net(read_bytes(path, "the SUMO network"), path)
+
+
+def parse_net(data: bytes, path: Path) -> NetFile:
+    """:func:`read_net` of the bytes ``data`` of the file ``path`` (named in errors)."""
     try:
         root = ET.fromstring(unzipped(path, data, "the SUMO network"))
     except ET.ParseError as e:

@@ -28,9 +28,20 @@ from scenarios.bodies import VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.sumo_net.build import input_path
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
-from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, NetFile, NetLane, Turn, read_net
+from scenarios.sumo_net.net_xml import (
+    STRAIGHT,
+    U_TURN,
+    NetFile,
+    NetLane,
+    Turn,
+    parse_net,
+    read_net,
+)
+from scenarios.sumo_net.sumo_config import FIELD as CONFIG_FIELD
+from scenarios.sumo_net.sumo_config import load_bundle
 
 #: tries at drawing a route that long before giving up (dead ends cut walks short)
 ROUTE_TRIES = 50
@@ -242,10 +253,17 @@ def _save(path: Path, array: np.ndarray) -> None:
         np.save(f, array)
 
 
-def read_network_file(spec: ScenarioSpec) -> NetFile:
-    """The spec's network file; a missing, unreadable or foreign file is a
-    :class:`SpecError` naming ``road.net_file``."""
-    path = Path(spec.road.net_file)
+def road_network(road: RoadSpec) -> NetFile:
+    """The road's network: its file, or its configuration's; a missing, unreadable or
+    foreign file is a :class:`SpecError` naming ``road.net_file`` or
+    ``road.config_file``."""
+    if road.kind == "sumo_config":
+        bundle = load_bundle(road.config_file)
+        try:
+            return parse_net(bundle.files[bundle.net_name], Path(bundle.net_name))
+        except SdcError as e:
+            raise SpecError(CONFIG_FIELD, str(e)) from None
+    path = input_path(road.net_file)
     if not path.exists():
         raise SpecError("road.net_file", f"no such file: {path}")
     try:
@@ -260,7 +278,7 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     Raises :class:`SpecError` naming the field when the file is bad or the network
     cannot hold the scenario (an obstacle off the drivable area).
     """
-    net = read_network_file(spec)
+    net = road_network(spec.road)
     try:
         route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
                            spec.road.route_turns,

@@ -3,7 +3,9 @@ hashed once on the driver, so every worker, on any node, runs on exactly the
 driver's bytes.
 
 A run of a ``sumo_net`` road reads ``road.net_file`` and that network's road
-edges (cached beside the built networks); a SUMO run of a built-in road reads
+edges (cached beside the built networks), one of a ``sumo_config`` road its
+configuration as one bundle (``scenarios/sumo_net/sumo_config.py``) and the road
+edges; a SUMO run of a built-in road reads
 the network netconvert built for it on the driver; a ``file.py:Class``
 controller reads its file; a run with a warm-up starts from its warm state, once
 the driver has it (:mod:`sdc.batch.warm_states`). Each is a :class:`JobFile`:
@@ -23,8 +25,9 @@ from scenarios.controller_ref import controller_kind
 from scenarios.errors import SdcError
 from scenarios.file_read import read_bytes
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.build import build_network, input_path
 from scenarios.sumo_net.route_road import edges_cache_path
+from scenarios.sumo_net.sumo_config import BUNDLE_SUFFIX, load_bundle
 from scenarios.warm_state import cached_path, uses_warm_state, warm_key
 from scenarios.world_backends import prepare_network
 
@@ -38,7 +41,8 @@ WARM_STATE_FIELD = "warm state"
 class JobFile:
     """One file a run reads besides its spec, identified by its content."""
 
-    field: str  # what names it: road.net_file, controller.name, or one of CACHED_FIELDS
+    field: str  # what names it: road.net_file, road.config_file, controller.name, or one
+    # of CACHED_FIELDS
     driver_path: str  # where the driver read it; never opened by a worker
     sha256: str
     name: str  # the copy's file name (a cached file's: the name the run looks it up by)
@@ -76,21 +80,37 @@ class FileCatalog:
     def _read(self, field: str, path: Path, what: str, name: str | None = None) -> JobFile:
         key = str(path)
         if key not in self._by_path:
-            data = read_bytes(path, what)
-            digest = sha256_hex(data)
-            self._payloads[digest] = data
-            self._by_path[key] = JobFile(field, key, digest, name or path.name)
+            self._add(field, key, read_bytes(path, what), name or path.name)
         return self._by_path[key]
+
+    def _add(self, field: str, key: str, data: bytes, name: str) -> JobFile:
+        digest = sha256_hex(data)
+        self._payloads[digest] = data
+        self._by_path[key] = JobFile(field, key, digest, name)
+        return self._by_path[key]
+
+    def _network_files(self, road: RoadSpec) -> tuple[JobFile, str]:
+        """A network road's own file (a configuration travels as its bundle) and the
+        sha256 of its network."""
+        if road.kind == "sumo_config":
+            bundle = load_bundle(road.config_file)
+            stem = input_path(road.config_file).stem
+            main = self._by_path.get(road.config_file) or self._add(
+                "road.config_file", road.config_file, bundle.to_bytes(),
+                f"{stem}{BUNDLE_SUFFIX}")
+            return main, sha256_hex(bundle.files[bundle.net_name])
+        main = self._read("road.net_file", input_path(road.net_file), "the SUMO network")
+        return main, main.sha256
 
     def _road_files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
         road = spec.road
-        if road.kind == "sumo_net":
+        if road.on_network:
             if road not in self._by_road:
                 prepare_network(road, self.cache_dir)  # caches its road edges
-                net = self._read("road.net_file", Path(road.net_file), "the SUMO network")
-                edges = edges_cache_path(net.sha256, self.cache_dir)
-                self._by_road[road] = (net,) + ((self._read("road edges", edges, "road edges"),)
-                                                if edges.is_file() else ())
+                main, net_sha256 = self._network_files(road)
+                edges = edges_cache_path(net_sha256, self.cache_dir)
+                self._by_road[road] = (main,) + ((self._read("road edges", edges, "road edges"),)
+                                                 if edges.is_file() else ())
             return self._by_road[road]
         if spec.scenario.backend != "sumo":
             return ()
@@ -103,6 +123,8 @@ class FileCatalog:
         """The key of the warm state a run of ``spec`` starts from (None: none)."""
         if not uses_warm_state(spec):
             return None
+        if spec.road.kind == "sumo_config":  # its content, not its bundle's bytes
+            return warm_key(spec, load_bundle(spec.road.config_file).sha256)
         return warm_key(spec, self._road_files(spec)[0].sha256)
 
     def files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:

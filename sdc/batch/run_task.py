@@ -72,7 +72,7 @@ def task_timeout_row(task: RunTask, error: str, wall_time_s: float) -> dict:
 
 def _record_driver_paths(metadata: dict, spec: ScenarioSpec) -> None:
     metadata["spec"] = spec.to_plain()
-    if "net_file" in metadata["road"]:
+    if "net_file" in metadata["road"] and spec.road.net_file is not None:
         metadata["road"]["net_file"] = spec.road.net_file
 
 

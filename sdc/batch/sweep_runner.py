@@ -25,6 +25,7 @@ from analysis.stats import STATUSES
 from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
+from scenarios.sumo_net.sumo_config import config_manifest
 from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.warm_state import SETTLING_FILE
 from scenarios.world_backends import prepare_network
@@ -142,6 +143,8 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int) -> dict
         "samples": samples,
         "versions": package_versions(),
         "traffic_model": traffic_model.description(),
+        # a sumo_config road: the options of its configuration applied, overridden, not
+        "sumo_config": config_manifest(sweep.base.road),
         "controllers": controller_sources(sweep.controllers),
         "files": {},  # what travels with the job: driver path -> field, sha256
         "git": git_state(),

@@ -84,9 +84,10 @@ class WorkerFiles:
             path = self.ensure(file, fetch)
             if file.cached:  # a run uses one at most: a built network, or a net's edges
                 cache_dir = path.parent
-            elif file.field == "road.net_file":
+            elif file.field in ("road.net_file", "road.config_file"):
+                name = file.field.removeprefix("road.")
                 spec = dataclasses.replace(spec, road=dataclasses.replace(
-                    spec.road, net_file=str(path)))
+                    spec.road, **{name: str(path)}))
             elif file.field == WARM_STATE_FIELD:
                 task = dataclasses.replace(task, warm_state=path)
             elif file.field == "controller.name":
