@@ -154,3 +154,68 @@ def test_turns_tighter_than_the_car_can_drive_are_left_out(name):
             assert (turn in kept) == (radius_m >= X5_TURN_RADIUS_M)
             tight += radius_m < X5_TURN_RADIUS_M
     assert tight >= 10
+
+
+#: centre-line points this close to a lane's start or end sit where it meets a
+#: junction, whose outline's corners come closer than a lane's half width [m]
+LANE_END_M = 3.0
+
+
+def centre_points(lane, step_m: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Points every ``step_m`` along a lane's centre line, and their distance to the
+    nearer of its ends."""
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(lane.shape_xy, axis=0).T))])
+    at = np.arange(0.0, along[-1], step_m)
+    points = np.column_stack([np.interp(at, along, lane.shape_xy[:, 0]),
+                              np.interp(at, along, lane.shape_xy[:, 1])])
+    return points, np.minimum(at, along[-1] - at)
+
+
+def crossed_by_another_road(net, lane, point: np.ndarray) -> bool:
+    """Does a lane of another road (not this lane's edge, not a junction lane) pass
+    within a lane's width of ``point``: a bridge over it, or a road beside it that
+    overlaps (a slip road merging), whose kerb lies across this lane in the plane?"""
+    for other in net.lanes.values():
+        if other.internal or other.edge == lane.edge:
+            continue
+        seg = other.shape_xy
+        a, b = seg[:-1], seg[1:]
+        ab = b - a
+        t = np.clip(np.einsum("ij,ij->i", point - a, ab) / np.maximum(
+            np.einsum("ij,ij->i", ab, ab), 1e-12), 0.0, 1.0)
+        if np.min(np.hypot(*(a + t[:, None] * ab - point).T)) < lane.width_m:
+            return True
+    return False
+
+
+@pytest.mark.parametrize("name, allowed", [("A10KW/osm.net.xml", 0.005),
+                                           ("bs3d/bs.net.xml", 0.01),
+                                           ("fkk_in/ingolstadt.net.xml.gz", 0.005),
+                                           ("square/square.net.xml", 0.0)])
+def test_road_edges_lie_where_the_lanes_end(name, allowed):
+    """Every point of a lane open to cars lies in the drivable area; on lanes outside
+    junctions, each is at least half the lane's width less 5 cm from the nearest road
+    edge, but within 3 m of the lane's ends (junction corners) or where another road
+    crosses or overlaps it in the plane (a bridge, a merging slip road). Those
+    exceptions are a small share of the points (``allowed``), and counted."""
+    from scenarios.sumo_net.route_road import network_area
+
+    net = read_net(GAME_DIR / name)
+    area = network_area(net)
+    points_in_all = too_close = at_ends = crossed = 0
+    for lane in net.lanes.values():
+        if not lane.passenger:
+            continue
+        points, to_end_m = centre_points(lane)
+        assert area.contains(points).all(), lane.id
+        if lane.internal:
+            continue
+        points_in_all += len(points)
+        close = area.edge_gaps_m(points) < lane.width_m / 2 - 0.05
+        too_close += int(close.sum())
+        at_ends += int((close & (to_end_m <= LANE_END_M)).sum())
+        for point in points[close & (to_end_m > LANE_END_M)]:
+            assert crossed_by_another_road(net, lane, point), (lane.id, point)
+            crossed += 1
+    assert too_close == at_ends + crossed
+    assert too_close <= allowed * points_in_all, (too_close, points_in_all)

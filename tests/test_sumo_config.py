@@ -243,3 +243,22 @@ seed = 1\ncontrollers = ["avoid"]\n[sweep.params]\n"ego.speed_mps" = { uniform =
     for row in rows.itertuples():
         replay = CliRunner().invoke(main, ["replay", str(out), "--run", row.run_id, "--verify"])
         assert replay.exit_code == 0, replay.output
+
+
+@pytest.mark.slow
+def test_the_real_scenarios_family_runs_on_each_of_its_configurations(tmp_path):
+    """The catalog's family over SUMO's own scenarios (sumo: paths into its
+    installation): every run ends ok, on each of the three configurations, and no
+    collision comes in the first second."""
+    from scenarios import CATALOG_DIR
+
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, [
+        "sweep", str(CATALOG_DIR / "sweeps" / "real-scenarios.toml"), "--out", str(out),
+        "--samples", "3", "--workers", "2", "--quiet"])
+    assert result.exit_code in (0, 1), result.output
+    rows = pd.read_parquet(out / "results.parquet")
+    assert (rows.status == "ok").all() and len(rows) == 9
+    assert rows["p.road.config_file"].nunique() == 3
+    early = rows.collision.astype(bool) & (rows.collision_time_s <= 1.0)
+    assert not early.any()
