@@ -88,6 +88,9 @@ class RoadSpec(Spec):
     #: sumo_net: "straight" goes straight on at every junction where its lane can
     #: (turning only where it must), "any" takes a random turn at each
     route_turns: Literal["straight", "any"] = "straight"
+    #: sumo_net and sumo_config: the ego's route pinned, as SUMO edge ids in order
+    #: (default: drawn from the seed)
+    route_edges: tuple[str, ...] | None = None
     see_edges: bool = True
 
     @property
@@ -575,11 +578,12 @@ def _check_road_kind(spec: ScenarioSpec) -> None:
     road, traffic = spec.road, spec.traffic
     own = {"road.net_file": ("sumo_net",), "traffic.vehicles": ("sumo_net",),
            "road.config_file": ("sumo_config",), "traffic.enter_s": ("sumo_config",),
-           "road.route_turns": NETWORK_KINDS}
+           "road.route_turns": NETWORK_KINDS, "road.route_edges": NETWORK_KINDS}
     given = {"road.net_file": road.net_file is not None, "traffic.vehicles": traffic.vehicles > 0,
              "road.config_file": road.config_file is not None,
              "traffic.enter_s": traffic.enter_s > 0,
-             "road.route_turns": road.route_turns != "straight"}
+             "road.route_turns": road.route_turns != "straight",
+             "road.route_edges": road.route_edges is not None}
     for field, kinds in own.items():
         if given[field] and road.kind not in kinds:
             names = " or ".join(f'"{k}"' for k in kinds)

@@ -47,6 +47,11 @@ def _coerce(value: Any, tp) -> Any:
             return None
         (inner,) = [a for a in options if a is not type(None)]
         return _coerce(value, inner)
+    if origin is tuple:  # tuple[X, ...]: a list of X
+        (inner, _) = typing.get_args(tp)
+        if not isinstance(value, list | tuple) or not value:
+            raise ValueError(f"must be a non-empty list, got {value!r}")
+        return tuple(_coerce(item, inner) for item in value)
     if origin is Literal:
         if value not in typing.get_args(tp) or isinstance(value, bool):
             raise ValueError(f"must be one of {_type_name(tp)}, got {value!r}")

@@ -219,3 +219,49 @@ def test_road_edges_lie_where_the_lanes_end(name, allowed):
             crossed += 1
     assert too_close == at_ends + crossed
     assert too_close <= allowed * points_in_all, (too_close, points_in_all)
+
+
+def test_a_pinned_route_is_driven_as_given():
+    """The edges of a drawn route, pinned, give the same lanes back."""
+    from scenarios.sumo_net.route_road import ROUTE, draw_route, pinned_route, scenario_stream
+
+    net = read_net(GAME_DIR / "A10KW" / "osm.net.xml")
+    for seed in range(5):
+        route = draw_route(net, scenario_stream(seed, ROUTE), 400.0, "any", X5_TURN_RADIUS_M)
+        edges = []
+        for lane in route:
+            if not lane.internal and (not edges or edges[-1] != lane.edge):
+                edges.append(lane.edge)
+        pinned = pinned_route(net, tuple(edges), X5_TURN_RADIUS_M)
+        assert [lane.edge for lane in pinned] == [lane.edge for lane in route]
+
+
+@pytest.mark.parametrize("edges, message", [
+    (("6272844#4", "5067107#1"), "every turn from edge '6272844#4' to edge '5067107#1' is "
+                                 "tighter than the car's turning circle"),
+    (("6272844#4", "nowhere"), "edge 'nowhere' is not in the network"),
+    (("6272844#4", "151495018"), "edge '6272844#4' does not lead to edge '151495018'"),
+])
+def test_a_pinned_route_a_car_cannot_drive_is_bad_input_naming_the_edge(edges, message):
+    from scenarios.errors import SpecError
+    from scenarios.sumo_net.route_road import pinned_route
+
+    net = read_net(GAME_DIR / "A10KW" / "osm.net.xml")
+    with pytest.raises(SpecError, match=message.replace("(", r"\(")) as raised:
+        pinned_route(net, edges, X5_TURN_RADIUS_M)
+    assert raised.value.field == "road.route_edges"
+
+
+def test_the_command_line_names_a_bad_pinned_route(tmp_path, lesson_plain):
+    from click.testing import CliRunner
+
+    from scenarios.toml_io import dumps_plain
+    from sdc.cli import main
+
+    plain = real_net_spec(lesson_plain, GAME_DIR / "A10KW" / "osm.net.xml")
+    plain["road"]["route_edges"] = ["6272844#4", "5067107#1"]
+    path = tmp_path / "pinned.toml"
+    path.write_text(dumps_plain(plain))
+    result = CliRunner().invoke(main, ["run", str(path)])
+    assert result.exit_code == 2 and "road.route_edges" in result.output
+    assert "'6272844#4'" in result.output and "Traceback" not in result.output

@@ -129,6 +129,10 @@ def test_a_configuration_takes_no_flows_random_trips_or_warm_up():
     plain["road"] = {"kind": "straight", "length_m": 100.0, "lanes": 1}
     with pytest.raises(SpecError, match='only applies to road kind "sumo_config"'):
         ScenarioSpec.from_plain(plain)
+    plain["traffic"] = {}
+    plain["road"]["route_edges"] = ["a", "b"]
+    with pytest.raises(SpecError, match='only applies to road kind "sumo_net" or "sumo_config"'):
+        ScenarioSpec.from_plain(plain)
 
 
 def start_overlaps(episode) -> bool:

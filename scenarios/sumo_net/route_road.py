@@ -151,6 +151,64 @@ def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
                    "(dead ends everywhere?); try a shorter road.length_m")
 
 
+ROUTE_FIELD = "road.route_edges"
+
+
+def _why_not(net: NetFile, edge: str, to: str, min_radius_m: float) -> str:
+    """Why no lane of ``edge`` leads on to ``to`` in a way a car can drive."""
+    lanes = [lane for lane in net.lanes.values() if lane.edge == edge and not lane.internal]
+    turns = [t for lane in lanes for t in net.turns.get(lane.id, ()) if net.lanes[t.to].edge == to]
+    if not turns:
+        return f"edge {edge!r} does not lead to edge {to!r}"
+    if all(t.direction == U_TURN for t in turns):
+        return f"edge {edge!r} leads to edge {to!r} by a U-turn only"
+    if not any(all(net.lanes[v].passenger for v in (*t.via, t.to)) for t in turns):
+        return f"edge {edge!r} leads to edge {to!r} on lanes closed to passenger cars only"
+    return (f"every turn from edge {edge!r} to edge {to!r} is tighter than the car's turning "
+            f"circle ({min_radius_m:.1f} m)")
+
+
+def pinned_route(net: NetFile, edges: tuple[str, ...], min_radius_m: float) -> list[NetLane]:
+    """The lanes (junction lanes included) of the route through ``edges`` in order: from
+    the rightmost lane of the first edge that leads through all of them, by turns a car
+    can drive (:func:`drivable_turns`). One it cannot drive is a :class:`SpecError`
+    naming ``road.route_edges`` and the edge."""
+    known = {lane.edge for lane in net.lanes.values() if not lane.internal}
+    for edge in edges:
+        if edge not in known:
+            raise SpecError(ROUTE_FIELD, f"edge {edge!r} is not in the network {net.path}")
+
+    def onward(lane: NetLane, i: int) -> list[NetLane] | None:
+        if i == len(edges) - 1:
+            return [lane]
+        for turn in drivable_turns(net, lane, min_radius_m):
+            if net.lanes[turn.to].edge == edges[i + 1]:
+                rest = onward(net.lanes[turn.to], i + 1)
+                if rest is not None:
+                    return [lane, *(net.lanes[v] for v in turn.via), *rest]
+        return None
+
+    starts = sorted((lane for lane in net.normal_lanes() if lane.edge == edges[0]),
+                    key=lambda lane: lane.index)
+    if not starts:
+        raise SpecError(ROUTE_FIELD, f"edge {edges[0]!r} has no lane open to passenger cars")
+    for start in starts:
+        route = onward(start, 0)
+        if route is not None:
+            return route
+    reach = 0  # how far along the edges some lane gets: the first step no lane takes
+    for i in range(1, len(edges)):
+        lanes = [lane for lane in net.normal_lanes() if lane.edge == edges[i - 1]]
+        if not any(net.lanes[t.to].edge == edges[i] for lane in lanes
+                   for t in drivable_turns(net, lane, min_radius_m)):
+            reach = i
+            break
+    if reach:
+        raise SpecError(ROUTE_FIELD, _why_not(net, edges[reach - 1], edges[reach], min_radius_m))
+    raise SpecError(ROUTE_FIELD, "no single lane leads through every edge in order (the route "
+                    "would need a lane change on an edge)")
+
+
 def _joined(shapes: list[np.ndarray]) -> np.ndarray:
     """One polyline through consecutive shapes, repeated points dropped."""
     points = np.vstack(shapes)
@@ -279,12 +337,19 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     cannot hold the scenario (an obstacle off the drivable area).
     """
     net = road_network(spec.road)
-    try:
-        route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE), spec.road.length_m,
-                           spec.road.route_turns,
-                           VEHICLE_MODELS[spec.vehicle.model].min_turn_radius_m)
-    except SdcError as e:
-        raise SpecError("road.length_m", str(e)) from None
+    min_radius_m = VEHICLE_MODELS[spec.vehicle.model].min_turn_radius_m
+    if spec.road.route_edges is not None:
+        route = pinned_route(net, spec.road.route_edges, min_radius_m)
+        route_m = sum(lane.length_m for lane in route)
+        if route_m < spec.road.length_m:
+            raise SpecError("road.length_m", f"{spec.road.length_m} is longer than the pinned "
+                            f"route (road.route_edges: {route_m:.1f} m)")
+    else:
+        try:
+            route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE),
+                               spec.road.length_m, spec.road.route_turns, min_radius_m)
+        except SdcError as e:
+            raise SpecError("road.length_m", str(e)) from None
     road = NetworkRoad(net, route, network_area(net, cache_dir))
     for i, obstacle in enumerate(spec.obstacles):
         s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
