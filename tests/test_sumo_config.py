@@ -28,6 +28,7 @@ from scenarios.sumo_net.sumo_config import (
     read_config,
     seconds,
 )
+from scenarios.world_backends import make_road
 from sdc.car.geometry import boxes_overlap
 from sdc.cli import main
 from sdc.run.episode import run_episode
@@ -266,3 +267,11 @@ def test_the_real_scenarios_family_runs_on_each_of_its_configurations(tmp_path):
     assert rows["p.road.config_file"].nunique() == 3
     early = rows.collision.astype(bool) & (rows.collision_time_s <= 1.0)
     assert not early.any()
+
+
+def test_a_configuration_without_lanes_for_cars_is_bad_input():
+    """SUMO's rail demo: its network has tracks only."""
+    plain = config_plain("rail", enter_s=10.0)
+    with pytest.raises(SpecError, match="no lane open to passenger cars") as raised:
+        make_road(ScenarioSpec.from_plain(plain))
+    assert raised.value.field == "road.config_file"

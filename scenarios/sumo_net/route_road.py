@@ -2,7 +2,8 @@
 drivable area for road edges.
 
 The route is drawn from the seed: a lane outside junctions open to passenger
-cars (chance in proportion to its length), then at every junction one of the
+cars, long enough to hold the ego where it starts (chance in proportion to its
+length), then at every junction one of the
 lane's turns (straight on where it can with ``road.route_turns = "straight"``),
 through the junction's own lanes, until the route is ``road.length_m`` long.
 Never a U-turn, a lane closed to passenger cars (rail, footway, bike or bus
@@ -126,11 +127,14 @@ def drivable_turns(net: NetFile, lane: NetLane, min_radius_m: float) -> list[Tur
 
 
 def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
-               turns: str = "straight", min_radius_m: float = 0.0) -> list[NetLane]:
+               turns: str = "straight", min_radius_m: float = 0.0,
+               first_lane_m: float = 0.0) -> list[NetLane]:
     """Lanes (junction lanes included) of a route at least ``length_m`` long;
     ``turns`` is ``road.route_turns``; no turn on it is tighter than ``min_radius_m``
-    (:func:`drivable_turns`)."""
-    starts = net.normal_lanes()
+    (:func:`drivable_turns`); its first lane at least ``first_lane_m`` long where the
+    network has such lanes (the ego starts on it, not inside the junction after it)."""
+    starts = ([lane for lane in net.normal_lanes() if lane.length_m >= first_lane_m]
+              or net.normal_lanes())
     weights = np.array([lane.length_m for lane in starts])
     for _ in range(ROUTE_TRIES):
         lane = starts[rng.choice(len(starts), p=weights / weights.sum())]
@@ -337,6 +341,11 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     cannot hold the scenario (an obstacle off the drivable area).
     """
     net = road_network(spec.road)
+    if not net.normal_lanes():
+        field = "road.config_file" if spec.road.kind == "sumo_config" else "road.net_file"
+        raise SpecError(field, f"{getattr(spec.road, field.removeprefix('road.'))}: its "
+                        "network has no lane open to passenger cars (a rail or footway "
+                        "network?)")
     min_radius_m = VEHICLE_MODELS[spec.vehicle.model].min_turn_radius_m
     if spec.road.route_edges is not None:
         route = pinned_route(net, spec.road.route_edges, min_radius_m)
@@ -346,8 +355,10 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
                             f"route (road.route_edges: {route_m:.1f} m)")
     else:
         try:
+            first_lane_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
             route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE),
-                               spec.road.length_m, spec.road.route_turns, min_radius_m)
+                               spec.road.length_m, spec.road.route_turns, min_radius_m,
+                               first_lane_m)
         except SdcError as e:
             raise SpecError("road.length_m", str(e)) from None
     road = NetworkRoad(net, route, network_area(net, cache_dir))
