@@ -169,6 +169,7 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
                      if SPEED in counted.columns else []),
         "gate": None if fail_above is None else gate(counted, controllers, fail_above, method),
         "traffic_model": manifest.get("traffic_model"),
+        "sumo_config": manifest.get("sumo_config"),
         "world": world_summary(counted),
     }
 
@@ -208,6 +209,13 @@ def world_lines(summary: dict) -> list[str]:
     overlapped: a world that made something up), and each controller's collisions
     split into those it ran into and those in which it was hit."""
     lines = [f"Traffic model: {summary.get('traffic_model') or 'not recorded'}."]
+    configs = summary.get("sumo_config") or []
+    for config in [configs] if isinstance(configs, dict) else configs:
+        overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
+        lines.append(f"SUMO configuration {config['file']}: its own demand from "
+                     f"{config['begin_s']:g} s; overridden by the run: "
+                     f"{overridden or 'nothing'}; not applied: "
+                     f"{', '.join(config['not_applied']) or 'nothing'}.")
     world = summary.get("world", {"recorded": False})
     if not world["recorded"]:
         return lines + ["World audit: not recorded (the sweep predates it)."]

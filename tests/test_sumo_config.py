@@ -238,9 +238,11 @@ seed = 1\ncontrollers = ["avoid"]\n[sweep.params]\n"ego.speed_mps" = { uniform =
                                        "--quiet", "--traces", "all"])
     assert result.exit_code in (0, 1), result.output
     manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["sumo_config"]["overridden"] == {
+    (config,) = manifest["sumo_config"]
+    assert config["overridden"] == {
         "end": "1800", "step-length": "0.5", "time-to-teleport": "0", "no-step-log": "true"}
-    assert "tripinfo-output" not in manifest["sumo_config"]["applied"]
+    assert config["applied"] == {"ignore-route-errors": "true",
+                                 "device.rerouting.adaptation-steps": "180"}
     fields = {entry["field"] for entry in manifest["files"].values()}
     assert "road.config_file" in fields and "warm state" in fields
     rows = pd.read_parquet(out / "results.parquet")
@@ -265,6 +267,13 @@ def test_the_real_scenarios_family_runs_on_each_of_its_configurations(tmp_path):
     rows = pd.read_parquet(out / "results.parquet")
     assert (rows.status == "ok").all() and len(rows) == 9
     assert rows["p.road.config_file"].nunique() == 3
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert {c["file"] for c in manifest["sumo_config"]} == set(rows["p.road.config_file"])
+    report = CliRunner().invoke(main, ["report", str(out)])
+    assert report.exit_code in (0, 1), report.output
+    text = (out / "report.md").read_text()
+    for name in set(rows["p.road.config_file"]):
+        assert f"SUMO configuration {name}: its own demand from" in text
     early = rows.collision.astype(bool) & (rows.collision_time_s <= 1.0)
     assert not early.any()
 

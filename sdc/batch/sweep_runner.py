@@ -133,8 +133,10 @@ def make_dir(out_dir: Path) -> None:
         raise SdcError(f"--out: cannot create {out_dir}: {e.strerror or e}") from None
 
 
-def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int) -> dict:
-    """The manifest of a sweep that has not run yet."""
+def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
+                 roads: tuple = ()) -> dict:
+    """The manifest of a sweep that has not run yet (``roads``: its runs' road specs,
+    for what it records of their SUMO configurations; default the base's)."""
     return {
         "sweep": sweep.to_plain(),
         "base_scenario": sweep.base.to_plain(),
@@ -143,8 +145,9 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int) -> dict
         "samples": samples,
         "versions": package_versions(),
         "traffic_model": traffic_model.description(),
-        # a sumo_config road: the options of its configuration applied, overridden, not
-        "sumo_config": config_manifest(sweep.base.road),
+        # sumo_config roads: the options of each configuration applied, overridden, not
+        "sumo_config": [entry for road in dict.fromkeys(roads or (sweep.base.road,))
+                        if (entry := config_manifest(road)) is not None],
         "controllers": controller_sources(sweep.controllers),
         "files": {},  # what travels with the job: driver path -> field, sha256
         "git": git_state(),
@@ -166,7 +169,8 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
     plan_table = plan_table_of(plan, sweep)  # before the directory: nothing half-made
     make_dir(out_dir)
     write_atomic(Path(out_dir) / "plan.parquet", lambda tmp: pq.write_table(plan_table, tmp))
-    return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}))
+    return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}),
+                        tuple(r.spec.road for r in plan if r.spec is not None))
 
 
 def build_networks(tasks: list[RunTask], workers: int) -> None:
