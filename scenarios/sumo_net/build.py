@@ -43,9 +43,14 @@ def input_path(text: str) -> Path:
 def sumo_load_error(net_path: Path) -> str | None:
     """What goes wrong when SUMO loads the network ``net_path`` (None: nothing). In
     a process of its own: SUMO crashes on some networks it cannot use."""
-    proc = subprocess.run([sumo_binary("sumo"), "--net-file", str(net_path), "--end", "0",
-                           "--no-step-log", "true", "--no-warnings", "true"],
-                          capture_output=True, text=True, check=False)
+    return process_problem(subprocess.run(
+        [sumo_binary("sumo"), "--net-file", str(net_path), "--end", "0", "--no-step-log",
+         "true", "--no-warnings", "true"], capture_output=True, text=True, check=False))
+
+
+def process_problem(proc: subprocess.CompletedProcess) -> str | None:
+    """What went wrong in a finished SUMO process (None: nothing): the signal it
+    crashed on, or its error lines."""
     if proc.returncode == 0:
         return None
     if proc.returncode < 0:

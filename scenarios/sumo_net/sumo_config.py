@@ -32,7 +32,7 @@ from pathlib import Path
 
 from scenarios.errors import FileError, SpecError
 from scenarios.file_read import read_bytes, unzipped
-from scenarios.sumo_net.build import input_path
+from scenarios.sumo_net.build import input_path, process_problem
 
 FIELD = "road.config_file"
 #: the sections whose options a run applies (their files and begin aside)
@@ -368,9 +368,4 @@ def _sumo_load_error(bundle: ConfigBundle) -> str | None:
                                *bundle.sumo_arguments(paths, None), "--no-step-log", "true",
                                "--no-warnings", "true"],
                               capture_output=True, text=True, check=False, cwd=folder)
-    if proc.returncode == 0:
-        return None
-    if proc.returncode < 0:
-        return f"it crashes (signal {-proc.returncode})"
-    errors = [line for line in proc.stderr.splitlines() if line.startswith("Error")]
-    return "; ".join(errors)[-1000:] or f"sumo exits with status {proc.returncode}"
+    return process_problem(proc)
