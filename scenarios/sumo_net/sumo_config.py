@@ -11,10 +11,11 @@ GUI settings are not applied. :meth:`SumoConfig.manifest` says which options wer
 overridden and which left out.
 
 A configuration travels as one :class:`ConfigBundle`: its files' bytes under fixed
-names beside a description, packed in a zip whose sha256 identifies the whole
-configuration (for warm states and for the files a job ships to its workers). A
-run writes the bundle's files into its scratch folder, so whatever the demand's
-additional files write lands there.
+names beside a description, one zip a job ships to its workers; the sha256 of its
+content identifies the whole configuration (for warm states). A run writes the
+bundle's files into its scratch folder, so whatever the demand's additional files
+write lands there. A process packs a configuration file once while it is unchanged
+(the files it names are not watched).
 """
 
 from __future__ import annotations
