@@ -209,8 +209,7 @@ def world_lines(summary: dict) -> list[str]:
     overlapped: a world that made something up), and each controller's collisions
     split into those it ran into and those in which it was hit."""
     lines = [f"Traffic model: {summary.get('traffic_model') or 'not recorded'}."]
-    configs = summary.get("sumo_config") or []
-    for config in [configs] if isinstance(configs, dict) else configs:
+    for config in summary.get("sumo_config") or []:
         overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
         lines.append(f"SUMO configuration {config['file']}: its own demand from "
                      f"{config['begin_s']:g} s; overridden by the run: "

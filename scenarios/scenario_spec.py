@@ -99,6 +99,11 @@ class RoadSpec(Spec):
         return self.kind in NETWORK_KINDS
 
     @property
+    def network_field(self) -> str:
+        """The field naming what a network road is read from."""
+        return "road.net_file" if self.kind == "sumo_net" else "road.config_file"
+
+    @property
     def lane_count(self) -> int:
         """Lanes of the road (a sumo_net road is its route's one lane)."""
         return self.lanes or 1
@@ -592,9 +597,8 @@ def _check_road_kind(spec: ScenarioSpec) -> None:
         if road.lanes is None:
             raise SpecError("road.lanes", f'is required for kind "{road.kind}"')
         return
-    file_field = "road.net_file" if road.kind == "sumo_net" else "road.config_file"
-    if not given[file_field]:
-        raise SpecError(file_field, f'is required for kind "{road.kind}"')
+    if not given[road.network_field]:
+        raise SpecError(road.network_field, f'is required for kind "{road.kind}"')
     if road.lanes is not None:
         raise SpecError("road.lanes", f'a "{road.kind}" road is its route\'s own lane: leave '
                         "lanes out (every lane index is 0)")

@@ -60,21 +60,15 @@ def passenger_classes(count: int) -> np.ndarray:
 START_ZONE_BEHIND_M, START_ZONE_AHEAD_M = 30.0, 10.0
 
 
-def stop_need_m(speed_mps: np.ndarray, ego_speed_mps: float, ego_decel_mps2: float) -> np.ndarray:
-    """The gap [m] a follower at ``speed_mps`` needs behind the ego's rear to stop short
-    of it, should the ego brake at once as hard as it can."""
-    speed_mps = np.asarray(speed_mps, float)
-    brake_m = speed_mps**2 / (2 * TRAFFIC_DECEL_MPS2) - ego_speed_mps**2 / (2 * ego_decel_mps2)
-    return TRAFFIC_MIN_GAP_M + TRAFFIC_TAU_S * speed_mps + np.maximum(brake_m, 0.0)
-
-
-def ego_stop_need_m(ego_speed_mps: float, ego_decel_mps2: float,
-                    speed_mps: np.ndarray) -> np.ndarray:
-    """The gap [m] the ego needs behind a vehicle at ``speed_mps`` to stop short of it,
-    braking at once as hard as it can, should that vehicle brake at SUMO's default."""
-    brake_m = (ego_speed_mps**2 / (2 * ego_decel_mps2)
-               - np.asarray(speed_mps, float)**2 / (2 * TRAFFIC_DECEL_MPS2))
-    return TRAFFIC_MIN_GAP_M + np.maximum(brake_m, 0.0)
+def stop_need_m(follower_mps, follower_decel_mps2: float, leader_mps,
+                leader_decel_mps2: float, reaction_s: float) -> np.ndarray:
+    """The gap [m] a follower at ``follower_mps`` needs behind its leader to stop short
+    of it, reacting after ``reaction_s``, should the leader brake at once as hard as it
+    can (each at its own deceleration), :data:`TRAFFIC_MIN_GAP_M` to spare."""
+    follower_mps = np.asarray(follower_mps, float)
+    brake_m = (follower_mps**2 / (2 * follower_decel_mps2)
+               - np.asarray(leader_mps, float)**2 / (2 * leader_decel_mps2))
+    return TRAFFIC_MIN_GAP_M + reaction_s * follower_mps + np.maximum(brake_m, 0.0)
 
 
 def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray,
@@ -83,9 +77,9 @@ def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray
     ego enters the road, in its lane or a neighbouring one (a bool mask): their body
     within :data:`START_ZONE_BEHIND_M` behind the ego's rear or
     :data:`START_ZONE_AHEAD_M` ahead of its front, or overlapping it; and with their
-    ``speeds_mps``, any behind it too close to stop should it brake at once
-    (:func:`stop_need_m`) or ahead of it too close for it to stop should they
-    (:func:`ego_stop_need_m`)."""
+    ``speeds_mps``, any behind it too close to stop should it brake at once (SUMO's
+    defaults: :func:`stop_need_m`) or ahead of it too close for it to stop, braking at
+    once, should they brake."""
     if len(centers_xy) == 0:
         return np.zeros(0, bool)
     s_m, d_m = road.to_frenet(np.asarray(centers_xy, float).reshape(-1, 2))
@@ -95,8 +89,10 @@ def in_start_zone(spec: ScenarioSpec, road: RoadGeometry, centers_xy: np.ndarray
     ahead_m = np.full(len(s_m), START_ZONE_AHEAD_M)
     if speeds_mps is not None:
         decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
-        behind_m = np.maximum(behind_m, stop_need_m(speeds_mps, ego.speed_mps, decel))
-        ahead_m = np.maximum(ahead_m, ego_stop_need_m(ego.speed_mps, decel, speeds_mps))
+        behind_m = np.maximum(behind_m, stop_need_m(speeds_mps, TRAFFIC_DECEL_MPS2,
+                                                    ego.speed_mps, decel, TRAFFIC_TAU_S))
+        ahead_m = np.maximum(ahead_m, stop_need_m(ego.speed_mps, decel, speeds_mps,
+                                                  TRAFFIC_DECEL_MPS2, 0.0))
     ego_rear_m, ego_front_m = ego.start_m - model.length_m / 2, ego.start_m + model.length_m / 2
     return ((np.abs(d_m - road.lane_center_d_m(ego.lane)) < 1.5 * road.lane_width_m)
             & (s_m + half_m >= ego_rear_m - behind_m)

@@ -361,8 +361,8 @@ class SumoWorld:
                              *self.sumo_options)
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
-        model = VEHICLE_MODELS[self.spec.vehicle.model]
-        _, lane, front_m = _sumo_place(self.road, ego.lane, ego.start_m + model.length_m / 2)
+        _, lane, front_m = _sumo_place(self.road, ego.lane,
+                                       ego.start_m + self._model.length_m / 2)
         sim.vehicle.add(EGO_ID, "r0", typeID=EGO_TYPE, depart="now", departLane=str(lane),
                         departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
         sim.vehicle.setSpeedMode(EGO_ID, 0)

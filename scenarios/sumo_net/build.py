@@ -19,6 +19,7 @@ from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
+from scenarios.warm_state import file_sha256
 
 EDGE_ID = "road"
 
@@ -109,7 +110,7 @@ def source_sha256(road: RoadSpec, cache_dir: Path | None = None) -> str:
         from scenarios.sumo_net.sumo_config import load_bundle
 
         return load_bundle(road.config_file).sha256
-    return hashlib.sha256(network_file(road, cache_dir).read_bytes()).hexdigest()
+    return file_sha256(network_file(road, cache_dir))
 
 
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:

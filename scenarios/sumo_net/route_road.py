@@ -112,13 +112,17 @@ def _tail(points: np.ndarray, reach_m: float) -> np.ndarray:
     return points[len(points) - 1 - int(np.searchsorted(back, reach_m)):]
 
 
+def _open_to_cars(net: NetFile, turn: Turn) -> bool:
+    """Are the junction's lanes of ``turn`` and the lane it leads to open to cars?"""
+    return all(net.lanes[v].passenger for v in (*turn.via, turn.to))
+
+
 def drivable_turns(net: NetFile, lane: NetLane, min_radius_m: float) -> list[Turn]:
     """The turns out of ``lane`` a car may take: no U-turn, onto lanes open to
     passenger cars, and none tighter than ``min_radius_m``, the car's turning radius."""
     turns = []
     for turn in net.turns.get(lane.id, ()):
-        if turn.direction == U_TURN or not all(
-                net.lanes[v].passenger for v in (*turn.via, turn.to)):
+        if turn.direction == U_TURN or not _open_to_cars(net, turn):
             continue
         path = turn_path(net, lane, turn, TURN_REACH_M)
         if tightest_radius_m(path, max(min_radius_m, TURN_WINDOW_M)) >= min_radius_m:
@@ -166,7 +170,7 @@ def _why_not(net: NetFile, edge: str, to: str, min_radius_m: float) -> str:
         return f"edge {edge!r} does not lead to edge {to!r}"
     if all(t.direction == U_TURN for t in turns):
         return f"edge {edge!r} leads to edge {to!r} by a U-turn only"
-    if not any(all(net.lanes[v].passenger for v in (*t.via, t.to)) for t in turns):
+    if not any(_open_to_cars(net, t) for t in turns):
         return f"edge {edge!r} leads to edge {to!r} on lanes closed to passenger cars only"
     return (f"every turn from edge {edge!r} to edge {to!r} is tighter than the car's turning "
             f"circle ({min_radius_m:.1f} m)")
@@ -342,11 +346,12 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     """
     net = road_network(spec.road)
     if not net.normal_lanes():
-        field = "road.config_file" if spec.road.kind == "sumo_config" else "road.net_file"
+        field = spec.road.network_field
         raise SpecError(field, f"{getattr(spec.road, field.removeprefix('road.'))}: its "
                         "network has no lane open to passenger cars (a rail or footway "
                         "network?)")
-    min_radius_m = VEHICLE_MODELS[spec.vehicle.model].min_turn_radius_m
+    model = VEHICLE_MODELS[spec.vehicle.model]
+    min_radius_m = model.min_turn_radius_m
     if spec.road.route_edges is not None:
         route = pinned_route(net, spec.road.route_edges, min_radius_m)
         route_m = sum(lane.length_m for lane in route)
@@ -355,7 +360,7 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
                             f"route (road.route_edges: {route_m:.1f} m)")
     else:
         try:
-            first_lane_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
+            first_lane_m = spec.ego.start_m + model.length_m / 2
             route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE),
                                spec.road.length_m, spec.road.route_turns, min_radius_m,
                                first_lane_m)

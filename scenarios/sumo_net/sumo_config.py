@@ -48,7 +48,7 @@ _BUNDLE_DESCRIPTION = "sdc-config.json"
 BUNDLE_SUFFIX = ".sdc-config.zip"
 _ZIP_TIME = (2020, 1, 1, 0, 0, 0)  # fixed, so equal configurations make equal bundles
 #: a bundle's format: bumped when what it holds changes
-BUNDLE_FORMAT = 1
+BUNDLE_FORMAT = 2
 
 
 def seconds(text: str) -> float | None:
@@ -154,7 +154,7 @@ def read_config(path: str | Path) -> SumoConfig:
 class ConfigBundle:
     """A configuration's files under fixed names (``files``: name -> bytes) and what
     a run needs of it (``description``): the names of the network, route and
-    additional files in order, the begin time, the options applied, the manifest.
+    additional files in order, and its manifest (its begin, the options applied).
     ``sha256`` identifies the content (the description and every file)."""
 
     description: dict
@@ -184,7 +184,7 @@ class ConfigBundle:
 
     @property
     def begin_s(self) -> float:
-        return self.description["begin_s"]
+        return self.description["manifest"]["begin_s"]
 
     def write(self, folder: Path) -> dict[str, Path]:
         """Write the files into ``folder``; their paths by name."""
@@ -209,12 +209,12 @@ class ConfigBundle:
             additional.append(str(own_routes))
         arguments = ["--net-file", str(paths[d["net"]])]
         if fresh:
-            arguments += ["--begin", repr(d["begin_s"])]
+            arguments += ["--begin", repr(self.begin_s)]
         if d["routes"]:
             arguments += ["--route-files", ",".join(str(paths[name]) for name in d["routes"])]
         if additional:
             arguments += ["--additional-files", ",".join(additional)]
-        for name, value in sorted(d["applied"].items()):
+        for name, value in sorted(d["manifest"]["applied"].items()):
             if f"--{name}" not in set_already:
                 arguments += [f"--{name}", value]
         return arguments
@@ -239,7 +239,6 @@ def pack(config: SumoConfig) -> ConfigBundle:
         "routes": [add("routes", i, p, "a route file") for i, p in enumerate(config.route_files)],
         "additional": [add("additional", i, p, "an additional file")
                        for i, p in enumerate(config.additional_files)],
-        "begin_s": config.begin_s, "applied": config.applied_options(),
         "manifest": {**config.manifest(), "file": config.path.name},
     }
     return ConfigBundle(description, files)
