@@ -193,7 +193,21 @@ def world_summary(results: pd.DataFrame) -> dict:
                            for c, rows in hits.groupby("controller", sort=False)},
             "vehicle_classes": {str(c): {str(k): int(n) for k, n in
                                          rows.collision_vclass.value_counts().items()}
-                                for c, rows in classes.groupby("controller", sort=False)}}
+                                for c, rows in classes.groupby("controller", sort=False)},
+            "red_lights": _red_lights(ok)}
+
+
+def _red_lights(ok: pd.DataFrame) -> dict | None:
+    """Per controller: runs that crossed a red light, and the crossings (None: the
+    sweep predates the column, or no run met a traffic light's red)."""
+    if "red_light_violations" not in ok.columns:
+        return None
+    counts = ok.red_light_violations.fillna(0)
+    if not counts.any():
+        return None
+    return {str(c): {"runs": int((rows > 0).sum()), "crossings": int(rows.sum()),
+                     "of": int(len(rows))}
+            for c, rows in counts.groupby(ok.controller, sort=False)}
 
 
 WORLD_TITLE = "## World"
@@ -234,6 +248,12 @@ def world_lines(summary: dict) -> list[str]:
     for controller, classes in world.get("vehicle_classes", {}).items():
         hit = ", ".join(f"{vclass} {n}" for vclass, n in sorted(classes.items()))
         lines.append(f"{controller}'s collisions with vehicles by vehicle class: {hit}.")
+    red = world.get("red_lights")
+    if red:
+        lines.append("Red lights crossed (column red_light_violations: stop lines the front "
+                     "bumper crossed while the light showed red): " + "; ".join(
+                         f"{c} {v['crossings']} in {v['runs']} of {v['of']} runs"
+                         for c, v in red.items()) + ".")
     return lines
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,6 +19,19 @@ from scenarios.scenario_spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
 CHORD_TOLERANCE_M = 0.001
+
+
+class RouteStop(NamedTuple):
+    """Where the route enters a junction that asks something of the car: the stop
+    line at the end of its lane, with a traffic light or a duty to give way."""
+
+    s_m: float  # the stop line, along the road
+    tl: str | None  # the traffic light controlling the car's link (None: none)
+    link_index: int  # the link's index in that light's state string (-1: none)
+    give_way: bool  # without a light, the car gives way there
+
+
+NO_STOPS: tuple[RouteStop, ...] = ()
 
 
 def centre_line_xy(road: RoadSpec) -> np.ndarray:
@@ -147,6 +161,10 @@ class RoadGeometry:
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` stands (anywhere here)."""
         return s_m
+
+    def stops(self) -> tuple[RouteStop, ...]:
+        """The stop lines along the road, in order (none on a road of its own)."""
+        return NO_STOPS
 
     def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
         """Each point's distance to the nearer road edge [m]: negative beyond it,

@@ -319,6 +319,42 @@ class AvoidParams(Spec):
     #: a gap behind that grows by more than this in a step belongs to another
     #: vehicle: its track starts afresh
     rear_jump_m: float = num(3.0, gt=0, le=100)
+    #: the nearest thing in the own lane ahead (the leader) is tracked along the
+    #: lane over this long: its speed (sdc.car.leader_watch) ...
+    leader_track_s: float = num(0.6, gt=0, le=10)
+    #: ... and a leader that moves by more than this against its track in a step
+    #: is another one: the track starts afresh
+    leader_jump_m: float = num(2.0, gt=0, le=100)
+    #: only a leader slower than this along the lane is an obstacle to pass; a
+    #: faster one is followed (a car queued behind is traffic, not an obstacle:
+    #: one seen moving faster than this is followed, and waited for when it stops)
+    pass_max_speed_mps: float = num(2.0, ge=0, le=70)
+    #: ... unless it stands this long: then it is passed like any obstacle
+    stand_patience_s: float = num(30.0, ge=0, le=3600)
+    #: with a rear view, a standing obstacle (its speed known, under
+    #: pass_max_speed_mps) starts the pass this long before the car would reach it
+    #: at its speed, into an open lane whose corridor is free as far as the lane
+    #: change takes (what moves ahead in that lane is then followed); 0: only at
+    #: detect_ttc_s
+    early_pass_ttc_s: float = num(10.0, ge=0, le=60)
+    #: following a leader (the intelligent driver model, Treiber et al. 2000):
+    #: the time gap kept ...
+    follow_time_gap_s: float = num(1.5, ge=0, le=10)
+    #: (standing behind it, the car keeps wait_gap_m) ...
+    #: ... the acceleration it asks at most, and the deceleration it is comfortable with
+    follow_accel_mps2: float = num(1.5, gt=0, le=10)
+    follow_decel_mps2: float = num(2.0, gt=0, le=10)
+    #: no pass starts round what stands in a junction, up to this far past its stop
+    #: line (a car crossing or turning) ...
+    junction_depth_m: float = num(20.0, ge=0, le=500)
+    #: ... or up to this far before a stop line where cars wait (a red or yellow
+    #: light, a duty to give way): a queue. Both are waited behind, while the light
+    #: is red or yellow, or else for this long at most
+    junction_clear_m: float = num(25.0, ge=0, le=500)
+    queue_patience_s: float = num(10.0, ge=0, le=3600)
+    #: a yellow light is stopped for when stopping at its line needs no more than
+    #: this fraction of the car's hardest braking (a red one whenever it can stop)
+    yellow_decel_fraction: float = num(0.5, gt=0, le=1)
 
 
 #: each built-in controller's parameters (its classes are in ``sdc.car.controller_plugins``)

@@ -6,6 +6,8 @@ heading counter-clockwise from +x, full length and width).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
@@ -43,6 +45,9 @@ class Snapshot(NamedTuple):
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order
     traffic_speeds_mps: np.ndarray  # (N,) speeds of the traffic boxes, along their headings
     traffic_classes: np.ndarray  # (N,) their SUMO vehicle classes (vClass): passenger, truck...
+    #: the traffic lights along the ego's route: each one's state string (SUMO's
+    #: link states, one character per link: r red, y yellow, G/g green, ...)
+    signals: Mapping[str, str] = MappingProxyType({})
 
 
 #: the vehicle class of a car (SUMO's vClass), the only kind highway-env drives

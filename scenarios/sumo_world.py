@@ -367,6 +367,8 @@ class SumoWorld:
                         departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
         sim.vehicle.setLaneChangeMode(EGO_ID, 0)
+        for tl in sorted({stop.tl for stop in self.road.stops() if stop.tl is not None}):
+            sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
         self._watch_types()
         self._push(ego_box, ego_speed_mps)
         # what departed in this step entered beside the ego, not after it: checked here
@@ -505,8 +507,10 @@ class SumoWorld:
         """The state after a step, without the vehicles ``taken`` off since."""
         boxes, speeds, classes = self._traffic(ego_box, taken)
         self._watch_types()
+        signals = {tl: values[tc.TL_RED_YELLOW_GREEN_STATE] for tl, values
+                   in self._sumo.trafficlight.getAllSubscriptionResults().items()}
         return Snapshot(self._sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds,
-                        classes)
+                        classes, signals)
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""

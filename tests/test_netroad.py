@@ -11,6 +11,7 @@ import pytest
 from scenarios import CATALOG_DIR, RoadSpec, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.drivable_area import DrivableArea
 from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, read_net
 from scenarios.sumo_net.route_road import (
     ROUTE,
@@ -49,6 +50,19 @@ def test_our_own_straight_network_has_exactly_the_built_in_roads_edges(tmp_path)
     points = np.random.default_rng(0).uniform([20.0, -10.0], [180.0, 10.0], size=(2000, 2))
     np.testing.assert_allclose(area.edge_gaps_m(points), road.edge_gaps_m(points), atol=1e-6)
     np.testing.assert_array_equal(area.contains(points), ~road.off_road(points))
+    np.testing.assert_array_equal(area.off_road(points), road.off_road(points))
+
+
+def test_a_gap_between_lanes_too_narrow_for_an_edge_is_no_kerb():
+    # two 3.2 m lanes side by side whose borders are 0.2 m apart (SUMO's shapes leave
+    # such slivers): no edge between them, and a body corner in the gap is on the road
+    lanes = [np.array([[0.0, 0.0], [100.0, 0.0]]), np.array([[0.0, 3.4], [100.0, 3.4]])]
+    area = DrivableArea(lanes, [3.2, 3.2], [0, 1], [])
+    between = np.array([[50.0, 1.7]])
+    assert not area.contains(between).any() and not area.off_road(between).any()
+    assert not np.any((area.edges[:, [1, 3]] > 1.0) & (area.edges[:, [1, 3]] < 2.4))
+    beyond_kerb = np.array([[50.0, -1.65], [50.0, 5.05], [50.0, -3.0]])
+    assert area.off_road(beyond_kerb).all()
 
 
 def test_the_line_between_the_two_directions_is_not_a_road_edge(town):

@@ -15,11 +15,18 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 #: cached road edges carry this number: change it when the search for edges changes
-EDGE_SEARCH_VERSION = 2
+EDGE_SEARCH_VERSION = 3
 #: lane and edge polylines are cut into pieces no longer than this for the spatial index [m]
 INDEX_PIECE_M = 5.0
 #: a border is probed this far outside itself, every PROBE_STEP_M along it [m]
 PROBE_OUT_M, PROBE_STEP_M = 0.25, 1.0
+#: ... and the probe is drivable within this of a lane: the seam between two lanes
+#: side by side (their shapes rounded to 0.01 m, or a few cm apart) is no road edge
+SEAM_SLACK_M = 0.1
+#: a point outside the area is off the road when it lies within this of a road edge
+#: (it crossed one) or this far from every lane and junction: a gap between lanes
+#: too narrow to hold an edge (the probe lands in the next lane) is no kerb [m]
+OFF_ROAD_M = PROBE_OUT_M + SEAM_SLACK_M
 #: road edges farther than this from a point do not count for its gap [m]
 GAP_HORIZON_M = 30.0
 #: index pieces looked up per point at once; a point with more within reach gets all
@@ -93,15 +100,16 @@ class DrivableArea:
         self._edge_a, self._edge_b = ea, eb
         self._edge_tree = cKDTree((ea + eb) / 2) if len(ea) else None
 
-    def contains(self, points: np.ndarray) -> np.ndarray:
-        """Which points lie on a lane or inside a junction (a bool mask)."""
+    def contains(self, points: np.ndarray, slack_m: float = 0.0) -> np.ndarray:
+        """Which points lie on a lane (or within ``slack_m`` of one) or inside a
+        junction (a bool mask)."""
         points = np.asarray(points, float).reshape(-1, 2)
         inside = np.zeros(len(points), bool)
         if len(points) == 0:
             return inside
         which, seg = _pieces_near(self._lane_tree, points, self._lane_reach_m)
         near = _segment_distance_m(points[which], self._lane_a[seg], self._lane_b[seg])
-        inside[which[near <= self._lane_half_w[seg] + 1e-9]] = True
+        inside[which[near <= self._lane_half_w[seg] + slack_m + 1e-9]] = True
         rest = np.flatnonzero(~inside)
         if len(rest) and len(self._junctions):
             p = points[rest]
@@ -133,12 +141,21 @@ class DrivableArea:
         side = np.asarray(outward)[owner[source]][:, None]
         probe = (a + b) / 2 + PROBE_OUT_M * side * np.column_stack([-direction[:, 1],
                                                                      direction[:, 0]])
-        is_edge = ~self.contains(probe)
+        is_edge = ~self.contains(probe, SEAM_SLACK_M)
         # each segment's consecutive edge pieces become one segment again
         same = source[1:] == source[:-1]
         first = is_edge & np.concatenate([[True], ~is_edge[:-1] | ~same])
         last = is_edge & np.concatenate([~is_edge[1:] | ~same, [True]])
         return np.hstack([a[first], b[last]])
+
+    def off_road(self, points: np.ndarray) -> np.ndarray:
+        """Which points lie off the road: outside the area, and beyond a road edge
+        or ``OFF_ROAD_M`` from anything drivable (a bool mask)."""
+        outside = ~self.contains(points)
+        if outside.any():
+            crossed = np.abs(self.edge_gaps_m(points)) <= OFF_ROAD_M
+            outside &= crossed | ~self.contains(points, OFF_ROAD_M)
+        return outside
 
     def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
         """Each point's distance to the nearest road edge [m]: negative off the

@@ -25,6 +25,9 @@ from scenarios.file_read import read_bytes, unzipped
 
 DEFAULT_LANE_WIDTH_M = 3.2  # SUMO's default when a lane names none
 STRAIGHT, U_TURN = "s", "t"  # SUMO's connection directions (dir) straight on and turnaround
+#: SUMO's link states (a connection's state) where a car gives way: minor, equal
+#: (right before left), stop, all-way stop
+GIVE_WAY_STATES = frozenset("m=sw")
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,18 @@ class Turn:
     to: str
     via: tuple[str, ...]
     direction: str  # SUMO's dir: s, l, r, t, ...
+    #: the traffic light controlling it and its link's index in the light's state
+    #: string (None, -1: none)
+    tl: str | None = None
+    link_index: int = -1
+    #: SUMO's link state without a light: M major (right of way), m minor (give
+    #: way), = equal (right before left), s stop, w all-way stop ("": unknown)
+    state: str = ""
+
+    @property
+    def give_way(self) -> bool:
+        """Must a car taking this turn give way where no light says so?"""
+        return self.state in GIVE_WAY_STATES
 
 
 @dataclass(frozen=True)
@@ -132,10 +147,11 @@ def _parse(root: ET.Element):
                 sumo_length_m=float(_required(lane, "length")), internal=function == "internal",
                 passenger=_passenger(lane) and _passenger(edge))
     successor: dict[str, list[tuple[str, str | None, str]]] = {}
+    control: dict[tuple[str, str], tuple[str | None, int, str]] = {}
     for c in root.iter("connection"):
-        source = f"{c.get('from')}_{c.get('fromLane')}"
-        successor.setdefault(source, []).append(
-            (f"{c.get('to')}_{c.get('toLane')}", c.get("via"), c.get("dir", "")))
+        source, to = f"{c.get('from')}_{c.get('fromLane')}", f"{c.get('to')}_{c.get('toLane')}"
+        successor.setdefault(source, []).append((to, c.get("via"), c.get("dir", "")))
+        control[source, to] = (c.get("tl"), int(c.get("linkIndex", -1)), c.get("state", ""))
     turns: dict[str, tuple[Turn, ...]] = {}
     for lane in lanes.values():
         if lane.internal:
@@ -147,7 +163,7 @@ def _parse(root: ET.Element):
                 chain.append(via)  # a junction lane may lead on to another (internal junction)
                 via = next((v for t, v, _ in successor.get(via, []) if t == to), None)
             if to in lanes:
-                found.append(Turn(to, tuple(chain), direction))
+                found.append(Turn(to, tuple(chain), direction, *control[lane.id, to]))
         turns[lane.id] = tuple(found)
     junctions = tuple(
         _shape(j.get("shape")) for j in root.iter("junction")

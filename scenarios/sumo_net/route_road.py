@@ -28,7 +28,7 @@ from scenarios.atomic_write import write_atomic
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
-from scenarios.road_geometry import RoadGeometry
+from scenarios.road_geometry import RoadGeometry, RouteStop
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import input_path
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
@@ -224,6 +224,20 @@ def _joined(shapes: list[np.ndarray]) -> np.ndarray:
     return points[np.concatenate([[True], step > 1e-6])]
 
 
+def _route_stops(net: NetFile, pieces: list[RoutePiece]) -> tuple[RouteStop, ...]:
+    """The stop lines where the route leaves a lane into a junction through a
+    link under a traffic light or one where the car gives way."""
+    normal = [p for p in pieces if not p.lane.internal]
+    stops = []
+    for piece, following in zip(normal, normal[1:], strict=False):
+        turn = next((t for t in net.turns.get(piece.lane.id, ()) if t.to == following.lane.id),
+                    None)
+        if turn is not None and (turn.tl is not None or turn.give_way):
+            stops.append(RouteStop(piece.start_s_m + piece.length_m, turn.tl, turn.link_index,
+                                   turn.tl is None and turn.give_way))
+    return tuple(stops)
+
+
 class NetworkRoad(RoadGeometry):
     """The ego's route through a SUMO network, one lane wide, with the network's
     road edges (``edge_segments``, ``edge_gaps_m``)."""
@@ -234,6 +248,7 @@ class NetworkRoad(RoadGeometry):
         starts = np.concatenate([[0.0], np.cumsum([lane.length_m for lane in route])[:-1]])
         self.pieces = [RoutePiece(lane, float(s), lane.length_m)
                        for lane, s in zip(route, starts, strict=True)]
+        self._stops = _route_stops(net, self.pieces)
 
     def piece_at(self, s_m: float) -> RoutePiece:
         """The route lane holding route position ``s_m``."""
@@ -268,6 +283,9 @@ class NetworkRoad(RoadGeometry):
                  if not p.lane.internal and p.start_s_m + p.length_m > s_m]
         return [e for i, e in enumerate(edges) if i == 0 or edges[i - 1] != e]
 
+    def stops(self) -> tuple[RouteStop, ...]:
+        return self._stops
+
     def edge_segments(self) -> np.ndarray:
         return self.area.edges
 
@@ -275,7 +293,7 @@ class NetworkRoad(RoadGeometry):
         return self.area.edge_gaps_m(points)
 
     def off_road(self, points: np.ndarray) -> np.ndarray:
-        return ~self.area.contains(points)
+        return self.area.off_road(points)
 
     def drawn_edge_segments(self) -> np.ndarray:
         """The network's road edges within ``DRAW_MARGIN_M`` of the route."""

@@ -22,8 +22,9 @@ import numpy as np
 
 from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
-from sdc.car.controller_api import Command, Observation, VehicleModel
+from sdc.car.controller_api import RED, YELLOW, Command, Observation, VehicleModel
 from sdc.car.lane_path import TURN_WINDOW_M, LanePath
+from sdc.car.leader_watch import LeaderWatch
 from sdc.car.rear_watch import RearWatch
 
 CRUISE, BRAKE = "cruise", "brake"
@@ -116,6 +117,10 @@ class AvoidController:
         self.free_since_s: dict[float, float] = {}  # since when a lane was seen empty beside
         self.traffic_seen: set[float] = set()  # the lanes where something was seen beside
         self.rear = RearWatch(self.params)
+        self.leader = LeaderWatch(self.params)  # in the own lane
+        self.path_leader = LeaderWatch(self.params)  # in the body's path, wherever it is
+        self.side_leaders = {LEFT: LeaderWatch(self.params), RIGHT: LeaderWatch(self.params)}
+        self.lines_s_m: list[float] = []  # the stop lines seen, along the road
         self._cos_sin: np.ndarray | None = None
         self._rear_view = False
 
@@ -130,14 +135,15 @@ class AvoidController:
         return LaneFrame(obs, self._cos_sin, path)
 
     def _side_blocked(self, frame: LaneFrame, side: float, target_m: float, obs: Observation,
-                      reach_m: float) -> bool:
-        """Any return in the corridor the car sweeps going to ``target_m`` and
-        passing there, from beside it to ``reach_m`` ahead?"""
+                      reach_m: float, offset_m: float, passed: np.ndarray) -> bool:
+        """Any return but those of what is ``passed`` in the corridor the car's body
+        sweeps going from ``offset_m`` to ``target_m`` and passing there, from beside
+        it to ``reach_m`` ahead (a kerb at the own lane's edge included)?"""
         p, v = self.params, obs.vehicle
         half_m = v.width_m / 2 + p.lateral_clearance_m
-        inner_m = obs.lane_width_m / 2  # the own lane's edge on that side
-        lo, hi = sorted((side * inner_m, target_m + side * half_m))
-        return bool(np.any(frame.within(lo, hi, -v.length_m / 2 - p.rear_margin_m, reach_m)))
+        lo, hi = sorted((offset_m + side * v.width_m / 2, target_m + side * half_m))
+        corridor = frame.within(lo, hi, -v.length_m / 2 - p.rear_margin_m, reach_m)
+        return bool(np.any(corridor & ~passed))
 
     def _lane_bands(self, obs: Observation):
         """(side, lo, hi): the lanes left, right and own, inside their edges."""
@@ -168,6 +174,15 @@ class AvoidController:
             watch_s = max(watch_s, self.params.traffic_memory_s)
         return obs.t_s - self.free_since_s[side] >= watch_s - 1e-9
 
+    @staticmethod
+    def _nearest_s(frame: LaneFrame, lo_m: float, hi_m: float, front_m: float) -> float | None:
+        """The station of the nearest return ahead of the front bumper laterally
+        within ``[lo_m, hi_m]`` (None if none)."""
+        ahead = frame.within(lo_m, hi_m, front_m - 0.5, math.inf)
+        if not ahead.any():
+            return None
+        return float(frame.s_m[int(np.argmin(np.where(ahead, frame.ahead_m, math.inf)))])
+
     # ---- decisions ---------------------------------------------------------
     def _swerve_distance_m(self, shift_m: float, speed_mps: float, brake_mps2: float,
                            obs: Observation) -> float:
@@ -193,18 +208,19 @@ class AvoidController:
         return max(speed_mps * t_s - 0.5 * brake_mps2 * t_s**2, arcs_m)
 
     def _plan(self, frame: LaneFrame, obs: Observation, offset: float, gap_m: float,
-              in_lane: np.ndarray):
+              in_lane: np.ndarray, early: bool = False):
         """On an obstacle ahead: ``(phase, side, target, end_s, accel)``, to swerve
         to ``target`` or brake; ``end_s``: how far along the lane the obstacle's
-        returns reach."""
+        returns reach. ``early`` (a standing obstacle still far): a pass into an
+        open lane whose corridor is free as far as the lane change takes (what
+        moves ahead in that lane is then followed), or None."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
         near = in_lane & (frame.ahead_m <= frame.ahead_m[in_lane].min() + p.obstacle_depth_m)
         lat = frame.lateral_m[near]
-        reach = gap_m + v.length_m + p.obstacle_depth_m + speed * p.free_time_s
         brake = v.max_decel_mps2
         stop_m = speed**2 / (2 * brake)
-        can_stop = stop_m <= gap_m  # at the car's hardest braking, from now
+        can_stop = early or stop_m <= gap_m  # at the car's hardest braking, from now
         options = []
         for side, phase in ((LEFT, AVOID_LEFT), (RIGHT, AVOID_RIGHT)):
             # a lane not open only to escape a collision braking cannot
@@ -213,14 +229,19 @@ class AvoidController:
             edge = lat.max() if side == LEFT else lat.min()
             clear_m = abs(edge) * (1 if side * edge > 0 else -1) + v.width_m / 2
             target = side * max(obs.lane_width_m, clear_m + p.lateral_clearance_m)
-            if self._side_blocked(frame, side, target, obs, reach):
-                continue
             shift = max(0.0, side * (side * (clear_m + p.shift_margin_m) - offset))
+            reach = gap_m + v.length_m + p.obstacle_depth_m + speed * p.free_time_s
+            if early and self._flows_our_way(side, obs):
+                reach = self._swerve_distance_m(abs(target - offset), speed, 0.0, obs) + v.length_m
+            if self._side_blocked(frame, side, target, obs, reach, offset, near):
+                continue
             options.append((phase, side, target, shift))
         end_s = float(frame.s_m[near].max())
         for phase, side, target, shift in options:  # keeping speed
             if self._swerve_distance_m(shift, speed, 0.0, obs) <= gap_m:
                 return phase, side, target, end_s, 0.0
+        if early:
+            return None
         if can_stop:
             return BRAKE, 0.0, 0.0, end_s, -brake
         for phase, side, target, shift in options:  # braking meanwhile
@@ -274,31 +295,56 @@ class AvoidController:
                         v.width_m / 2 + p.path_clearance_m)
         front_m = v.length_m / 2
         in_lane = frame.within(-half_lane, half_lane, front_m - 0.5, math.inf)
-        gap_lane = float(frame.ahead_m[in_lane].min()) - front_m if in_lane.any() else math.inf
         # the car's own path, wherever it is: its body's width along the lane
         body_half = v.width_m / 2 + p.edge_tolerance_m
         gap_path = frame.gap_m(offset - body_half, offset + body_half, front_m)
+        gap_lane, lead_s = math.inf, None
+        if in_lane.any():
+            nearest = int(np.argmin(np.where(in_lane, frame.ahead_m, math.inf)))
+            gap_lane, lead_s = float(frame.ahead_m[nearest]) - front_m, float(frame.s_m[nearest])
+        self.leader.update(obs.t_s, lead_s)
+        self.path_leader.update(obs.t_s, self._nearest_s(frame, offset - body_half,
+                                                         offset + body_half, front_m))
+        for side, lo, hi in self._lane_bands(obs)[:2]:
+            self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
+        following = self.leader.is_traffic(obs.t_s)  # not an obstacle to pass
+        waiting = not following and self._waits_at_junction(obs, gap_lane)
         speed = obs.speed_mps
         ttc_lane = gap_lane / speed if speed > 0 else math.inf
         accel = None
 
-        if self.phase in (CRUISE, AVOID_RETURN, BRAKE):
+        if (following or waiting) and self.phase == BRAKE:
+            self.phase = CRUISE
+        if self.phase in (CRUISE, AVOID_RETURN, BRAKE) and not (following or waiting):
             # a threat: closing in under detect_ttc_s, or (slow or stopped) within the
             # waiting gap; once braking, anything in the lane the cruise would reach so
             holding = self.phase == BRAKE and gap_lane < (
                 self.cruise_mps * p.detect_ttc_s + p.wait_gap_m)
+            lead_mps = self.leader.speed_mps()
+            early = (self._rear_view and self.phase == CRUISE and lead_mps is not None
+                     and ttc_lane < p.early_pass_ttc_s)
+            plan = None
             if ttc_lane < p.detect_ttc_s or gap_lane < p.wait_gap_m + 1.0 or holding:
-                phase, side, target, end_s, accel = self._plan(frame, obs, offset, gap_lane,
-                                                               in_lane)
+                plan = self._plan(frame, obs, offset, gap_lane, in_lane)
+            elif early:
+                plan = self._plan(frame, obs, offset, gap_lane, in_lane, early=True)
+            elif self.phase == BRAKE:
+                self.phase = CRUISE
+            if plan is not None:
+                phase, side, target, end_s, accel = plan
                 if phase != BRAKE:
                     self.phase, self.side, self.target_m = phase, side, target
                     self.obstacle_end_s = end_s
                 else:
                     self.phase, accel = BRAKE, self._brake_accel(gap_lane, obs)
-            elif self.phase == BRAKE:
-                self.phase = CRUISE
         if self.phase in (AVOID_LEFT, AVOID_RIGHT):
             self._passing(frame, obs, path, half_lane)
+            oncoming = (self.path_leader.speed_mps() or 0.0) < -p.pass_max_speed_mps
+            if (oncoming and gap_lane > p.wait_gap_m + 1.0 and self._lane_open(OWN, obs)
+                    and self.phase != AVOID_RETURN):
+                # something comes the other way in the passing lane while the obstacle is
+                # still ahead: back behind it
+                self.phase, self.target_m = AVOID_RETURN, 0.0
         if self.phase == AVOID_RETURN and abs(offset) < p.settled_offset_m:
             self.phase = CRUISE
         if self.phase in (CRUISE, AVOID_RETURN):
@@ -308,7 +354,18 @@ class AvoidController:
             gap = gap_path if self.phase in (AVOID_LEFT, AVOID_RIGHT) else min(gap_lane, gap_path)
             turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
                                            v.max_decel_mps2 * p.gap_decel_fraction)
-            accel = self._speed_accel(gap, obs, turn_mps)
+            if following and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
+                accel = self._follow_accel(gap, max(self.leader.speed_mps() or 0.0, 0.0), obs,
+                                           turn_mps)
+            elif self.phase in (AVOID_LEFT, AVOID_RIGHT) and self.path_leader.is_traffic(obs.t_s):
+                accel = self._follow_accel(gap, max(self.path_leader.speed_mps() or 0.0, 0.0),
+                                           obs, turn_mps)
+            elif waiting and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
+                # to a stop wait_gap_m short of it: room to steer round it later
+                accel = self._speed_accel(gap - p.wait_gap_m + p.stop_margin_m, obs, turn_mps)
+            else:
+                accel = self._speed_accel(gap, obs, turn_mps)
+            accel = min(accel, self._signal_accel(obs, turn_mps))
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, speed * p.preview_time_s)
@@ -316,23 +373,90 @@ class AvoidController:
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
 
-    def _brake_accel(self, gap_m: float, obs: Observation) -> float:
-        """Braking to stop ``stop_margin_m`` short of the obstacle: the deceleration
-        that needs, times ``brake_gain``, up to the car's maximum."""
+    def _flows_our_way(self, side: float, obs: Observation) -> bool:
+        """Does what is nearest ahead in the lane on ``side`` move the car's way
+        faster than ``pass_max_speed_mps`` (traffic to follow there, not a car
+        standing or coming the other way)?"""
+        speed = self.side_leaders[side].speed_mps()
+        return speed is not None and speed > self.params.pass_max_speed_mps
+
+    def _waits_at_junction(self, obs: Observation, gap_m: float) -> bool:
+        """Is what stands ``gap_m`` ahead waited behind rather than passed: queued
+        within ``junction_clear_m`` before the next stop line while its light is red
+        or yellow; or, for less than ``queue_patience_s`` so far, queued before a
+        line where cars give way or standing in a junction (up to
+        ``junction_depth_m`` past a line seen: crossing or turning)?"""
+        p, line = self.params, obs.stop_line
+        if obs.lane is None or not math.isfinite(gap_m):
+            return False
+        front_s_m = obs.lane.s_m + obs.vehicle.length_m / 2
+        what_s_m = front_s_m + gap_m
+        queued = False
+        if line is not None:
+            line_s_m = front_s_m + line.distance_m
+            if not any(abs(s - line_s_m) < 1.0 for s in self.lines_s_m):
+                self.lines_s_m.append(line_s_m)
+            if line_s_m - p.junction_clear_m <= what_s_m < line_s_m:
+                if line.signal in (RED, YELLOW):
+                    return True
+                queued = line.give_way
+        in_junction = any(s <= what_s_m <= s + p.junction_depth_m for s in self.lines_s_m)
+        stood_s = obs.t_s - min(self.leader.standing_since_s, obs.t_s)
+        return (queued or in_junction) and stood_s < p.queue_patience_s
+
+    def _signal_accel(self, obs: Observation, turn_mps: float) -> float:
+        """Stopping short of the next stop line when its light is red and the car can
+        stop there, or yellow and it can stop braking at ``yellow_decel_fraction`` of its
+        hardest; otherwise no limit."""
+        p, v, line = self.params, obs.vehicle, obs.stop_line
+        if line is None or line.signal not in (RED, YELLOW):
+            return math.inf
+        decel = v.max_decel_mps2 * (1.0 if line.signal == RED else p.yellow_decel_fraction)
+        if (obs.speed_mps > p.creep_speed_mps
+                and obs.speed_mps**2 > 2 * decel * max(line.distance_m, 0.0)):
+            return math.inf  # too close to stop before it: go on across
+        # to a stop stop_margin_m short of the line
+        return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
+
+    def _brake_accel(self, gap_m: float, obs: Observation, wait_m: float | None = None
+                     ) -> float:
+        """Braking to stop ``wait_m`` (default ``wait_gap_m``) short of the obstacle
+        where the car can, else ``stop_margin_m`` short of it: the deceleration that
+        needs, times ``brake_gain``, up to the car's maximum."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
         room_m = gap_m - p.stop_margin_m
         if speed <= 0:
             return 0.0 if room_m > 0 else -v.max_decel_mps2
-        wait_room_m = gap_m - p.wait_gap_m  # far enough back to steer round it later
-        if wait_room_m > 0 and speed**2 / (2 * wait_room_m) <= v.max_decel_mps2 / p.brake_gain:
+        # far enough back to steer round it later
+        wait_room_m = gap_m - (p.wait_gap_m if wait_m is None else wait_m)
+        if wait_room_m > 0 and speed**2 / (2 * wait_room_m) <= v.max_decel_mps2:
             room_m = wait_room_m
         need = speed**2 / (2 * room_m) if room_m > 0 else math.inf
         if speed < p.creep_speed_mps:  # the last of it: stop (rather than creep ever slower)
             need = max(need, speed / obs.step_s)
         return -min(v.max_decel_mps2, p.brake_gain * need)
 
-    def _speed_accel(self, gap_m: float, obs: Observation, turn_mps: float) -> float:
+    def _follow_accel(self, gap_m: float, leader_mps: float, obs: Observation,
+                      turn_mps: float) -> float:
+        """Following a leader ``gap_m`` ahead at ``leader_mps``: the intelligent
+        driver model toward the cruise speed at the time gap ``follow_time_gap_s``,
+        and never faster than the speed from which the car stops short of where
+        the leader would stop braking as hard (:meth:`_speed_accel` with the
+        leader's stopping distance added to the gap)."""
+        p, v = self.params, obs.vehicle
+        speed = obs.speed_mps
+        a_mps2, b_mps2 = min(p.follow_accel_mps2, v.max_accel_mps2), p.follow_decel_mps2
+        wanted_m = p.wait_gap_m + max(0.0, speed * p.follow_time_gap_s + speed * (
+            speed - leader_mps) / (2 * math.sqrt(a_mps2 * b_mps2)))
+        free = (speed / self.cruise_mps) ** 4 if self.cruise_mps > 0 else math.inf
+        idm = a_mps2 * (1 - free - (wanted_m / max(gap_m, 1e-3)) ** 2)
+        decel = v.max_decel_mps2 * p.gap_decel_fraction
+        bound = self._speed_accel(gap_m + leader_mps**2 / (2 * decel), obs, turn_mps)
+        return max(-v.max_decel_mps2, min(idm, bound))
+
+    def _speed_accel(self, gap_m: float, obs: Observation, turn_mps: float,
+                     wait_m: float | None = None) -> float:
         """Toward the cruise speed, or slower when something ahead in the path
         needs it (the speed from which the car still stops short of it braking at
         ``gap_decel_fraction`` of its hardest), or a bend of the lane ahead
@@ -342,7 +466,7 @@ class AvoidController:
         decel = v.max_decel_mps2 * p.gap_decel_fraction
         allowed = math.sqrt(2 * decel * room_m) if room_m > 0 else 0.0
         if obs.speed_mps > allowed:
-            return self._brake_accel(gap_m, obs)
+            return self._brake_accel(gap_m, obs, wait_m)
         target = min(self.cruise_mps, allowed, turn_mps)
         if obs.speed_mps > turn_mps:  # braking for the bend as the limit falls
             return max(-v.max_decel_mps2, p.speed_gain_1ps * (target - obs.speed_mps)

@@ -25,7 +25,19 @@ from scenarios.bodies import VehicleModel
 from sdc.car.sensors import LaneReading
 from sdc.car.vehicle import Command
 
-__all__ = ["Command", "Controller", "LaneReading", "Observation", "VehicleModel"]
+__all__ = ["Command", "Controller", "LaneReading", "Observation", "StopLine", "VehicleModel"]
+
+#: a stop line's signal: its light's colour for the car's way, or none (no light)
+RED, YELLOW, GREEN, NO_SIGNAL = "red", "yellow", "green", "none"
+
+
+class StopLine(NamedTuple):
+    """The next stop line along the car's route, as a map and a camera give it: where
+    the route enters a junction with a traffic light or a duty to give way."""
+
+    distance_m: float  # along the route from the front bumper to the line
+    signal: str  # red | yellow | green | none (no light, or one switched off)
+    give_way: bool  # the car gives way there: a sign, right before left, a green without priority
 
 
 class Observation(NamedTuple):
@@ -42,6 +54,7 @@ class Observation(NamedTuple):
     steer_rad: float  # the road-wheel angle reached (the steering lags the command)
     vehicle: VehicleModel  # the car's size and actuator limits
     lidar_range_m: float = math.inf  # the lidar's range: no return means nothing up to it
+    stop_line: StopLine | None = None  # the next stop line ahead (None: none on the route)
 
 
 class Controller(Protocol):

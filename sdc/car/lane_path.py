@@ -26,6 +26,8 @@ ARC_POINTS = 41
 ARC_REACH_M = 100.0
 #: a bend's curvature is its turn over this length of lane [m]
 TURN_WINDOW_M = 3.0
+#: a kink of the lane is taken on the arc that cuts its corner by this much [m]
+CORNER_CUT_M = 0.3
 
 
 def arc_curvature_1pm(lane, look_ahead_m: float) -> float:
@@ -88,12 +90,15 @@ class LanePath:
         return s_m, d_m
 
     def turn_speed_mps(self, lateral_accel_mps2: float, decel_mps2: float,
-                       window_m: float = TURN_WINDOW_M) -> float:
+                       window_m: float = TURN_WINDOW_M,
+                       corner_m: float = CORNER_CUT_M) -> float:
         """The highest speed from which the car, braking at ``decel_mps2``, takes
         every bend of the lane ahead at no more than ``lateral_accel_mps2`` (inf on
         a straight lane). At each vertex ahead the lane's curvature is its turn
         between the segments ``window_m`` / 2 before and after it over the distance
-        between their middles (at least ``window_m``)."""
+        between their middles (at least ``window_m``), or, where the lane kinks
+        (long straight pieces meeting at an angle), that of the arc tangent to both
+        that passes ``corner_m`` inside the corner, if tighter."""
         ahead = self._start_s > self.car_s_m
         if not ahead.any():
             return math.inf
@@ -105,8 +110,9 @@ class LanePath:
         after = np.clip(np.searchsorted(self._start_s, stations + window_m / 2, "right") - 1,
                         0, last)
         middle = self._start_s + self._lengths / 2
-        curvature = (np.abs(heading[after] - heading[before])
-                     / np.maximum(window_m, middle[after] - middle[before]))
+        turn = np.minimum(np.abs(heading[after] - heading[before]), 0.99 * math.pi)
+        curvature = np.maximum(turn / np.maximum(window_m, middle[after] - middle[before]),
+                               (1 / np.cos(turn / 2) - 1) / corner_m)
         bends = curvature > 1e-6
         if not bends.any():
             return math.inf

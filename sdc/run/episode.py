@@ -32,6 +32,7 @@ from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
 from sdc.run.result_row import ok_row
+from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
@@ -88,6 +89,7 @@ class Simulation:
                                       spec.lidar.max_range_m + self.model.length_m)
         self.road_frame = RoadFrame(self.road, self.lane_sensor.lane_d_m)
         self.lane_width_m = self.road.lane_width_m
+        self.stop_lines = StopLineWatch(self.road.stops())
         self.recorder = TraceRecorder()
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
@@ -111,6 +113,8 @@ class Simulation:
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
         self.ranges.flags.writeable = False  # a controller sees what the trace records
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
+        front_s_m = self.lane.s_m + self.model.length_m / 2 if self.lane else None
+        self.stop_line = self.stop_lines.update(front_s_m, snapshot.signals)
         self.contacts, self.conflicts = self.road_frame.measure(self.box, state.speed_mps,
                                                                 snapshot)
 
@@ -120,7 +124,7 @@ class Simulation:
         return Observation(self.k * self.step_s, self.step_s, self.ranges,
                            self.lidar.angles_rad, self.spec.lidar.mount_ahead_m, self.lane,
                            self.lane_width_m, state.speed_mps, state.steer_rad, self.model,
-                           self.spec.lidar.max_range_m)
+                           self.spec.lidar.max_range_m, self.stop_line)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
@@ -214,6 +218,7 @@ class Simulation:
             collision_role=self.collision.role if self.collision else None,
             collision_vclass=self.collision.vehicle_class if self.collision else None,
             world_overlaps=world_overlaps(trace.traffic, obstacles),
+            red_light_violations=self.stop_lines.red_light_violations,
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
                                             floats["speed_mps"]),
             progress_m=round(progress_m, 6),

@@ -70,6 +70,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle overlapped another one or an obstacle within "
            "the sensing radius (analysis.world_audit); 0 in a consistent world"),
+    Column("red_light_violations", pa.int64(), OUTCOME,
+           "stop lines the ego's front bumper crossed while their traffic light showed red "
+           "for its way (sdc.run.stop_lines); 0 on roads without lights"),
     Column("outcome", pa.string(), OUTCOME,
            "how the run ended (analysis/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under 0.1 m/s for "

@@ -1,0 +1,209 @@
+"""The avoid controller in real traffic: following, red lights, turns, stopped cars.
+
+Runs the families of the issue on `avoid` in real traffic, each beside the
+control group, and prints ``name value`` lines (``<family>.<controller>.<figure>``),
+a table per family, and the must-shows last as ``must_show.*`` lines with Wilson
+95% intervals:
+
+- real-traffic (sweeps/real-traffic.toml: eight of SUMO's real scenarios with
+  their own demand, no obstacle, 180-degree lidar): avoid completes at least 95%,
+  no road-edge collision, nothing hit with its front;
+- real-motorway-stop (sweeps/real-motorway-stop.toml: a stopped car in the ego's
+  lane on the A10 with its demand, 360-degree lidar): no collision where a stop
+  was possible, at least 80% completed;
+- grid-turns (a default ``netgenerate --grid`` network, routes turning at random,
+  generated here): no road-edge collision;
+- signal-grid (sweeps/grid-town.toml: a signalised 10 x 10 grid with 2000 cars):
+  avoid crosses no red light; seed and lane-keep counted beside it;
+- envelope (sweeps/seed-envelope.toml without traffic): no stuck run where the
+  lane beside the obstacle is free, no collision where a stop was possible.
+
+    python benchmarks/avoid_real.py [FAMILY ...] [--samples N] [--workers N] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+from analysis.stats import wilson_interval
+from scenarios import CATALOG_DIR
+from scenarios.sumo_net.build import sumo_binary
+from scenarios.sweep_spec import SweepSpec, load_sweep
+from scenarios.world_backends import check_inputs
+from sdc.batch.executors import LocalExecutor
+from sdc.batch.progress import QuietReporter
+from sdc.batch.sweep_runner import run_sweep
+
+OUTCOMES = ("completed", "collided", "stuck", "unfinished")
+HITS = ("obstacle", "vehicle", "road_edge")
+SWEEPS = CATALOG_DIR / "sweeps"
+
+GRID_SCENARIO = """\
+[scenario]
+name = "grid-turns"
+duration_s = 40.0
+step_s = 0.064
+seed = 1
+
+[road]
+kind = "sumo_net"
+net_file = "{net}"
+length_m = 400.0
+route_turns = "any"
+
+[traffic]
+vehicles = 0
+warm_up_s = 0.0
+
+[ego]
+lane = 0
+start_m = 10.0
+speed_mps = 8.0
+
+[controller]
+name = "avoid"
+"""
+GRID_SWEEP = """\
+[sweep]
+name = "grid-turns"
+base = "grid-turns.toml"
+samples = 40
+sampler = "lhs"
+seed = 5
+controllers = ["lane-keep", "avoid"]
+
+[sweep.params]
+"ego.speed_mps" = {{ uniform = [4.0, 14.0] }}
+"""
+
+
+def grid_turns_sweep(folder: Path) -> SweepSpec:
+    """The grid-turns family on a default ``netgenerate --grid`` network made here."""
+    net = folder / "default-grid.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--output-file", str(net)],
+                   check=True, capture_output=True)
+    (folder / "grid-turns.toml").write_text(GRID_SCENARIO.format(net=net))
+    (folder / "grid-turns-sweep.toml").write_text(GRID_SWEEP)
+    return load_sweep(folder / "grid-turns-sweep.toml")
+
+
+def family_sweep(name: str, folder: Path) -> SweepSpec:
+    if name == "grid-turns":
+        return grid_turns_sweep(folder)
+    if name == "signal-grid":
+        return load_sweep(SWEEPS / "grid-town.toml")
+    if name == "envelope":
+        return load_sweep(SWEEPS / "seed-envelope.toml")
+    return load_sweep(SWEEPS / f"{name}.toml")
+
+
+FAMILIES = ("real-traffic", "real-motorway-stop", "grid-turns", "signal-grid", "envelope")
+
+
+def run_family(name: str, out_dir: Path, samples: int | None, workers: int) -> pd.DataFrame:
+    """Run (or finish) one family's sweep into ``out_dir``; its result rows."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    sweep = family_sweep(name, out_dir)
+    if samples is not None:
+        sweep = sweep.with_samples(samples)
+    check_inputs(sweep.base)
+    run_sweep(sweep, out_dir / "runs", LocalExecutor(workers), QuietReporter(),
+              traces="none", resume=True)
+    rows = pd.read_parquet(out_dir / "runs" / "results.parquet").sort_values("run_index")
+    if name == "envelope":  # the slice without traffic
+        rows = rows[rows["p.traffic.flow_vph_per_lane"] == 0]
+    return rows
+
+
+def figures(rows: pd.DataFrame) -> dict[str, float]:
+    """One controller's figures from its result rows."""
+    ok = rows[rows.status == "ok"]
+    out: dict[str, float] = {"runs": len(rows), "errors": len(rows) - len(ok)}
+    out.update({o: int((ok.outcome == o).sum()) for o in OUTCOMES})
+    out.update({f"hit_{h}": int((ok.collision_with == h).sum()) for h in HITS})
+    out["front_hits"] = int((ok.collision_part == "front").sum())
+    possible = ok.stop_possible.fillna(False).astype(bool)
+    out["collided_where_stop_possible"] = int((ok.collision & possible).sum())
+    out["red_light_violations"] = int(ok.red_light_violations.fillna(0).sum())
+    out["runs_through_red"] = int((ok.red_light_violations.fillna(0) > 0).sum())
+    return out
+
+
+def print_family(name: str, table: dict[str, dict[str, float]]) -> None:
+    for controller, figs in table.items():
+        for key, value in figs.items():
+            print(f"{name}.{controller}.{key} {value:.4g}")
+    keys = ("runs", "errors", *OUTCOMES, *(f"hit_{h}" for h in HITS), "front_hits",
+            "red_light_violations")
+    print(f"\n{name}\n{'controller':<10} " + " ".join(f"{k[:10]:>10}" for k in keys))
+    for controller, figs in table.items():
+        print(f"{controller:<10} " + " ".join(f"{figs[k]:>10.0f}" for k in keys))
+
+
+def rate_line(name: str, hits: int, runs: int, target: str) -> str:
+    lo, hi = wilson_interval(hits, runs)
+    rate = hits / runs if runs else float("nan")
+    return (f"must_show.{name} {rate:.3f} ({hits}/{runs}; target {target}; "
+            f"Wilson 95% {lo:.3f} - {hi:.3f})")
+
+
+def must_shows(results: dict[str, dict[str, dict[str, float]]]) -> list[str]:
+    lines = []
+    if "real-traffic" in results:
+        a = results["real-traffic"]["avoid"]
+        lines.append(rate_line("real_traffic.avoid_completed_rate", a["completed"], a["runs"],
+                               ">= 0.95"))
+        lines.append(f"must_show.real_traffic.avoid_road_edge_collisions {a['hit_road_edge']} "
+                     "(target 0)")
+        lines.append(f"must_show.real_traffic.avoid_front_collisions {a['front_hits']} (target 0)")
+    if "real-motorway-stop" in results:
+        a = results["real-motorway-stop"]["avoid"]
+        lines.append(f"must_show.real_motorway_stop.avoid_collided_where_stop_possible "
+                     f"{a['collided_where_stop_possible']} (target 0)")
+        lines.append(rate_line("real_motorway_stop.avoid_completed_rate", a["completed"],
+                               a["runs"], ">= 0.80"))
+    if "grid-turns" in results:
+        a = results["grid-turns"]["avoid"]
+        lines.append(f"must_show.grid_turns.avoid_road_edge_collisions {a['hit_road_edge']} "
+                     "(target 0)")
+    if "signal-grid" in results:
+        table = results["signal-grid"]
+        beside = ", ".join(f"{c} {f['red_light_violations']:.0f}" for c, f in table.items())
+        lines.append(f"must_show.signal_grid.avoid_red_light_violations "
+                     f"{table['avoid']['red_light_violations']:.0f} (target 0; {beside})")
+    if "envelope" in results:
+        a = results["envelope"]["avoid"]
+        lines.append(f"must_show.envelope.avoid_stuck {a['stuck']} (target 0 where the lane "
+                     "beside is free: no traffic in this slice)")
+        lines.append(f"must_show.envelope.avoid_collided_where_stop_possible "
+                     f"{a['collided_where_stop_possible']} (target 0)")
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("families", nargs="*", choices=[[], *FAMILIES], default=[])
+    parser.add_argument("--samples", type=int, default=None)
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--out", type=Path, default=None)
+    args = parser.parse_args()
+    out = args.out or Path(tempfile.mkdtemp(prefix="avoid-real-"))
+    results = {}
+    for name in args.families or FAMILIES:
+        rows = run_family(name, out / name, args.samples, args.workers)
+        table = {c: figures(rows[rows.controller == c]) for c in rows.controller.unique()}
+        print_family(name, table)
+        results[name] = table
+    print()
+    for line in must_shows(results):
+        print(line)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,137 @@
+"""``avoid`` among traffic: it follows a moving leader, waits behind a queue, stops
+for red and passes only what stands (sdc.car.leader_watch, the stop line in the
+observation). Closed loops on the fake straight road of test_avoid: the boxes
+move, the car moves under its own commands."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
+
+from scenarios.scenario_spec import AvoidParams
+from sdc.car.avoid import AVOID_LEFT, AVOID_RIGHT, AvoidController
+from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, StopLine
+from sdc.car.leader_watch import LeaderWatch
+from sdc.car.vehicle import Vehicle, VehicleState
+
+PASSING = (AVOID_LEFT, AVOID_RIGHT)
+
+
+def drive(boxes_at, seconds: float, speed_mps: float, line_at=None, **params):
+    """The car from x = 0 at ``speed_mps`` for ``seconds`` on a two-lane road;
+    ``boxes_at(t)`` the boxes at time t, ``line_at(t, front_x)`` the stop line
+    then (or None). Per step: (t, phase, speed, gap from the front bumper to the
+    nearest box in the own lane, the car's rear-axle x)."""
+    controller, vehicle = AvoidController(params), Vehicle(MODEL, 0.9)
+    state = VehicleState(0.0, 0.0, 0.0, speed_mps, 0.0)
+    rows = []
+    for k in range(round(seconds / STEP_S)):
+        t = k * STEP_S
+        boxes = boxes_at(t)
+        obs = FakeRoad(boxes, lanes_left=1, lanes_right=0).observe(state, t)
+        front_x = state.x_m + FRONT_AHEAD_M
+        if line_at is not None:
+            obs = obs._replace(stop_line=line_at(t, front_x))
+        command = controller.step(obs)
+        ahead = [b[0] - b[3] / 2 - front_x for b in boxes if abs(b[1]) < LANE_W / 2]
+        rows.append((t, controller.phase, state.speed_mps, min(ahead, default=math.inf),
+                     state.x_m))
+        state = vehicle.step(state, command, STEP_S)
+    return rows
+
+
+def test_leader_speed_is_its_stations_change_and_a_jump_starts_afresh():
+    watch = LeaderWatch(AvoidParams())
+    for k in range(10):
+        watch.update(k * 0.1, 50.0 + 8.0 * k * 0.1)
+    assert watch.speed_mps() == pytest.approx(8.0)
+    assert watch.is_traffic(0.9) and watch.moved
+    watch.update(1.0, 20.0)  # something else, much nearer
+    assert watch.speed_mps() is None and not watch.moved
+
+
+def test_a_car_seen_moving_then_stopping_stays_traffic_for_the_patience():
+    params = AvoidParams(stand_patience_s=5.0)
+    watch = LeaderWatch(params)
+    s = 50.0
+    for k in range(40):  # 10 m/s for 1 s, then it stands
+        s += (10.0 if k < 10 else 0.0) * 0.1
+        watch.update(k * 0.1, s)
+    assert watch.speed_mps() == pytest.approx(0.0) and watch.is_traffic(3.9)
+    assert not watch.is_traffic(watch.standing_since_s + 5.0)
+    never_moved = LeaderWatch(params)
+    for k in range(10):
+        never_moved.update(k * 0.1, 50.0)
+    assert not never_moved.is_traffic(0.9)  # a standing obstacle: to pass
+
+
+@pytest.mark.parametrize("leader_mps", [4.0, 8.0, 12.0])
+def test_a_slower_moving_leader_is_followed_at_the_time_gap_never_passed(leader_mps):
+    params = AvoidParams()
+    rows = drive(lambda t: [car_at(40.0 + leader_mps * t, 0.0)], 40.0, 15.0)
+    assert not any(phase in PASSING for _, phase, *_ in rows)
+    t, _, speed, gap, _ = rows[-1]
+    assert speed == pytest.approx(leader_mps, abs=0.2)
+    # the intelligent driver model's steady gap at the leader's speed, cruising at 15
+    wanted = ((params.wait_gap_m + leader_mps * params.follow_time_gap_s)
+              / math.sqrt(1 - (leader_mps / 15.0) ** 4))
+    assert gap == pytest.approx(wanted, rel=0.05)
+    assert min(r[3] for r in rows) > params.wait_gap_m  # never closer than standing
+
+
+def test_a_leader_that_brakes_hard_to_a_stop_is_not_hit_nor_passed():
+    def boxes(t):  # 12 m/s, then braking at 6 m/s^2 from t = 5 s to a stop
+        x = 30.0 + 12.0 * min(t, 5.0)
+        if t > 5.0:
+            dt = min(t - 5.0, 2.0)
+            x += 12.0 * dt - 3.0 * dt**2
+        return [car_at(x, 0.0)]
+
+    rows = drive(boxes, 20.0, 12.0, stand_patience_s=60.0)
+    assert min(r[3] for r in rows) > 1.0
+    assert not any(phase in PASSING for _, phase, *_ in rows)
+    assert rows[-1][2] == pytest.approx(0.0, abs=0.05)  # it waits behind the queue
+
+
+def test_what_stood_from_the_start_is_passed_once_seen():
+    rows = drive(lambda t: [car_at(60.0, 0.0)], 12.0, 12.0, lane_watch_s=0.0)
+    assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+
+
+def test_red_is_stopped_for_before_its_line_and_green_goes():
+    line_x = 60.0
+
+    def line(colour):
+        return lambda t, front_x: StopLine(line_x - front_x, colour, False)
+
+    for colour in (RED, YELLOW):
+        rows = drive(lambda t: [], 15.0, 12.0, line_at=line(colour))
+        fronts = [x + FRONT_AHEAD_M for *_, x in rows]
+        assert max(fronts) < line_x  # stopped short of it
+        assert max(fronts) > line_x - 3 * AvoidParams().stop_margin_m
+    for colour in (GREEN, NO_SIGNAL):
+        rows = drive(lambda t: [], 15.0, 12.0, line_at=line(colour))
+        assert rows[-1][4] + FRONT_AHEAD_M > line_x + 50.0
+
+
+def test_a_red_too_close_to_stop_for_is_crossed_and_a_late_yellow_too():
+    rows = drive(lambda t: [], 3.0, 20.0,
+                 line_at=lambda t, front_x: StopLine(15.0 - front_x, RED, False)
+                 if t > 0 else None)  # 25 m needed to stop at 20 m/s: 15 m given
+    assert rows[-1][4] + FRONT_AHEAD_M > 15.0
+    rows = drive(lambda t: [], 3.0, 15.0,
+                 line_at=lambda t, front_x: StopLine(20.0 - front_x, YELLOW, False))
+    assert rows[-1][4] + FRONT_AHEAD_M > 20.0  # 28 m to stop comfortably
+
+
+def test_what_stands_before_a_red_light_is_a_queue_waited_behind_not_passed():
+    queue = [car_at(55.0, 0.0)]  # the last car of a queue 3 m before the line
+    line = lambda t, front_x: StopLine(60.0 - front_x, RED, False)  # noqa: E731
+    rows = drive(lambda t: queue, 30.0, 12.0, line_at=line, lane_watch_s=0.0)
+    assert not any(phase in PASSING for _, phase, *_ in rows)
+    assert rows[-1][2] == 0.0 and rows[-1][3] == pytest.approx(AvoidParams().wait_gap_m, 0.2)
+    green = lambda t, front_x: StopLine(60.0 - front_x, GREEN, False)  # noqa: E731
+    rows = drive(lambda t: queue, 30.0, 12.0, line_at=green, lane_watch_s=0.0)
+    assert any(phase in PASSING for _, phase, *_ in rows)  # it stands through green: passed
