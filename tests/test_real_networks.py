@@ -265,3 +265,45 @@ def test_the_command_line_names_a_bad_pinned_route(tmp_path, lesson_plain):
     result = CliRunner().invoke(main, ["run", str(path)])
     assert result.exit_code == 2 and "road.route_edges" in result.output
     assert "'6272844#4'" in result.output and "Traceback" not in result.output
+
+
+def loop_route(radius_m: float):
+    """A 20 m straight lane, then a lane turning a full circle of ``radius_m``."""
+    from scenarios.sumo_net.net_xml import NetLane
+
+    theta = np.linspace(0.0, 2 * np.pi, 200)
+    circle = np.column_stack([20.0 + radius_m * np.sin(theta), radius_m * (1 - np.cos(theta))])
+    straight = np.array([[0.0, 0.0], [20.0, 0.0]])
+    return [NetLane(name, name, 0, shape, 3.2, 1.0, False, True)
+            for name, shape in (("a_0", straight), ("b_0", circle))]
+
+
+@pytest.mark.parametrize("speed_mps, takes", [(5.0, True), (12.0, True), (16.0, True),
+                                              (18.0, False), (25.0, False)])
+def test_a_route_whose_start_bends_are_too_tight_for_the_start_speed_is_not_drawn(
+        speed_mps, takes):
+    """A 15 m loop 10 m ahead of the start, grip 8.8 m/s^2 and brakes of 8 m/s^2: the
+    car brakes to v^2 - 2 * 8 * 10 by the loop, which takes sqrt(8.8 * 15) = 11.5 m/s:
+    from up to 17.1 m/s."""
+    from scenarios.sumo_net.route_road import takes_its_start
+
+    route = loop_route(15.0)
+    arrives_mps = np.sqrt(max(speed_mps**2 - 2 * 8.0 * 10.0, 0.0))
+    assert (arrives_mps <= np.sqrt(8.8 * 15.0)) == takes
+    assert takes_its_start(route, 10.0, speed_mps, 8.8, 8.0) == takes
+
+
+def test_routes_drawn_on_the_motorway_start_where_the_car_can_take_the_bends():
+    """On the A10 at 25 m/s the drawn route never starts on a ramp's loop; at walking
+    pace any route will do."""
+    from scenarios import ScenarioSpec
+    from scenarios.sumo_net.route_road import network_road, takes_its_start
+    from scenarios.toml_io import read_toml
+
+    plain = read_toml(Path(__file__).parents[1] / "scenarios/catalog/real-scenarios.toml")
+    plain["obstacles"] = []
+    for seed in range(12):
+        plain["scenario"]["seed"] = seed
+        plain["ego"]["speed_mps"] = 25.0
+        road = network_road(ScenarioSpec.from_plain(plain))
+        assert takes_its_start([p.lane for p in road.pieces], 10.0, 25.0, 0.9 * 9.81, 8.0)

@@ -19,13 +19,14 @@ built-in roads; road edges come from the whole network
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from scenarios.atomic_write import write_atomic
-from scenarios.bodies import VEHICLE_MODELS
+from scenarios.bodies import GRAVITY_MPS2, VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry, RouteStop
@@ -55,6 +56,8 @@ TURN_REACH_M = 5.0
 TURN_WINDOW_M = 3.0
 #: ... on the polyline sampled this finely [m]
 RADIUS_SAMPLE_M = 0.25
+#: a bend the ego reaches from its start is measured over this much of the lane [m]
+START_BEND_WINDOW_M = 6.0
 
 
 @dataclass(frozen=True)
@@ -130,16 +133,41 @@ def drivable_turns(net: NetFile, lane: NetLane, min_radius_m: float) -> list[Tur
     return turns
 
 
+def takes_its_start(route: list[NetLane], start_m: float, speed_mps: float,
+                    lateral_mps2: float, decel_mps2: float) -> bool:
+    """Can a car at ``speed_mps``, ``start_m`` along the route, take every bend it
+    reaches before it could stop (braking at ``decel_mps2`` from the start) at no
+    more than ``lateral_mps2``? A bend's curvature is its heading change over
+    :data:`START_BEND_WINDOW_M` (a kink spread over that much of the lane)."""
+    line = _joined([lane.shape_xy for lane in route])
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+    stop_m = speed_mps**2 / (2 * decel_mps2)
+    at = np.arange(start_m, min(along[-1], start_m + stop_m + START_BEND_WINDOW_M),
+                   RADIUS_SAMPLE_M)
+    span = round(START_BEND_WINDOW_M / RADIUS_SAMPLE_M)
+    if len(at) <= span + 1:
+        return True
+    x, y = np.interp(at, along, line[:, 0]), np.interp(at, along, line[:, 1])
+    heading = np.unwrap(np.arctan2(np.diff(y), np.diff(x)))
+    curvature = np.abs(heading[span:] - heading[:-span]) / START_BEND_WINDOW_M
+    reached_m = at[:len(curvature)] - start_m  # where each bend begins
+    speed_sq = np.maximum(speed_mps**2 - 2 * decel_mps2 * reached_m, 0.0)
+    return bool(np.all(curvature * speed_sq <= lateral_mps2))
+
+
 def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
                turns: str = "straight", min_radius_m: float = 0.0,
-               first_lane_m: float = 0.0) -> list[NetLane]:
+               first_lane_m: float = 0.0,
+               fits: Callable[[list[NetLane]], bool] | None = None) -> list[NetLane]:
     """Lanes (junction lanes included) of a route at least ``length_m`` long;
     ``turns`` is ``road.route_turns``; no turn on it is tighter than ``min_radius_m``
     (:func:`drivable_turns`); its first lane at least ``first_lane_m`` long where the
-    network has such lanes (the ego starts on it, not inside the junction after it)."""
+    network has such lanes (the ego starts on it, not inside the junction after it);
+    and, with ``fits``, a route it accepts (the car takes its start's bends)."""
     starts = ([lane for lane in net.normal_lanes() if lane.length_m >= first_lane_m]
               or net.normal_lanes())
     weights = np.array([lane.length_m for lane in starts])
+    too_fast = 0
     for _ in range(ROUTE_TRIES):
         lane = starts[rng.choice(len(starts), p=weights / weights.sum())]
         route, total_m = [lane], lane.length_m
@@ -153,8 +181,13 @@ def draw_route(net: NetFile, rng: np.random.Generator, length_m: float,
             lane = net.lanes[turn.to]
             route += [*(net.lanes[v] for v in turn.via), lane]
             total_m = sum(piece.length_m for piece in route)
-        if total_m >= length_m:
+        if total_m >= length_m and (fits is None or fits(route)):
             return route
+        too_fast += total_m >= length_m
+    if too_fast:
+        raise SdcError(f"{net.path}: found no route of {length_m:g} m in {ROUTE_TRIES} tries "
+                       f"whose bends the car takes from its start speed ({too_fast} too "
+                       "tight); try a lower ego.speed_mps")
     raise SdcError(f"{net.path}: found no route of {length_m:g} m in {ROUTE_TRIES} tries "
                    "(dead ends everywhere?); try a shorter road.length_m")
 
@@ -379,9 +412,15 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     else:
         try:
             first_lane_m = spec.ego.start_m + model.length_m / 2
+            mu = spec.vehicle.friction_mu
+
+            def fits(route: list[NetLane]) -> bool:
+                return takes_its_start(route, spec.ego.start_m, spec.ego.speed_mps,
+                                       mu * GRAVITY_MPS2, model.braking_decel_mps2(mu))
+
             route = draw_route(net, scenario_stream(spec.scenario.seed, ROUTE),
                                spec.road.length_m, spec.road.route_turns, min_radius_m,
-                               first_lane_m)
+                               first_lane_m, fits)
         except SdcError as e:
             raise SpecError("road.length_m", str(e)) from None
     road = NetworkRoad(net, route, network_area(net, cache_dir))

@@ -353,7 +353,8 @@ class AvoidController:
         if accel is None:
             gap = gap_path if self.phase in (AVOID_LEFT, AVOID_RIGHT) else min(gap_lane, gap_path)
             turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
-                                           v.max_decel_mps2 * p.gap_decel_fraction)
+                                           v.max_decel_mps2 * p.gap_decel_fraction,
+                                           behind_m=v.center_ahead_of_rear_axle_m)
             if following and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
                 accel = self._follow_accel(gap, max(self.leader.speed_mps() or 0.0, 0.0), obs,
                                            turn_mps)
@@ -369,9 +370,30 @@ class AvoidController:
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, speed * p.preview_time_s)
-        steer = pursuit_steer_rad(path, self.target_m, preview_m, v, speed,
+        target_m = self.target_m
+        if self.phase in (CRUISE, AVOID_RETURN):
+            target_m += self._inside_of_bend_m(path, obs)
+        steer = pursuit_steer_rad(path, target_m, preview_m, v, speed,
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
+
+    @staticmethod
+    def _inside_of_bend_m(path: LanePath, obs: Observation) -> float:
+        """How far toward the inside of the bend the car holds its line (+ left): in
+        a bend of radius R its front swings sqrt(R^2 + f^2) - R outside the rear axle's
+        track (f: the front bumper ahead of the rear axle); half of that centres the
+        band the body sweeps on the lane, as far as the lane leaves room beside it."""
+        v = obs.vehicle
+        rear_m = v.center_ahead_of_rear_axle_m
+        front_m = v.length_m - v.rear_overhang_m
+        axle_s_m = path.car_s_m - rear_m
+        curvature = path.curvature_1pm(axle_s_m, axle_s_m + front_m)
+        if abs(curvature) < 1e-6:
+            return 0.0
+        radius_m = 1.0 / abs(curvature)
+        swing_m = math.hypot(radius_m, front_m) - radius_m
+        room_m = max(obs.lane_width_m / 2 - v.width_m / 2, 0.0)
+        return math.copysign(min(swing_m / 2, room_m), curvature)
 
     def _flows_our_way(self, side: float, obs: Observation) -> bool:
         """Does what is nearest ahead in the lane on ``side`` move the car's way

@@ -91,15 +91,17 @@ class LanePath:
 
     def turn_speed_mps(self, lateral_accel_mps2: float, decel_mps2: float,
                        window_m: float = TURN_WINDOW_M,
-                       corner_m: float = CORNER_CUT_M) -> float:
+                       corner_m: float = CORNER_CUT_M, behind_m: float = 0.0) -> float:
         """The highest speed from which the car, braking at ``decel_mps2``, takes
         every bend of the lane ahead at no more than ``lateral_accel_mps2`` (inf on
         a straight lane). At each vertex ahead the lane's curvature is its turn
         between the segments ``window_m`` / 2 before and after it over the distance
         between their middles (at least ``window_m``), or, where the lane kinks
         (long straight pieces meeting at an angle), that of the arc tangent to both
-        that passes ``corner_m`` inside the corner, if tighter."""
-        ahead = self._start_s > self.car_s_m
+        that passes ``corner_m`` inside the corner, if tighter. Bends from
+        ``behind_m`` behind the body centre on count (the rear axle's: the car is
+        still turning through them)."""
+        ahead = self._start_s > self.car_s_m - behind_m
         if not ahead.any():
             return math.inf
         heading = np.unwrap(np.arctan2(self._dirs[:, 1], self._dirs[:, 0]))
@@ -117,7 +119,7 @@ class LanePath:
         if not bends.any():
             return math.inf
         limit_sq = lateral_accel_mps2 / curvature[bends]
-        distance = stations[bends] - self.car_s_m
+        distance = np.maximum(stations[bends] - self.car_s_m, 0.0)
         return float(np.sqrt(np.min(limit_sq + 2 * decel_mps2 * distance)))
 
     def heading_rad(self, s_m: float) -> float:
