@@ -30,6 +30,10 @@ from sdc.car.rear_watch import RearWatch
 CRUISE, BRAKE = "cruise", "brake"
 AVOID_LEFT, AVOID_RIGHT, AVOID_RETURN = "avoid_left", "avoid_right", "avoid_return"
 LEFT, RIGHT, OWN = 1.0, -1.0, 0.0  # the sign of a side's lateral offsets
+#: an obstacle's face is what the lidar sees of it within this beyond its nearest
+#: return [m], laterally joined by gaps under FACE_JOIN_M [m] (the beams' spacing at
+#: a few tens of metres)
+FACE_DEPTH_M, FACE_JOIN_M = 1.0, 0.6
 #: the lane taken when it is not sensed (off the road's ends): straight ahead
 STRAIGHT_AHEAD = LanePath(np.array([[-1000.0, 0.0], [1000.0, 0.0]]), np.array([-1000.0, 1000.0]))
 
@@ -56,6 +60,27 @@ class LaneFrame:
         ``[behind_m, ahead_m]`` (both from the body centre)."""
         lat, along = self.lateral_m, self.ahead_m
         return (lat >= lo_m) & (lat <= hi_m) & (along >= behind_m) & (along <= ahead_m)
+
+    def obstacle(self, in_path: np.ndarray, depth_m: float) -> np.ndarray:
+        """The returns of the obstacle whose nearest return is the nearest of
+        ``in_path``: its face (the returns within ``FACE_DEPTH_M`` beyond that one,
+        laterally joined to those in the path by gaps under ``FACE_JOIN_M``: a body
+        reaching out of the lane, not a kerb beside it) and everything laterally
+        within the face up to ``depth_m`` beyond it."""
+        nearest_m = float(self.ahead_m[in_path].min())
+        face = self.within(-math.inf, math.inf, nearest_m, nearest_m + FACE_DEPTH_M)
+        core = self.lateral_m[in_path & face]
+        lo, hi = float(core.min()), float(core.max())
+        outside = np.sort(self.lateral_m[face])
+        for lat in outside[outside > hi]:
+            if lat - hi > FACE_JOIN_M:
+                break
+            hi = float(lat)
+        for lat in outside[outside < lo][::-1]:
+            if lo - lat > FACE_JOIN_M:
+                break
+            lo = float(lat)
+        return self.within(lo, hi, nearest_m, nearest_m + depth_m)
 
     def gap_m(self, lo_m: float, hi_m: float, front_m: float) -> float:
         """Along the lane from ``front_m`` ahead of the body centre (its front bumper)
@@ -216,7 +241,7 @@ class AvoidController:
         moves ahead in that lane is then followed), or None."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
-        near = in_lane & (frame.ahead_m <= frame.ahead_m[in_lane].min() + p.obstacle_depth_m)
+        near = frame.obstacle(in_lane, p.obstacle_depth_m)
         lat = frame.lateral_m[near]
         brake = v.max_decel_mps2
         stop_m = speed**2 / (2 * brake)
