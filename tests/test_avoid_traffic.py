@@ -135,3 +135,12 @@ def test_what_stands_before_a_red_light_is_a_queue_waited_behind_not_passed():
     green = lambda t, front_x: StopLine(60.0 - front_x, GREEN, False)  # noqa: E731
     rows = drive(lambda t: queue, 30.0, 12.0, line_at=green, lane_watch_s=0.0)
     assert any(phase in PASSING for _, phase, *_ in rows)  # it stands through green: passed
+
+
+def test_red_is_stopped_for_while_braking_for_an_obstacle_beyond_the_line():
+    # the barrel 30 m past the line (beyond the junction), seen 3.4 s ahead at 25 m/s
+    barrel_x, line_x = 90.0, 60.0
+    rows = drive(lambda t: [[barrel_x, 0.0, 0.0, 0.6, 0.6]], 15.0, 25.0,
+                 line_at=lambda t, front_x: StopLine(line_x - front_x, RED, False))
+    assert "brake" in {phase for _, phase, *_ in rows}  # the obstacle's plan held it
+    assert max(x + FRONT_AHEAD_M for *_, x in rows) < line_x

@@ -375,11 +375,11 @@ class AvoidController:
         if self.phase in (CRUISE, AVOID_RETURN):
             self.target_m = 0.0
 
+        turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
+                                       v.max_decel_mps2 * p.gap_decel_fraction,
+                                       behind_m=v.center_ahead_of_rear_axle_m)
         if accel is None:
             gap = gap_path if self.phase in (AVOID_LEFT, AVOID_RIGHT) else min(gap_lane, gap_path)
-            turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
-                                           v.max_decel_mps2 * p.gap_decel_fraction,
-                                           behind_m=v.center_ahead_of_rear_axle_m)
             if following and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
                 accel = self._follow_accel(gap, max(self.leader.speed_mps() or 0.0, 0.0), obs,
                                            turn_mps)
@@ -391,7 +391,7 @@ class AvoidController:
                 accel = self._speed_accel(gap - p.wait_gap_m + p.stop_margin_m, obs, turn_mps)
             else:
                 accel = self._speed_accel(gap, obs, turn_mps)
-            accel = min(accel, self._signal_accel(obs, turn_mps))
+        accel = min(accel, self._signal_accel(obs, turn_mps))  # whatever else it does
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, speed * p.preview_time_s)
