@@ -200,10 +200,13 @@ class AvoidController:
         return obs.t_s - self.free_since_s[side] >= watch_s - 1e-9
 
     @staticmethod
-    def _nearest_s(frame: LaneFrame, lo_m: float, hi_m: float, front_m: float) -> float | None:
+    def _nearest_s(frame: LaneFrame, lo_m: float, hi_m: float, front_m: float,
+                   among: np.ndarray | None = None) -> float | None:
         """The station of the nearest return ahead of the front bumper laterally
-        within ``[lo_m, hi_m]`` (None if none)."""
+        within ``[lo_m, hi_m]`` (and ``among`` them; None if none)."""
         ahead = frame.within(lo_m, hi_m, front_m - 0.5, math.inf)
+        if among is not None:
+            ahead &= among
         if not ahead.any():
             return None
         return float(frame.s_m[int(np.argmin(np.where(ahead, frame.ahead_m, math.inf)))])
@@ -323,53 +326,13 @@ class AvoidController:
         # the car's own path, wherever it is: its body's width along the lane
         body_half = v.width_m / 2 + p.edge_tolerance_m
         gap_path = frame.gap_m(offset - body_half, offset + body_half, front_m)
-        gap_lane, lead_s = math.inf, None
-        if in_lane.any():
-            nearest = int(np.argmin(np.where(in_lane, frame.ahead_m, math.inf)))
-            gap_lane, lead_s = float(frame.ahead_m[nearest]) - front_m, float(frame.s_m[nearest])
-        self.leader.update(obs.t_s, lead_s)
-        self.path_leader.update(obs.t_s, self._nearest_s(frame, offset - body_half,
-                                                         offset + body_half, front_m))
-        for side, lo, hi in self._lane_bands(obs)[:2]:
-            self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
+        gap_lane = self._track(frame, obs, in_lane, (offset - body_half, offset + body_half))
         following = self.leader.is_traffic(obs.t_s)  # not an obstacle to pass
         waiting = not following and self._waits_at_junction(obs, gap_lane)
-        speed = obs.speed_mps
-        ttc_lane = gap_lane / speed if speed > 0 else math.inf
-        accel = None
-
-        if (following or waiting) and self.phase == BRAKE:
-            self.phase = CRUISE
-        if self.phase in (CRUISE, AVOID_RETURN, BRAKE) and not (following or waiting):
-            # a threat: closing in under detect_ttc_s, or (slow or stopped) within the
-            # waiting gap; once braking, anything in the lane the cruise would reach so
-            holding = self.phase == BRAKE and gap_lane < (
-                self.cruise_mps * p.detect_ttc_s + p.wait_gap_m)
-            lead_mps = self.leader.speed_mps()
-            early = (self._rear_view and self.phase == CRUISE and lead_mps is not None
-                     and ttc_lane < p.early_pass_ttc_s)
-            plan = None
-            if ttc_lane < p.detect_ttc_s or gap_lane < p.wait_gap_m + 1.0 or holding:
-                plan = self._plan(frame, obs, offset, gap_lane, in_lane)
-            elif early:
-                plan = self._plan(frame, obs, offset, gap_lane, in_lane, early=True)
-            elif self.phase == BRAKE:
-                self.phase = CRUISE
-            if plan is not None:
-                phase, side, target, end_s, accel = plan
-                if phase != BRAKE:
-                    self.phase, self.side, self.target_m = phase, side, target
-                    self.obstacle_end_s = end_s
-                else:
-                    self.phase, accel = BRAKE, self._brake_accel(gap_lane, obs)
+        accel = self._decide(frame, obs, path, gap_lane, in_lane, following or waiting)
         if self.phase in (AVOID_LEFT, AVOID_RIGHT):
             self._passing(frame, obs, path, half_lane)
-            oncoming = (self.path_leader.speed_mps() or 0.0) < -p.pass_max_speed_mps
-            if (oncoming and gap_lane > p.wait_gap_m + 1.0 and self._lane_open(OWN, obs)
-                    and self.phase != AVOID_RETURN):
-                # something comes the other way in the passing lane while the obstacle is
-                # still ahead: back behind it
-                self.phase, self.target_m = AVOID_RETURN, 0.0
+            self._back_from_oncoming(obs, gap_lane)
         if self.phase == AVOID_RETURN and abs(offset) < p.settled_offset_m:
             self.phase = CRUISE
         if self.phase in (CRUISE, AVOID_RETURN):
@@ -379,28 +342,92 @@ class AvoidController:
                                        v.max_decel_mps2 * p.gap_decel_fraction,
                                        behind_m=v.center_ahead_of_rear_axle_m)
         if accel is None:
-            gap = gap_path if self.phase in (AVOID_LEFT, AVOID_RIGHT) else min(gap_lane, gap_path)
-            if following and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
-                accel = self._follow_accel(gap, max(self.leader.speed_mps() or 0.0, 0.0), obs,
-                                           turn_mps)
-            elif self.phase in (AVOID_LEFT, AVOID_RIGHT) and self.path_leader.is_traffic(obs.t_s):
-                accel = self._follow_accel(gap, max(self.path_leader.speed_mps() or 0.0, 0.0),
-                                           obs, turn_mps)
-            elif waiting and self.phase in (CRUISE, AVOID_RETURN) and gap == gap_lane:
-                # to a stop wait_gap_m short of it: room to steer round it later
-                accel = self._speed_accel(gap - p.wait_gap_m + p.stop_margin_m, obs, turn_mps)
-            else:
-                accel = self._speed_accel(gap, obs, turn_mps)
+            accel = self._cruise_accel(obs, gap_lane, gap_path, following, waiting, turn_mps)
         accel = min(accel, self._signal_accel(obs, turn_mps))  # whatever else it does
         if lane is None:
             return Command(0.0, accel)
-        preview_m = max(p.min_preview_m, speed * p.preview_time_s)
+        preview_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s)
         target_m = self.target_m
         if self.phase in (CRUISE, AVOID_RETURN):
             target_m += self._inside_of_bend_m(path, obs)
-        steer = pursuit_steer_rad(path, target_m, preview_m, v, speed,
+        steer = pursuit_steer_rad(path, target_m, preview_m, v, obs.speed_mps,
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
+
+    def _track(self, frame: LaneFrame, obs: Observation, in_lane: np.ndarray,
+               body: tuple[float, float]) -> float:
+        """Track the leaders (in the own lane, in the body's path ``body`` = (lo, hi),
+        in the lanes beside) and return the gap from the front bumper to the
+        nearest return in the own lane (inf if none)."""
+        front_m = obs.vehicle.length_m / 2
+        lead_s = self._nearest_s(frame, -math.inf, math.inf, front_m, in_lane)
+        self.leader.update(obs.t_s, lead_s)
+        self.path_leader.update(obs.t_s, self._nearest_s(frame, *body, front_m))
+        for side, lo, hi in self._lane_bands(obs)[:2]:
+            self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
+        return float(frame.ahead_m[in_lane].min()) - front_m if in_lane.any() else math.inf
+
+    def _decide(self, frame: LaneFrame, obs: Observation, path: LanePath, gap_lane: float,
+                in_lane: np.ndarray, traffic: bool) -> float | None:
+        """The phase at this step, in the lane or braking (a ``traffic`` leader, one
+        followed or waited behind, is never an obstacle to pass): on a threat, the
+        plan's; its acceleration when the plan fixes it (None: the cruise's)."""
+        p = self.params
+        if traffic and self.phase == BRAKE:
+            self.phase = CRUISE
+        if self.phase not in (CRUISE, AVOID_RETURN, BRAKE) or traffic:
+            return None
+        # a threat: closing in under detect_ttc_s, or (slow or stopped) within the
+        # waiting gap; once braking, anything in the lane the cruise would reach so
+        speed = obs.speed_mps
+        ttc_lane = gap_lane / speed if speed > 0 else math.inf
+        holding = self.phase == BRAKE and gap_lane < (
+            self.cruise_mps * p.detect_ttc_s + p.wait_gap_m)
+        offset = path.offset_m
+        plan = None
+        if ttc_lane < p.detect_ttc_s or gap_lane < p.wait_gap_m + 1.0 or holding:
+            plan = self._plan(frame, obs, offset, gap_lane, in_lane)
+        elif (self._rear_view and self.phase == CRUISE and ttc_lane < p.early_pass_ttc_s
+              and self.leader.speed_mps() is not None):
+            plan = self._plan(frame, obs, offset, gap_lane, in_lane, early=True)
+        elif self.phase == BRAKE:
+            self.phase = CRUISE
+        if plan is None:
+            return None
+        phase, side, target, end_s, accel = plan
+        if phase == BRAKE:
+            self.phase = BRAKE
+            return self._brake_accel(gap_lane, obs)
+        self.phase, self.side, self.target_m = phase, side, target
+        self.obstacle_end_s = end_s
+        return accel
+
+    def _back_from_oncoming(self, obs: Observation, gap_lane: float) -> None:
+        """Something coming the other way in the passing lane while the obstacle is
+        still ahead: back behind it, if the own lane is open."""
+        p = self.params
+        oncoming = (self.path_leader.speed_mps() or 0.0) < -p.pass_max_speed_mps
+        if oncoming and gap_lane > p.wait_gap_m + 1.0 and self._lane_open(OWN, obs):
+            self.phase, self.target_m = AVOID_RETURN, 0.0
+
+    def _cruise_accel(self, obs: Observation, gap_lane: float, gap_path: float,
+                      following: bool, waiting: bool, turn_mps: float) -> float:
+        """The acceleration when no plan fixed it: following a leader (the own
+        lane's, or the passing lane's), to a stop wait_gap_m behind what is waited
+        for, or toward the cruise speed as what is ahead and the bends allow."""
+        p = self.params
+        passing = self.phase in (AVOID_LEFT, AVOID_RIGHT)
+        gap = gap_path if passing else min(gap_lane, gap_path)
+        in_lane = not passing and gap == gap_lane
+        if following and in_lane:
+            return self._follow_accel(gap, max(self.leader.speed_mps() or 0.0, 0.0), obs,
+                                      turn_mps)
+        if passing and self.path_leader.is_traffic(obs.t_s):
+            return self._follow_accel(gap, max(self.path_leader.speed_mps() or 0.0, 0.0),
+                                      obs, turn_mps)
+        if waiting and in_lane:  # room to steer round it later
+            return self._speed_accel(gap - p.wait_gap_m + p.stop_margin_m, obs, turn_mps)
+        return self._speed_accel(gap, obs, turn_mps)
 
     @staticmethod
     def _inside_of_bend_m(path: LanePath, obs: Observation) -> float:
