@@ -363,8 +363,9 @@ class AvoidController:
         lead_s = self._nearest_s(frame, -math.inf, math.inf, front_m, in_lane)
         self.leader.update(obs.t_s, lead_s)
         self.path_leader.update(obs.t_s, self._nearest_s(frame, *body, front_m))
-        for side, lo, hi in self._lane_bands(obs)[:2]:
-            self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
+        if self._rear_view:  # the lanes beside matter for an early pass only
+            for side, lo, hi in self._lane_bands(obs)[:2]:
+                self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
         return float(frame.ahead_m[in_lane].min()) - front_m if in_lane.any() else math.inf
 
     def _decide(self, frame: LaneFrame, obs: Observation, path: LanePath, gap_lane: float,
