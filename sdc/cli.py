@@ -76,6 +76,8 @@ def summary_lines(name: str, row: dict) -> list[str]:
     if row.get("world_overlaps"):
         outcome += (f"; WARNING: bodies other than the ego overlapped in "
                     f"{row['world_overlaps']} steps (world_overlaps)")
+    if row.get("red_light_violations"):
+        outcome += f"; crossed {row['red_light_violations']} red light(s)"
     maneuver = "not started"
     if row["maneuver_started"]:
         returned = (f"returned to lane after {row['return_time_s']:.2f} s"

@@ -90,3 +90,16 @@ def test_avoid_stops_for_red_where_lane_keeping_runs_it():
     assert sum(r["red_light_violations"] for r in avoid) == 0
     # it waited at the lights and went on at green, to the route's end
     assert all(r["termination"] == "route_end" for r in avoid)
+
+
+def test_sdc_run_says_how_many_red_lights_it_crossed(tmp_path):
+    from click.testing import CliRunner
+
+    from scenarios.toml_io import dumps_spec
+    from sdc.cli import main
+
+    spec_file = tmp_path / "grid.toml"
+    spec_file.write_text(dumps_spec(grid_town(1, "lane-keep")))
+    result = CliRunner().invoke(main, ["run", str(spec_file)])
+    assert result.exit_code in (0, 1), result.output
+    assert "crossed 2 red light(s)" in result.output
