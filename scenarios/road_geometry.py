@@ -22,8 +22,9 @@ CHORD_TOLERANCE_M = 0.001
 
 
 class RouteStop(NamedTuple):
-    """Where the route enters a junction that asks something of the car: the stop
-    line at the end of its lane, with a traffic light or a duty to give way."""
+    """Where the route enters a junction that takes traffic from another road too
+    (a crossing, a merge) or asks something of the car (a traffic light, a duty to
+    give way): the stop line at the end of its lane."""
 
     s_m: float  # the stop line, along the road
     tl: str | None  # the traffic light controlling the car's link (None: none)

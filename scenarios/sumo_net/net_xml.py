@@ -61,6 +61,9 @@ class Turn:
     #: SUMO's link state without a light: M major (right of way), m minor (give
     #: way), = equal (right before left), s stop, w all-way stop ("": unknown)
     state: str = ""
+    #: the junction it goes through takes traffic from another road too (a crossing,
+    #: a merge): not a mere bend or a change of lane count
+    shared: bool = False
 
     @property
     def give_way(self) -> bool:
@@ -152,6 +155,10 @@ def _parse(root: ET.Element):
         source, to = f"{c.get('from')}_{c.get('fromLane')}", f"{c.get('to')}_{c.get('toLane')}"
         successor.setdefault(source, []).append((to, c.get("via"), c.get("dir", "")))
         control[source, to] = (c.get("tl"), int(c.get("linkIndex", -1)), c.get("state", ""))
+    ends_at = {e.get("id"): e.get("to") for e in root.iter("edge") if e.get("to")}
+    arrivals = {j.get("id"): {lane.rsplit("_", 1)[0] for lane in j.get("incLanes", "").split()
+                              if not lane.startswith(":")}
+                for j in root.iter("junction")}
     turns: dict[str, tuple[Turn, ...]] = {}
     for lane in lanes.values():
         if lane.internal:
@@ -163,7 +170,8 @@ def _parse(root: ET.Element):
                 chain.append(via)  # a junction lane may lead on to another (internal junction)
                 via = next((v for t, v, _ in successor.get(via, []) if t == to), None)
             if to in lanes:
-                found.append(Turn(to, tuple(chain), direction, *control[lane.id, to]))
+                found.append(Turn(to, tuple(chain), direction, *control[lane.id, to],
+                                  shared=len(arrivals.get(ends_at.get(lane.edge), ())) > 1))
         turns[lane.id] = tuple(found)
     junctions = tuple(
         _shape(j.get("shape")) for j in root.iter("junction")

@@ -258,14 +258,15 @@ def _joined(shapes: list[np.ndarray]) -> np.ndarray:
 
 
 def _route_stops(net: NetFile, pieces: list[RoutePiece]) -> tuple[RouteStop, ...]:
-    """The stop lines where the route leaves a lane into a junction through a
-    link under a traffic light or one where the car gives way."""
+    """The stop lines where the route leaves a lane into a junction that takes
+    traffic from another road too, or through a link under a traffic light or one
+    where the car gives way."""
     normal = [p for p in pieces if not p.lane.internal]
     stops = []
     for piece, following in zip(normal, normal[1:], strict=False):
         turn = next((t for t in net.turns.get(piece.lane.id, ()) if t.to == following.lane.id),
                     None)
-        if turn is not None and (turn.tl is not None or turn.give_way):
+        if turn is not None and (turn.tl is not None or turn.give_way or turn.shared):
             stops.append(RouteStop(piece.start_s_m + piece.length_m, turn.tl, turn.link_index,
                                    turn.tl is None and turn.give_way))
     return tuple(stops)

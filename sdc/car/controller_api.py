@@ -33,7 +33,8 @@ RED, YELLOW, GREEN, NO_SIGNAL = "red", "yellow", "green", "none"
 
 class StopLine(NamedTuple):
     """The next stop line along the car's route, as a map and a camera give it: where
-    the route enters a junction with a traffic light or a duty to give way."""
+    the route enters a junction that takes traffic from another road too (a
+    crossing, a merge), or one with a traffic light or a duty to give way."""
 
     distance_m: float  # along the route from the front bumper to the line
     signal: str  # red | yellow | green | none (no light, or one switched off)
