@@ -1,5 +1,6 @@
-"""Tracking the leader: the nearest return in the car's own lane ahead, along the
-lane, step by step. Its speed tells a car to follow from an obstacle to pass.
+"""Tracking a leader: the nearest return ahead in one band along the lane (the
+car's own lane, its body's path, a lane beside), step by step. Its speed tells a
+car to follow from an obstacle to pass.
 
 The track is the leader's station along the lane (``LaneFrame.s_m``, the same for
 a point from step to step) over the last ``leader_track_s``; its speed is the
@@ -16,7 +17,7 @@ import math
 
 
 class LeaderWatch:
-    """The leader of the car's lane, step by step (see the module)."""
+    """The leader in one band, step by step (see the module)."""
 
     def __init__(self, params):
         self.params = params
