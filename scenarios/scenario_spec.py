@@ -334,13 +334,12 @@ class AvoidParams(Spec):
     #: with a rear view, a standing obstacle (its speed known, under
     #: pass_max_speed_mps) starts the pass this long before the car would reach it
     #: at its speed, into an open lane whose corridor is free as far as the lane
-    #: change takes (what moves ahead in that lane is then followed); 0: only at
-    #: detect_ttc_s
+    #: change takes when what is ahead in that lane moves the car's way (it is then
+    #: followed), else free to beyond the obstacle; 0: only at detect_ttc_s
     early_pass_ttc_s: float = num(10.0, ge=0, le=60)
-    #: following a leader (the intelligent driver model, Treiber et al. 2000):
-    #: the time gap kept ...
+    #: following a leader (the intelligent driver model, Treiber et al. 2000;
+    #: standing, wait_gap_m behind it): the time gap kept ...
     follow_time_gap_s: float = num(1.5, ge=0, le=10)
-    #: (standing behind it, the car keeps wait_gap_m) ...
     #: ... the acceleration it asks at most, and the deceleration it is comfortable with
     follow_accel_mps2: float = num(1.5, gt=0, le=10)
     follow_decel_mps2: float = num(2.0, gt=0, le=10)
