@@ -31,6 +31,8 @@ import tempfile
 from pathlib import Path
 
 import pandas as pd
+from avoid_roads import HITS, OUTCOMES  # beside this script
+from avoid_roads import figures as road_figures
 
 from analysis.stats import wilson_interval
 from scenarios import CATALOG_DIR
@@ -41,8 +43,6 @@ from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
 
-OUTCOMES = ("completed", "collided", "stuck", "unfinished")
-HITS = ("obstacle", "vehicle", "road_edge")
 SWEEPS = CATALOG_DIR / "sweeps"
 
 GRID_SCENARIO = """\
@@ -125,11 +125,10 @@ def run_family(name: str, out_dir: Path, samples: int | None, workers: int) -> p
 
 
 def figures(rows: pd.DataFrame) -> dict[str, float]:
-    """One controller's figures from its result rows."""
+    """One controller's figures from its result rows: avoid-roads' and those of
+    this issue."""
     ok = rows[rows.status == "ok"]
-    out: dict[str, float] = {"runs": len(rows), "errors": len(rows) - len(ok)}
-    out.update({o: int((ok.outcome == o).sum()) for o in OUTCOMES})
-    out.update({f"hit_{h}": int((ok.collision_with == h).sum()) for h in HITS})
+    out = road_figures(rows)
     out["front_hits"] = int((ok.collision_part == "front").sum())
     possible = ok.stop_possible.fillna(False).astype(bool)
     out["collided_where_stop_possible"] = int((ok.collision & possible).sum())

@@ -80,19 +80,27 @@ def scenario_stream(seed: int, purpose: int) -> np.random.Generator:
     return np.random.default_rng([seed, purpose])
 
 
+def _stations_m(points: np.ndarray) -> np.ndarray:
+    """Each vertex's distance along a polyline from its first [m]."""
+    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+
+
+def _headings_rad(points: np.ndarray, along_m: np.ndarray, at_m: np.ndarray) -> np.ndarray:
+    """The polyline's heading between consecutive points sampled at stations ``at_m``
+    (``along_m``: its vertices' stations), unwrapped [rad]."""
+    x, y = np.interp(at_m, along_m, points[:, 0]), np.interp(at_m, along_m, points[:, 1])
+    return np.unwrap(np.arctan2(np.diff(y), np.diff(x)))
+
+
 def tightest_radius_m(points: np.ndarray, window_m: float) -> float:
     """The tightest turning radius along a polyline: the least arc length over heading
     change of any stretch ``window_m`` long (a kink counts as a turn spread over it;
     the whole line when it is shorter), the line sampled every
     :data:`RADIUS_SAMPLE_M` [m]; inf for a straight line."""
-    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    along = _stations_m(points)
     if along[-1] <= RADIUS_SAMPLE_M:
         return math.inf
-    at = np.arange(0.0, along[-1], RADIUS_SAMPLE_M)
-    sampled = np.column_stack([np.interp(at, along, points[:, 0]),
-                               np.interp(at, along, points[:, 1])])
-    step = np.diff(sampled, axis=0)
-    heading = np.unwrap(np.arctan2(step[:, 1], step[:, 0]))
+    heading = _headings_rad(points, along, np.arange(0.0, along[-1], RADIUS_SAMPLE_M))
     span = int(min(round(window_m / RADIUS_SAMPLE_M), len(heading) - 1))
     if span < 1:
         return math.inf
@@ -111,7 +119,7 @@ def turn_path(net: NetFile, lane: NetLane, turn: Turn, reach_m: float) -> np.nda
 
 def _tail(points: np.ndarray, reach_m: float) -> np.ndarray:
     """The last ``reach_m`` of a polyline (its whole when shorter)."""
-    back = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points[::-1], axis=0).T))])
+    back = _stations_m(points[::-1])
     return points[len(points) - 1 - int(np.searchsorted(back, reach_m)):]
 
 
@@ -140,15 +148,14 @@ def takes_its_start(route: list[NetLane], start_m: float, speed_mps: float,
     more than ``lateral_mps2``? A bend's curvature is its heading change over
     :data:`START_BEND_WINDOW_M` (a kink spread over that much of the lane)."""
     line = _joined([lane.shape_xy for lane in route])
-    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+    along = _stations_m(line)
     stop_m = speed_mps**2 / (2 * decel_mps2)
     at = np.arange(start_m, min(along[-1], start_m + stop_m + START_BEND_WINDOW_M),
                    RADIUS_SAMPLE_M)
     span = round(START_BEND_WINDOW_M / RADIUS_SAMPLE_M)
     if len(at) <= span + 1:
         return True
-    x, y = np.interp(at, along, line[:, 0]), np.interp(at, along, line[:, 1])
-    heading = np.unwrap(np.arctan2(np.diff(y), np.diff(x)))
+    heading = _headings_rad(line, along, at)
     curvature = np.abs(heading[span:] - heading[:-span]) / START_BEND_WINDOW_M
     reached_m = at[:len(curvature)] - start_m  # where each bend begins
     speed_sq = np.maximum(speed_mps**2 - 2 * decel_mps2 * reached_m, 0.0)

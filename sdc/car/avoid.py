@@ -82,11 +82,18 @@ class LaneFrame:
             lo = float(lat)
         return self.within(lo, hi, nearest_m, nearest_m + depth_m)
 
-    def gap_m(self, lo_m: float, hi_m: float, front_m: float) -> float:
-        """Along the lane from ``front_m`` ahead of the body centre (its front bumper)
-        to the nearest return laterally within ``[lo_m, hi_m]`` (inf if none)."""
-        ahead = self.within(lo_m, hi_m, front_m - 0.5, math.inf)
-        return float(self.ahead_m[ahead].min()) - front_m if ahead.any() else math.inf
+    def ahead(self, lo_m: float, hi_m: float, front_m: float) -> np.ndarray:
+        """Which returns lie laterally in ``[lo_m, hi_m]`` and ahead of the front
+        bumper, ``front_m`` ahead of the body centre (0.5 m of slack behind it)."""
+        return self.within(lo_m, hi_m, front_m - 0.5, math.inf)
+
+    def nearest(self, among: np.ndarray, front_m: float) -> tuple[float, float | None]:
+        """The nearest return ``among`` these: its gap along the lane from the front
+        bumper ``front_m`` ahead of the body centre, and its station (inf, None: none)."""
+        if not among.any():
+            return math.inf, None
+        i = int(np.argmin(np.where(among, self.ahead_m, math.inf)))
+        return float(self.ahead_m[i]) - front_m, float(self.s_m[i])
 
 
 def pursuit_steer_rad(path: LanePath, target_m: float, preview_m: float,
@@ -199,18 +206,6 @@ class AvoidController:
             watch_s = max(watch_s, self.params.traffic_memory_s)
         return obs.t_s - self.free_since_s[side] >= watch_s - 1e-9
 
-    @staticmethod
-    def _nearest_s(frame: LaneFrame, lo_m: float, hi_m: float, front_m: float,
-                   among: np.ndarray | None = None) -> float | None:
-        """The station of the nearest return ahead of the front bumper laterally
-        within ``[lo_m, hi_m]`` (and ``among`` them; None if none)."""
-        ahead = frame.within(lo_m, hi_m, front_m - 0.5, math.inf)
-        if among is not None:
-            ahead &= among
-        if not ahead.any():
-            return None
-        return float(frame.s_m[int(np.argmin(np.where(ahead, frame.ahead_m, math.inf)))])
-
     # ---- decisions ---------------------------------------------------------
     def _swerve_distance_m(self, shift_m: float, speed_mps: float, brake_mps2: float,
                            obs: Observation) -> float:
@@ -322,11 +317,13 @@ class AvoidController:
         half_lane = min(obs.lane_width_m / 2 - p.edge_tolerance_m,
                         v.width_m / 2 + p.path_clearance_m)
         front_m = v.length_m / 2
-        in_lane = frame.within(-half_lane, half_lane, front_m - 0.5, math.inf)
+        in_lane = frame.ahead(-half_lane, half_lane, front_m)
         # the car's own path, wherever it is: its body's width along the lane
         body_half = v.width_m / 2 + p.edge_tolerance_m
-        gap_path = frame.gap_m(offset - body_half, offset + body_half, front_m)
-        gap_lane = self._track(frame, obs, in_lane, (offset - body_half, offset + body_half))
+        gap_lane, lane_s = frame.nearest(in_lane, front_m)
+        gap_path, path_s = frame.nearest(frame.ahead(offset - body_half, offset + body_half,
+                                                     front_m), front_m)
+        self._track(frame, obs, lane_s, path_s)
         following = self.leader.is_traffic(obs.t_s)  # not an obstacle to pass
         waiting = not following and self._waits_at_junction(obs, gap_lane)
         accel = self._decide(frame, obs, path, gap_lane, in_lane, following or waiting)
@@ -354,19 +351,17 @@ class AvoidController:
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
 
-    def _track(self, frame: LaneFrame, obs: Observation, in_lane: np.ndarray,
-               body: tuple[float, float]) -> float:
-        """Track the leaders (in the own lane, in the body's path ``body`` = (lo, hi),
-        in the lanes beside) and return the gap from the front bumper to the
-        nearest return in the own lane (inf if none)."""
-        front_m = obs.vehicle.length_m / 2
-        lead_s = self._nearest_s(frame, -math.inf, math.inf, front_m, in_lane)
-        self.leader.update(obs.t_s, lead_s)
-        self.path_leader.update(obs.t_s, self._nearest_s(frame, *body, front_m))
+    def _track(self, frame: LaneFrame, obs: Observation, lane_s: float | None,
+               path_s: float | None) -> None:
+        """Track the leaders: in the own lane and in the body's path (the stations
+        of their nearest returns), and in the lanes beside."""
+        self.leader.update(obs.t_s, lane_s)
+        self.path_leader.update(obs.t_s, path_s)
         if self._rear_view:  # the lanes beside matter for an early pass only
+            front_m = obs.vehicle.length_m / 2
             for side, lo, hi in self._lane_bands(obs)[:2]:
-                self.side_leaders[side].update(obs.t_s, self._nearest_s(frame, lo, hi, front_m))
-        return float(frame.ahead_m[in_lane].min()) - front_m if in_lane.any() else math.inf
+                _, side_s = frame.nearest(frame.ahead(lo, hi, front_m), front_m)
+                self.side_leaders[side].update(obs.t_s, side_s)
 
     def _decide(self, frame: LaneFrame, obs: Observation, path: LanePath, gap_lane: float,
                 in_lane: np.ndarray, traffic: bool) -> float | None:
