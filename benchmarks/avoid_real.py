@@ -10,7 +10,9 @@ a table per family, and the must-shows last as ``must_show.*`` lines with Wilson
   no road-edge collision, nothing hit with its front;
 - real-motorway-stop (sweeps/real-motorway-stop.toml: a stopped car in the ego's
   lane on the A10 with its demand, 360-degree lidar): no collision where a stop
-  was possible, at least 80% completed;
+  was possible, at least 80% completed; beside it SUMO's own driver in the ego's
+  place (sdc.run.sumo_driver): in how many runs the world lets a car past, and
+  what avoid completes of those;
 - grid-turns (a default ``netgenerate --grid`` network, routes turning at random,
   generated here): no road-edge collision;
 - signal-grid (sweeps/grid-town.toml: a signalised 10 x 10 grid with 2000 cars):
@@ -25,9 +27,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import subprocess
 import tempfile
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
@@ -37,11 +41,12 @@ from avoid_roads import figures as road_figures
 from analysis.stats import wilson_interval
 from scenarios import CATALOG_DIR
 from scenarios.sumo_net.build import sumo_binary
-from scenarios.sweep_spec import SweepSpec, load_sweep
+from scenarios.sweep_spec import SweepSpec, expand, load_sweep
 from scenarios.world_backends import check_inputs
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
+from sdc.run.sumo_driver import COLLIDED, NOT_PAST, PASSED, sumo_drives
 
 SWEEPS = CATALOG_DIR / "sweeps"
 
@@ -124,6 +129,29 @@ def run_family(name: str, out_dir: Path, samples: int | None, workers: int) -> p
     return rows
 
 
+def sumo_driver(out_dir: Path, samples: int | None, workers: int) -> dict[str, str]:
+    """SUMO's own driver in the ego's place in each of the family's avoid runs: each
+    run's outcome (passed, collided, not_past), by run ID."""
+    sweep = family_sweep("real-motorway-stop", out_dir)
+    if samples is not None:
+        sweep = sweep.with_samples(samples)
+    runs = [r for r in expand(sweep) if r.spec.controller.label == "avoid"]
+    with ProcessPoolExecutor(workers) as pool:
+        drives = list(pool.map(sumo_drives, [r.spec for r in runs]))
+    return {r.run_id: d.outcome for r, d in zip(runs, drives, strict=True)}
+
+
+def sumo_driver_figures(avoid: pd.DataFrame, drives: dict[str, str]) -> dict[str, float]:
+    """SUMO's driver's figures, and what avoid completed where SUMO's driver passed."""
+    outcomes = pd.Series(drives)
+    passed = outcomes[outcomes == PASSED].index
+    return {"runs": len(outcomes), "errors": 0, "completed": int((outcomes == PASSED).sum()),
+            "collided": int((outcomes == COLLIDED).sum()), "stuck": 0,
+            "unfinished": int((outcomes == NOT_PAST).sum()),  # not past when time ran out
+            "avoid_completed_where_passed":
+                int((avoid.set_index("run_id").outcome.reindex(passed) == "completed").sum())}
+
+
 def figures(rows: pd.DataFrame) -> dict[str, float]:
     """One controller's figures from its result rows: avoid-roads' and those of
     this issue."""
@@ -143,9 +171,9 @@ def print_family(name: str, table: dict[str, dict[str, float]]) -> None:
             print(f"{name}.{controller}.{key} {value:.4g}")
     keys = ("runs", "errors", *OUTCOMES, *(f"hit_{h}" for h in HITS), "front_hits",
             "red_light_violations")
-    print(f"\n{name}\n{'controller':<10} " + " ".join(f"{k[:10]:>10}" for k in keys))
+    print(f"\n{name}\n{'controller':<11} " + " ".join(f"{k[:10]:>10}" for k in keys))
     for controller, figs in table.items():
-        print(f"{controller:<10} " + " ".join(f"{figs[k]:>10.0f}" for k in keys))
+        print(f"{controller:<11} " + " ".join(f"{figs.get(k, math.nan):>10.0f}" for k in keys))
 
 
 def rate_line(name: str, hits: int, runs: int, target: str) -> str:
@@ -170,6 +198,13 @@ def must_shows(results: dict[str, dict[str, dict[str, float]]]) -> list[str]:
                      f"{a['collided_where_stop_possible']} (target 0)")
         lines.append(rate_line("real_motorway_stop.avoid_completed_rate", a["completed"],
                                a["runs"], ">= 0.80"))
+        s = results["real-motorway-stop"].get("sumo-driver")
+        if s is not None:
+            lines.append(rate_line("real_motorway_stop.sumo_driver_passed_rate", s["completed"],
+                                   s["runs"], "none: the world's own driver, for reference"))
+            lines.append(rate_line("real_motorway_stop.avoid_completed_where_sumo_driver_passed",
+                                   s["avoid_completed_where_passed"], s["completed"],
+                                   "none: what the world allows"))
     if "grid-turns" in results:
         a = results["grid-turns"]["avoid"]
         lines.append(f"must_show.grid_turns.avoid_road_edge_collisions {a['hit_road_edge']} "
@@ -200,6 +235,9 @@ def main() -> None:
     for name in args.families or FAMILIES:
         rows = run_family(name, out / name, args.samples, args.workers)
         table = {c: figures(rows[rows.controller == c]) for c in rows.controller.unique()}
+        if name == "real-motorway-stop":
+            drives = sumo_driver(out / name, args.samples, args.workers)
+            table["sumo-driver"] = sumo_driver_figures(rows[rows.controller == "avoid"], drives)
         print_family(name, table)
         results[name] = table
     print()

@@ -354,6 +354,12 @@ class AvoidParams(Spec):
     #: a yellow light is stopped for when stopping at its line needs no more than
     #: this fraction of the car's hardest braking (a red one whenever it can stop)
     yellow_decel_fraction: float = num(0.5, gt=0, le=1)
+    #: through a bend of the lane tighter than this radius the car checks the room
+    #: its body sweeps against the range image and picks its line by it ...
+    bend_radius_m: float = num(25.0, gt=0, le=1000)
+    #: ... keeping this far from every return (the turn at most as tight as at
+    #: tightest_steer_fraction of the steering limit)
+    bend_clearance_m: float = num(0.25, ge=0, le=5)
 
 
 #: each built-in controller's parameters (its classes are in ``sdc.car.controller_plugins``)

@@ -562,6 +562,25 @@ class SumoWorld:
                                     self._types.sizes, float(ego_box[0]), float(ego_box[1]),
                                     self._radius_m, boxes, speeds, kinds)
 
+    def hand_ego_to_sumo(self, max_speed_mps: float) -> None:
+        """From now on SUMO's own driver models drive the ego (its safe speeds and
+        lane changes, up to ``max_speed_mps``): the world's driver in the ego's place,
+        a reference for what the world leaves a controller (:mod:`sdc.run.sumo_driver`)."""
+        vehicle = self._sumo.vehicle
+        vehicle.setSpeedMode(EGO_ID, 31)
+        vehicle.setLaneChangeMode(EGO_ID, 1621)
+        vehicle.setMaxSpeed(EGO_ID, max_speed_mps)
+        vehicle.setSpeed(EGO_ID, -1)
+
+    def step_sumo_ego(self) -> tuple[float, float, float, bool]:
+        """One step with SUMO driving the ego (:meth:`hand_ego_to_sumo`): its front
+        bumper's x and y [m], its speed [m/s], and whether SUMO saw it collide."""
+        self._advance()
+        vehicle = self._sumo.vehicle
+        x_m, y_m = vehicle.getPosition(EGO_ID)
+        collided = EGO_ID in self._sumo.simulation.getCollidingVehiclesIDList()
+        return x_m, y_m, vehicle.getSpeed(EGO_ID), collided
+
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""
         return sum(1 for v in self._sumo.vehicle.getIDList() if _is_traffic(v))

@@ -1,5 +1,6 @@
 """SUMO network files as roads: reading, drivable area and road edges, routes.
-No simulation runs here (netconvert builds one small network)."""
+netconvert builds small networks; one whole run (marked slow) drives off the
+network's end."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from scenarios import CATALOG_DIR, RoadSpec, SpecError
+from scenarios import CATALOG_DIR, RoadSpec, ScenarioSpec, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.sumo_net.build import build_network
 from scenarios.sumo_net.drivable_area import DrivableArea
@@ -203,3 +204,43 @@ def test_a_bad_network_file_is_bad_input_for_run_and_sweep(tmp_path):
         result = CliRunner().invoke(main, args)
         assert result.exit_code == 2, result.output
         assert "road.net_file" in result.stderr and "not a SUMO network" in result.stderr
+
+
+def dead_end_road(tmp_path) -> tuple[dict, object]:
+    """A sumo_net road on a network of one straight 200 m two-lane edge: its route
+    ends where the network does (SUMO's vehicles leave it there)."""
+    net = build_network(RoadSpec(length_m=200.0, lanes=2, lane_width_m=3.5), tmp_path)
+    plain = load_spec(GRID_TOWN).to_plain()
+    plain["road"].update(net_file=str(net), length_m=150.0)
+    return plain, network_road(ScenarioSpec.from_plain(plain))
+
+
+def test_past_the_end_of_a_route_that_leaves_the_network_is_no_kerb(tmp_path):
+    _, road = dead_end_road(tmp_path)
+    assert road.length_m == pytest.approx(200.0)
+    lane_y = float(road.center_xy[0, 1])
+
+    def hit(cx, cy):
+        return collision_with(np.array([cx, cy, 0.0, 4.85, 1.93]), Contacts(-1, -1, math.inf),
+                              road)
+
+    assert hit(200.5, lane_y) is None  # its front 2.9 m out of the network
+    assert hit(190.0, lane_y - 2.0) == ROAD_EDGE  # over the side kerb before the end
+    assert hit(199.0, lane_y - 2.0) == ROAD_EDGE  # ... and at the end
+
+
+@pytest.mark.slow
+def test_a_route_that_leaves_the_network_ends_the_run_without_a_made_up_kerb(tmp_path):
+    """At 25 m/s the front moves 2.5 m a step: out of the network's last lane before
+    the route's end is checked, where no kerb stands."""
+    from sdc.run.episode import run_episode
+
+    plain, _ = dead_end_road(tmp_path)
+    plain["traffic"].update(vehicles=0, warm_up_s=0.0)
+    plain["obstacles"] = []
+    plain["ego"].update(lane=0, start_m=20.0, speed_mps=25.0)
+    plain["scenario"].update(step_s=0.1, duration_s=20.0)
+    plain["controller"] = {"name": "lane-keep"}
+    row = run_episode(ScenarioSpec.from_plain(plain)).row
+    assert row["collision_with"] == "none"
+    assert row["termination"] == "route_end"

@@ -26,6 +26,7 @@ from sdc.car.collision import FRONT, RAN_INTO, REAR, SIDE, WAS_HIT, describe, hi
 from sdc.car.geometry import box_gap_m, boxes_overlap
 from sdc.car.geometry_kernels import Contacts
 from sdc.run.episode import run_episode
+from sdc.run.sumo_driver import PASSED, sumo_drives
 
 X5_LENGTH_M, X5_WIDTH_M = 4.85, 1.93
 
@@ -367,35 +368,6 @@ def test_sumo_knows_the_egos_size_and_brakes(lesson_plain):
         assert math.isclose(vehicle.getEmergencyDecel("ego"), vehicle.getDecel("ego"))
 
 
-def sumo_drives_the_ego(spec: ScenarioSpec) -> tuple[str, float]:
-    """SUMO's own driver model as the ego: a car of the ego's vType, entered where the
-    ego starts, cruising at its speed, lane changes and all left to SUMO. Whether it
-    gets past the first obstacle (``passed``, ``collided`` or ``stuck``) and the lowest
-    speed it drove at."""
-    road = make_road(spec)
-    obstacle = spec.obstacles[0]
-    obstacle_end_m = (road.place_s_m(obstacle.position_m, obstacle.size_m[0])
-                      + obstacle.size_m[0] / 2)
-    with SumoWorld(spec, road) as world:
-        lane_d_m = road.lane_center_d_m(spec.ego.lane)
-        world.start(held_box(road, spec.ego.start_m, lane_d_m), spec.ego.speed_mps)
-        vehicle, simulation = world._sumo.vehicle, world._sumo.simulation
-        vehicle.setSpeedMode("ego", 31)  # SUMO's safe speeds and lane changes again
-        vehicle.setLaneChangeMode("ego", 1621)
-        vehicle.setMaxSpeed("ego", spec.ego.speed_mps)
-        vehicle.setSpeed("ego", -1)
-        slowest_mps = spec.ego.speed_mps
-        for _ in range(round(spec.scenario.duration_s / spec.scenario.step_s)):
-            world._sumo.simulationStep()
-            if "ego" in simulation.getCollidingVehiclesIDList():
-                return "collided", slowest_mps
-            slowest_mps = min(slowest_mps, vehicle.getSpeed("ego"))
-            front_m = road.locate(*vehicle.getPosition("ego"))[0]
-            if front_m - X5_LENGTH_M > obstacle_end_m:
-                return "passed", slowest_mps
-        return "stuck", slowest_mps
-
-
 @pytest.mark.slow
 def test_the_traffic_family_leaves_a_way_past_its_obstacle():
     """No gridlock in the avoid-roads traffic family: in its 15 busiest samples
@@ -409,6 +381,6 @@ def test_the_traffic_family_leaves_a_way_past_its_obstacle():
             if r.spec.controller.label == "avoid"]
     busiest = sorted(runs, key=lambda r: -r.spec.traffic.flow_vph_per_lane)[:15]
     for run in busiest:
-        outcome, slowest_mps = sumo_drives_the_ego(run.spec)
-        assert outcome == "passed", (run.run_id, outcome)
-        assert slowest_mps > 1.0, run.run_id
+        drive = sumo_drives(run.spec)
+        assert drive.outcome == PASSED, (run.run_id, drive)
+        assert drive.slowest_mps > 1.0, run.run_id

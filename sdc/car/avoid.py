@@ -22,6 +22,7 @@ import numpy as np
 
 from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
+from sdc.car.bend_room import Track, bend_room, track
 from sdc.car.controller_api import RED, YELLOW, Command, Observation, VehicleModel
 from sdc.car.lane_path import TURN_WINDOW_M, LanePath
 from sdc.car.leader_watch import LeaderWatch
@@ -52,7 +53,8 @@ class LaneFrame:
         r = obs.ranges_m[hit]
         x = (obs.lidar_ahead_m - obs.vehicle.center_ahead_of_rear_axle_m) + r * cos_sin[0, hit]
         y = r * cos_sin[1, hit]
-        self.s_m, self.lateral_m = path.to_lane(np.column_stack([x, y]))
+        self.xy_m = np.column_stack([x, y])  # in the car's frame, from its body centre
+        self.s_m, self.lateral_m = path.to_lane(self.xy_m)
         self.ahead_m = self.s_m - path.car_s_m
 
     def within(self, lo_m: float, hi_m: float, behind_m: float, ahead_m: float) -> np.ndarray:
@@ -115,7 +117,8 @@ def pursuit_steer_rad(path: LanePath, target_m: float, preview_m: float,
     ahead_m = reach_m * c - lateral_m * s
     left_m = reach_m * s + lateral_m * c
     curvature = 2.0 * left_m / (ahead_m**2 + left_m**2)
-    curvature += path.curvature_1pm(axle_s_m, axle_s_m + TURN_WINDOW_M)
+    lane_1pm = path.curvature_1pm(axle_s_m, axle_s_m + TURN_WINDOW_M)
+    curvature += lane_1pm / max(1.0 - lane_1pm * target_m, 0.2)  # the target's parallel
     if speed_mps > 0:
         limit = max_lateral_accel_mps2 / speed_mps**2
         curvature = max(-limit, min(limit, curvature))
@@ -153,6 +156,7 @@ class AvoidController:
         self.path_leader = LeaderWatch(self.params)  # in the body's path, wherever it is
         self.side_leaders = {LEFT: LeaderWatch(self.params), RIGHT: LeaderWatch(self.params)}
         self.lines_s_m: list[float] = []  # the stop lines seen, along the road
+        self.bend_offset_m: float | None = None  # the offset held through a tight bend
         self._cos_sin: np.ndarray | None = None
         self._rear_view = False
 
@@ -332,22 +336,23 @@ class AvoidController:
             self._back_from_oncoming(obs, gap_lane)
         if self.phase == AVOID_RETURN and abs(offset) < p.settled_offset_m:
             self.phase = CRUISE
+        target_m, free_m, bend_mps, steer_path = self.target_m, math.inf, math.inf, path
         if self.phase in (CRUISE, AVOID_RETURN):
             self.target_m = 0.0
+            target_m, free_m, bend_mps, steer_path = self._lane_line(frame, obs, path, lane_s)
 
-        turn_mps = path.turn_speed_mps(p.turn_lateral_accel_mps2,
-                                       v.max_decel_mps2 * p.gap_decel_fraction,
-                                       behind_m=v.center_ahead_of_rear_axle_m)
+        turn_mps = min(bend_mps, path.turn_speed_mps(p.turn_lateral_accel_mps2,
+                                                     v.max_decel_mps2 * p.gap_decel_fraction,
+                                                     behind_m=v.center_ahead_of_rear_axle_m))
         if accel is None:
             accel = self._cruise_accel(obs, gap_lane, gap_path, following, waiting, turn_mps)
         accel = min(accel, self._signal_accel(obs, turn_mps))  # whatever else it does
+        if math.isfinite(free_m):  # no room for the body in the bend ahead: stop short
+            accel = min(accel, self._speed_accel(free_m, obs, turn_mps, wait_m=p.stop_margin_m))
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s)
-        target_m = self.target_m
-        if self.phase in (CRUISE, AVOID_RETURN):
-            target_m += self._inside_of_bend_m(path, obs)
-        steer = pursuit_steer_rad(path, target_m, preview_m, v, obs.speed_mps,
+        steer = pursuit_steer_rad(steer_path, target_m, preview_m, v, obs.speed_mps,
                                   p.max_lateral_accel_mps2)
         return Command(steer, accel)
 
@@ -424,6 +429,55 @@ class AvoidController:
         if waiting and in_lane:  # room to steer round it later
             return self._speed_accel(gap - p.wait_gap_m + p.stop_margin_m, obs, turn_mps)
         return self._speed_accel(gap, obs, turn_mps)
+
+    def _lane_line(self, frame: LaneFrame, obs: Observation, path: LanePath,
+                   leader_s: float | None) -> tuple[float, float, float, LanePath]:
+        """Where the car holds its lane: its lateral target, how far it may go (inf:
+        as far as it likes), the speed the bends ahead allow on that line and the
+        path to steer along (through a tight bend the lane smoothed as the car's track
+        is: a junction's turn is drawn as a few straight pieces).
+
+        Through bends tighter than ``bend_radius_m`` ahead (up to where the car
+        stops braking at ``gap_decel_fraction`` of its hardest, and as long again
+        as the car; not past the leader) the offset nearest the lane's centre that
+        leaves the body ``bend_clearance_m`` from every return (:mod:`sdc.car.bend_room`);
+        once the rear axle is in such a bend, the offset held so far while it still
+        fits (the corner beside the car is then out of the range image). No offset
+        fits: the car stops short of where it would not. Elsewhere, the inside of a
+        gentle bend (:meth:`_inside_of_bend_m`)."""
+        p, v = self.params, obs.vehicle
+        axle_s = path.car_s_m - v.center_ahead_of_rear_axle_m
+        decel = v.max_decel_mps2 * p.gap_decel_fraction
+        end_s = axle_s + obs.speed_mps**2 / (2 * decel) + 2 * v.length_m
+        if leader_s is not None:
+            end_s = min(end_s, leader_s - v.front_ahead_of_rear_axle_m - p.bend_clearance_m)
+        route = track(path, axle_s, end_s)
+        tight = np.abs(route.curvature_1pm) > 1.0 / p.bend_radius_m
+        if not tight.any():
+            self.bend_offset_m = None
+            return self._inside_of_bend_m(path, obs), math.inf, math.inf, path
+        held = self.bend_offset_m is not None and bool(tight[0])
+        preferred = self.bend_offset_m if held else 0.0
+        min_radius_m = v.wheelbase_m / math.tan(p.tightest_steer_fraction * v.max_steer_rad)
+        room = bend_room(route, frame.xy_m, v, preferred, obs.lane_width_m / 2,
+                         p.bend_clearance_m, min_radius_m,
+                         None if held else max(obs.lane_width_m / 2 - v.width_m / 2, 0.0))
+        offset = preferred if math.isnan(room.offset_m) else room.offset_m
+        self.bend_offset_m = offset
+        reach_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s) + TURN_WINDOW_M
+        steer_along = track(path, axle_s - 1.0, axle_s + v.wheelbase_m + reach_m)
+        return (offset, room.free_m, self._bend_speed_mps(route, offset, obs),
+                LanePath(steer_along.xy_m, steer_along.s_m))
+
+    def _bend_speed_mps(self, route: Track, offset_m: float, obs: Observation) -> float:
+        """The speed from which the car, braking at ``gap_decel_fraction`` of its
+        hardest, takes the track's parallel at ``offset_m`` at no more than
+        ``turn_lateral_accel_mps2``."""
+        p = self.params
+        curvature = route.curvature_1pm / np.maximum(1.0 - route.curvature_1pm * offset_m, 0.2)
+        decel = obs.vehicle.max_decel_mps2 * p.gap_decel_fraction
+        limit_sq = p.turn_lateral_accel_mps2 / np.maximum(np.abs(curvature), 1e-9)
+        return float(np.sqrt(np.min(limit_sq + 2 * decel * (route.s_m - route.s_m[0]))))
 
     @staticmethod
     def _inside_of_bend_m(path: LanePath, obs: Observation) -> float:

@@ -33,13 +33,17 @@ def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) 
     given its box's ``contacts`` with the obstacles and traffic.
 
     A body corner off the road (beyond either edge, while alongside it; off the
-    drivable area of a network) counts as a road-edge collision.
+    drivable area of a network) counts as a road-edge collision, unless it is past
+    the route's end (where the route leaves the network there is no kerb: SUMO's
+    vehicles leave it; the run ends there).
     """
     if contacts.obstacle >= 0:
         return OBSTACLE
     if contacts.vehicle >= 0:
         return VEHICLE
-    if road.off_road(one_box_corners(ego_box)).any():
+    corners = one_box_corners(ego_box)
+    off = corners[road.off_road(corners)]
+    if len(off) and (road.to_frenet(off)[0] < road.length_m).any():
         return ROAD_EDGE
     return None
 

@@ -139,6 +139,12 @@ class LanePath:
         index = bisect.bisect_right(self._start_s_list, s_m) - 1
         return min(max(index, 0), len(self._start_s_list) - 1)
 
+    def points_at(self, s_m: np.ndarray) -> np.ndarray:
+        """The lane centre's points at stations ``s_m`` (K,) in the car's frame (K, 2)."""
+        seg = np.clip(np.searchsorted(self._start_s, s_m, "right") - 1, 0, len(self._start_s) - 1)
+        along = s_m - self._start_s[seg]
+        return self._starts[seg] + along[:, None] * self._dirs[seg]
+
     def point_at(self, s_m: float, d_m: float) -> tuple[float, float]:
         """The point of lane coordinates ``(s_m, d_m)`` in the car's frame."""
         seg = self._segment(s_m)
