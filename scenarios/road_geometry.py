@@ -35,6 +35,30 @@ class RouteStop(NamedTuple):
 NO_STOPS: tuple[RouteStop, ...] = ()
 
 
+class Crossings(NamedTuple):
+    """Roads that cross the route without a junction: over or under it."""
+
+    lanes: frozenset[str]  # their SUMO lanes
+    points_xy: np.ndarray  # where their centre lines cross the route's (K, 2) [m]
+
+
+NO_CROSSINGS = Crossings(frozenset(), np.empty((0, 2)))
+#: no stretch of the road (an empty (0, 2) array of ``[from_s_m, to_s_m]`` rows)
+NO_STRETCHES = np.empty((0, 2))
+
+
+def merged_stretches(rows: np.ndarray, join_m: float = 1e-6) -> np.ndarray:
+    """Stretches ``[from_s_m, to_s_m]`` (K, 2) in order, those that touch (within
+    ``join_m``) joined into one."""
+    out: list[list[float]] = []
+    for lo, hi in rows:
+        if out and lo <= out[-1][1] + join_m:
+            out[-1][1] = max(out[-1][1], float(hi))
+        else:
+            out.append([float(lo), float(hi)])
+    return np.array(out).reshape(-1, 2)
+
+
 def centre_line_xy(road: RoadSpec) -> np.ndarray:
     """The centre line as an (M, 2) polyline starting at the origin heading +x [m]."""
     if road.kind == "straight":
@@ -166,6 +190,18 @@ class RoadGeometry:
     def stops(self) -> tuple[RouteStop, ...]:
         """The stop lines along the road, in order (none on a road of its own)."""
         return NO_STOPS
+
+    def crossings(self) -> Crossings:
+        """Roads over or under this one (none on a road of its own)."""
+        return NO_CROSSINGS
+
+    def lanes_beside(self, lane: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where a lane of the road's own direction, open to cars, lies beside lane
+        ``lane`` (left, right): each (K, 2) rows ``[from_s_m, to_s_m]`` along the
+        road, in order. Here every lane runs the road's whole length."""
+        whole = np.array([[0.0, self.length_m]])
+        return (whole if lane + 1 < self.lanes else NO_STRETCHES,
+                whole if lane > 0 else NO_STRETCHES)
 
     def edge_gaps_m(self, points: np.ndarray) -> np.ndarray:
         """Each point's distance to the nearer road edge [m]: negative beyond it,

@@ -337,6 +337,12 @@ class AvoidParams(Spec):
     #: change takes when what is ahead in that lane moves the car's way (it is then
     #: followed), else free to beyond the obstacle; 0: only at detect_ttc_s
     early_pass_ttc_s: float = num(10.0, ge=0, le=60)
+    #: a pass on a side where the map shows no lane of the car's direction on past
+    #: the obstacle (the other direction's lane, a lane that ends, a shoulder)
+    #: starts only with that side seen free as far as a car coming the other way,
+    #: out of sight, at this speed would come before the car is back in its lane
+    #: (on the A10's two-way links SUMO's cars come at up to 19 m/s)
+    oncoming_speed_mps: float = num(20.0, ge=0, le=70)
     #: following a leader (the intelligent driver model, Treiber et al. 2000;
     #: standing, wait_gap_m behind it): the time gap kept ...
     follow_time_gap_s: float = num(1.5, ge=0, le=10)

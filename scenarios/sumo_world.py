@@ -36,6 +36,7 @@ from scenarios.snapshot import (
     sensing_radius_m,
 )
 from scenarios.sumo_net.build import EDGE_ID, network_file, source_sha256, sumo_binary
+from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
 from scenarios.sumo_net.sumo_config import load_bundle
@@ -256,6 +257,7 @@ class SumoWorld:
         self.cache_dir = cache_dir
         self.warm_state_path = warm_state
         self._obstacle_boxes = obstacle_boxes(spec, road)
+        self._crossings = road.crossings()
         self._demand: RandomTrips | None = None
         self._trips_made = 0
         self._radius_m = sensing_radius_m(spec)
@@ -545,8 +547,10 @@ class SumoWorld:
         (compiled where built: in Python it cost more than the step's geometry).
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
-        if taken:  # the results are the step's, from before they were taken off
-            nearby = {vid: values for vid, values in nearby.items() if vid not in taken}
+        # the results are the step's, from before they were taken off
+        hidden = taken | self._on_other_levels(nearby, ego_box)
+        if hidden:
+            nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
         n = len(nearby)
         boxes, speeds, kinds = np.empty((n, 5)), np.empty(n), np.empty(n)
         try:
@@ -555,6 +559,24 @@ class SumoWorld:
             self._types.add([v for v in nearby if _is_traffic(v)], self._sumo)
             count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
         return boxes[:count], speeds[:count], self._types.names(kinds[:count])
+
+    def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
+        """The vehicles around the ego on a road that crosses its route without a
+        junction (a bridge or a tunnel: :meth:`RoadGeometry.crossings`), their front
+        bumpers within ``LEVEL_REACH_M`` of where it crosses."""
+        points, lanes = self._crossings.points_xy, self._crossings.lanes
+        if not nearby or not len(points):
+            return frozenset()
+        if np.min(np.hypot(*(points - ego_box[:2]).T)) > self._radius_m + LEVEL_REACH_M:
+            return frozenset()
+        lane_of = self._sumo.vehicle.getLaneID
+        hidden = []
+        for vid, values in nearby.items():
+            x_m, y_m = values[tc.VAR_POSITION]
+            near = np.min(np.hypot(points[:, 0] - x_m, points[:, 1] - y_m)) <= LEVEL_REACH_M
+            if near and _is_traffic(vid) and lane_of(vid) in lanes:
+                hidden.append(vid)
+        return frozenset(hidden)
 
     def _read_traffic(self, nearby: dict, ego_box: np.ndarray, boxes: np.ndarray,
                       speeds: np.ndarray, kinds: np.ndarray) -> int:

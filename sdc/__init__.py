@@ -2,13 +2,13 @@
 
 A controller plug-in needs only what this package exports::
 
-    from sdc import Command, Observation, StopLine
+    from sdc import Command, LanesBeside, Observation, StopLine
 
 (loaded on first use, so ``python -m sdc`` checks its settings before any
 kernel is imported)
 """
 
-__all__ = ["Command", "Observation", "StopLine"]
+__all__ = ["Command", "LanesBeside", "Observation", "StopLine"]
 
 
 def __getattr__(name: str):

@@ -12,18 +12,21 @@ from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
 
 from scenarios.scenario_spec import AvoidParams
 from sdc.car.avoid import AVOID_LEFT, AVOID_RIGHT, AvoidController
-from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, StopLine
+from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, LanesBeside, StopLine
 from sdc.car.leader_watch import LeaderWatch
 from sdc.car.vehicle import Vehicle, VehicleState
 
 PASSING = (AVOID_LEFT, AVOID_RIGHT)
 
 
-def drive(boxes_at, seconds: float, speed_mps: float, line_at=None, **params):
+def drive(boxes_at, seconds: float, speed_mps: float, line_at=None, beside_at=None,
+          **params):
     """The car from x = 0 at ``speed_mps`` for ``seconds`` on a two-lane road;
     ``boxes_at(t)`` the boxes at time t, ``line_at(t, front_x)`` the stop line
-    then (or None). Per step: (t, phase, speed, gap from the front bumper to the
-    nearest box in the own lane, the car's rear-axle x)."""
+    then (or None), ``beside_at(x)`` the map's lanes beside at the body centre's x
+    (default: not known). Per step:
+    (t, phase, speed, gap from the front bumper to the nearest box in the own
+    lane, the car's rear-axle x)."""
     controller, vehicle = AvoidController(params), Vehicle(MODEL, 0.9)
     state = VehicleState(0.0, 0.0, 0.0, speed_mps, 0.0)
     rows = []
@@ -34,6 +37,8 @@ def drive(boxes_at, seconds: float, speed_mps: float, line_at=None, **params):
         front_x = state.x_m + FRONT_AHEAD_M
         if line_at is not None:
             obs = obs._replace(stop_line=line_at(t, front_x))
+        if beside_at is not None:
+            obs = obs._replace(lanes_beside=beside_at(obs.lane.s_m))
         command = controller.step(obs)
         ahead = [b[0] - b[3] / 2 - front_x for b in boxes if abs(b[1]) < LANE_W / 2]
         rows.append((t, controller.phase, state.speed_mps, min(ahead, default=math.inf),
@@ -97,6 +102,31 @@ def test_a_leader_that_brakes_hard_to_a_stop_is_not_hit_nor_passed():
 
 def test_what_stood_from_the_start_is_passed_once_seen():
     rows = drive(lambda t: [car_at(60.0, 0.0)], 12.0, 12.0, lane_watch_s=0.0)
+    assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+
+
+def test_no_pass_where_the_map_shows_no_lane_of_ours_and_oncoming_traffic_is_out_of_sight():
+    """The lane left holds the other direction (the map: ``left_m`` 0). Passing the
+    car standing in the own lane there needs that lane seen free as far as a car
+    coming the other way at 20 m/s would come before the car is back: more than
+    the 80 m the lidar sees, even from a standstill behind it. avoid waits; with
+    a lane of its own direction on past the car it passes."""
+    standing = [car_at(60.0, 0.0)]
+
+    def left_until(end_x: float):
+        return lambda x: LanesBeside(max(end_x - x, 0.0), 0.0)
+
+    rows = drive(lambda t: standing, 20.0, 12.0, beside_at=left_until(0.0), lane_watch_s=0.0)
+    assert not any(phase in PASSING for _, phase, *_ in rows)
+    assert rows[-1][2] == pytest.approx(0.0, abs=0.05)
+    rows = drive(lambda t: standing, 12.0, 12.0, beside_at=left_until(200.0), lane_watch_s=0.0)
+    assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+    # a lane of its own direction that ends beside the car ahead is no lane to pass in
+    rows = drive(lambda t: standing, 20.0, 12.0, beside_at=left_until(64.0), lane_watch_s=0.0)
+    assert not any(phase in PASSING for _, phase, *_ in rows)
+    # where a car coming the other way would come slower, the lane seen free will do
+    rows = drive(lambda t: standing, 20.0, 12.0, beside_at=left_until(0.0), lane_watch_s=0.0,
+                 oncoming_speed_mps=5.0)
     assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
 
 

@@ -244,3 +244,36 @@ def test_a_route_that_leaves_the_network_ends_the_run_without_a_made_up_kerb(tmp
     row = run_episode(ScenarioSpec.from_plain(plain)).row
     assert row["collision_with"] == "none"
     assert row["termination"] == "route_end"
+
+
+def test_the_lanes_beside_are_the_edges_next_lanes_open_to_cars(town):
+    spec, net, _ = town
+    road = network_road(spec)
+    left, right = road.lanes_beside(0)
+    places = {(lane.edge, lane.index): lane for lane in net.lanes.values()}
+    for piece in road.pieces:  # brute force: each piece's middle against the network
+        middle = piece.start_s_m + piece.length_m / 2
+        for stretches, step in ((left, 1), (right, -1)):
+            beside = places.get((piece.lane.edge, piece.lane.index + step))
+            expected = beside is not None and beside.passenger
+            inside = bool(np.any((stretches[:, 0] <= middle) & (middle <= stretches[:, 1])))
+            assert inside == expected, (piece.lane.id, step)
+    assert len(left) and np.all(np.diff(left.ravel()) > 0)  # in order, apart
+
+
+def test_a_built_in_roads_lanes_beside_run_its_whole_length():
+    road = RoadGeometry.from_spec(RoadSpec(length_m=200.0, lanes=3, lane_width_m=3.5))
+    left, right = road.lanes_beside(0)
+    assert left.tolist() == [[0.0, 200.0]] and right.size == 0
+    left, right = road.lanes_beside(2)
+    assert left.size == 0 and right.tolist() == [[0.0, 200.0]]
+
+
+def test_the_map_gives_how_far_the_lane_beside_runs_on():
+    from sdc.run.lanes_beside import LanesBesideMap
+
+    beside = LanesBesideMap((np.array([[0.0, 50.0], [80.0, 120.0]]), np.empty((0, 2))))
+    assert beside.at(10.0) == (40.0, 0.0)
+    assert beside.at(60.0) == (0.0, 0.0)  # a stretch without
+    assert beside.at(100.0) == (20.0, 0.0)
+    assert beside.at(None) is None

@@ -44,7 +44,7 @@ def _pieces(starts: np.ndarray, ends: np.ndarray, max_len_m: float):
     return a, a + step, source
 
 
-def _segment_distance_m(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def segment_distance_m(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance from each point to the matching segment a-b (row-wise) [m]."""
     ab = b - a
     t = np.einsum("ij,ij->i", points - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-12)
@@ -52,7 +52,7 @@ def _segment_distance_m(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.
     return np.hypot(*(points - foot).T)
 
 
-def _polyline_segments(lines: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def polyline_segments(lines: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """All segments of several polylines: (starts, ends, polyline index)."""
     starts = np.vstack([line[:-1] for line in lines])
     ends = np.vstack([line[1:] for line in lines])
@@ -82,7 +82,7 @@ class DrivableArea:
         edges (those outside junctions); every lane counts as drivable. ``edges``
         are the road edges found earlier for the same lanes and junctions (their
         search takes a moment on a big network)."""
-        starts, ends, owner = _polyline_segments(lane_shapes)
+        starts, ends, owner = polyline_segments(lane_shapes)
         keep = np.hypot(*(ends - starts).T) > 1e-9
         a, b, source = _pieces(starts[keep], ends[keep], INDEX_PIECE_M)
         self._lane_a, self._lane_b = a, b
@@ -108,7 +108,7 @@ class DrivableArea:
         if len(points) == 0:
             return inside
         which, seg = _pieces_near(self._lane_tree, points, self._lane_reach_m)
-        near = _segment_distance_m(points[which], self._lane_a[seg], self._lane_b[seg])
+        near = segment_distance_m(points[which], self._lane_a[seg], self._lane_b[seg])
         inside[which[near <= self._lane_half_w[seg] + slack_m + 1e-9]] = True
         rest = np.flatnonzero(~inside)
         if len(rest) and len(self._junctions):
@@ -117,7 +117,7 @@ class DrivableArea:
             candidates = ((p[:, None, 0] >= box[:, 0]) & (p[:, None, 0] <= box[:, 2])
                           & (p[:, None, 1] >= box[:, 1]) & (p[:, None, 1] <= box[:, 3]))
             for i, j in zip(*np.nonzero(candidates), strict=True):
-                if not inside[rest[i]] and _in_polygon(p[i], self._junctions[j]):
+                if not inside[rest[i]] and in_polygon(p[i], self._junctions[j]):
                     inside[rest[i]] = True
         return inside
 
@@ -133,7 +133,7 @@ class DrivableArea:
             outward.append(-1.0 if _signed_area(closed) > 0 else 1.0)  # CCW: outside is right
         if not lines:
             return np.zeros((0, 4))
-        starts, ends, owner = _polyline_segments(lines)
+        starts, ends, owner = polyline_segments(lines)
         keep = np.hypot(*(ends - starts).T) > 1e-9
         starts, ends, owner = starts[keep], ends[keep], owner[keep]
         a, b, source = _pieces(starts, ends, PROBE_STEP_M)
@@ -165,7 +165,7 @@ class DrivableArea:
         if self._edge_tree is None or len(points) == 0:
             return gaps
         which, seg = _pieces_near(self._edge_tree, points, GAP_HORIZON_M + INDEX_PIECE_M / 2)
-        d = _segment_distance_m(points[which], self._edge_a[seg], self._edge_b[seg])
+        d = segment_distance_m(points[which], self._edge_a[seg], self._edge_b[seg])
         np.minimum.at(gaps, which, d)
         gaps[gaps > GAP_HORIZON_M] = math.inf
         return np.where(self.contains(points), gaps, -np.abs(gaps))
@@ -193,7 +193,7 @@ def _signed_area(closed: np.ndarray) -> float:
     return 0.5 * float(np.sum(x[:-1] * y[1:] - x[1:] * y[:-1]))
 
 
-def _in_polygon(point: np.ndarray, shape: np.ndarray) -> bool:
+def in_polygon(point: np.ndarray, shape: np.ndarray) -> bool:
     """Even-odd rule: a ray from ``point`` crosses the outline an odd number of times."""
     x, y = point
     xa, ya = shape[:, 0], shape[:, 1]

@@ -29,10 +29,11 @@ from scenarios.atomic_write import write_atomic
 from scenarios.bodies import GRAVITY_MPS2, VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
-from scenarios.road_geometry import RoadGeometry, RouteStop
+from scenarios.road_geometry import Crossings, RoadGeometry, RouteStop, merged_stretches
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import input_path
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
+from scenarios.sumo_net.grade_separation import crossing_lanes
 from scenarios.sumo_net.net_xml import (
     STRAIGHT,
     U_TURN,
@@ -279,6 +280,22 @@ def _route_stops(net: NetFile, pieces: list[RoutePiece]) -> tuple[RouteStop, ...
     return tuple(stops)
 
 
+def _lanes_beside(net: NetFile, pieces: list[RoutePiece]) -> tuple[np.ndarray, np.ndarray]:
+    """Where a lane of the same edge, open to cars, lies left and right of the route's
+    lane (its index one up or one down): merged stretches along the route."""
+    by_place = {(lane.edge, lane.index): lane for lane in net.lanes.values()}
+
+    def beside(step: int) -> np.ndarray:
+        rows = []
+        for piece in pieces:
+            lane = by_place.get((piece.lane.edge, piece.lane.index + step))
+            if lane is not None and lane.passenger:
+                rows.append((piece.start_s_m, piece.start_s_m + piece.length_m))
+        return merged_stretches(np.array(rows).reshape(-1, 2))
+
+    return beside(1), beside(-1)
+
+
 class NetworkRoad(RoadGeometry):
     """The ego's route through a SUMO network, one lane wide, with the network's
     road edges (``edge_segments``, ``edge_gaps_m``)."""
@@ -290,6 +307,8 @@ class NetworkRoad(RoadGeometry):
         self.pieces = [RoutePiece(lane, float(s), lane.length_m)
                        for lane, s in zip(route, starts, strict=True)]
         self._stops = _route_stops(net, self.pieces)
+        self._beside = _lanes_beside(net, self.pieces)
+        self._crossings = crossing_lanes(net, self.center_xy, {lane.id for lane in route})
 
     def piece_at(self, s_m: float) -> RoutePiece:
         """The route lane holding route position ``s_m``."""
@@ -326,6 +345,14 @@ class NetworkRoad(RoadGeometry):
 
     def stops(self) -> tuple[RouteStop, ...]:
         return self._stops
+
+    def crossings(self) -> Crossings:
+        return self._crossings
+
+    def lanes_beside(self, lane: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where the network has a lane of the route's direction beside it (its own
+        edge's next lane left or right; ``lane`` is the route's, 0)."""
+        return self._beside
 
     def edge_segments(self) -> np.ndarray:
         return self.area.edges

@@ -239,8 +239,14 @@ class AvoidController:
         """On an obstacle ahead: ``(phase, side, target, end_s, accel)``, to swerve
         to ``target`` or brake; ``end_s``: how far along the lane the obstacle's
         returns reach. ``early`` (a standing obstacle still far): a pass into an
-        open lane whose corridor is free as far as the lane change takes (what
-        moves ahead in that lane is then followed), or None."""
+        open lane, or None. A side where the map has no lane of the car's direction
+        on past the obstacle (a kerb, the other direction's lane, a lane that
+        ends) needs its corridor seen free as far as a car coming the other way
+        would come meanwhile (:meth:`_sight_needed_m`, within the lidar's range).
+        With a rear view, a lane whose nearest vehicle ahead comes
+        the other way is no side to pass on, and a lane of the car's direction whose
+        nearest moves the car's way needs its corridor free only as far as the lane
+        change takes (that vehicle is then followed)."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
         near = frame.obstacle(in_lane, p.obstacle_depth_m)
@@ -248,17 +254,27 @@ class AvoidController:
         brake = v.max_decel_mps2
         stop_m = speed**2 / (2 * brake)
         can_stop = early or stop_m <= gap_m  # at the car's hardest braking, from now
+        # from the body centre to where the car is back in its lane past the obstacle
+        back_m = float(frame.ahead_m[near].max()) + p.return_gap_m + v.length_m
         options = []
         for side, phase in ((LEFT, AVOID_LEFT), (RIGHT, AVOID_RIGHT)):
             # a lane not open only to escape a collision braking cannot
             if can_stop and not self._lane_open(side, obs):
+                continue
+            if self._oncoming(side):
                 continue
             edge = lat.max() if side == LEFT else lat.min()
             clear_m = abs(edge) * (1 if side * edge > 0 else -1) + v.width_m / 2
             target = side * max(obs.lane_width_m, clear_m + p.lateral_clearance_m)
             shift = max(0.0, side * (side * (clear_m + p.shift_margin_m) - offset))
             reach = gap_m + v.length_m + p.obstacle_depth_m + speed * p.free_time_s
-            if early and self._flows_our_way(side, obs):
+            if self._beside_m(side, obs) < back_m:  # not a lane of ours all the way
+                # out there until back past the obstacle and across into its lane
+                out_m = back_m + self._swerve_distance_m(abs(target), speed, 0.0, obs)
+                reach = max(reach, self._sight_needed_m(out_m, obs))
+                if reach > obs.lidar_range_m:
+                    continue
+            elif self._flows_our_way(side, obs):  # followed once there: as far as the move
                 reach = self._swerve_distance_m(abs(target - offset), speed, 0.0, obs) + v.length_m
             if self._side_blocked(frame, side, target, obs, reach, offset, near):
                 continue
@@ -362,7 +378,7 @@ class AvoidController:
         of their nearest returns), and in the lanes beside."""
         self.leader.update(obs.t_s, lane_s)
         self.path_leader.update(obs.t_s, path_s)
-        if self._rear_view:  # the lanes beside matter for an early pass only
+        if self._rear_view:  # the lanes beside are judged by their leaders' speeds
             front_m = obs.vehicle.length_m / 2
             for side, lo, hi in self._lane_bands(obs)[:2]:
                 _, side_s = frame.nearest(frame.ahead(lo, hi, front_m), front_m)
@@ -405,19 +421,30 @@ class AvoidController:
 
     def _back_from_oncoming(self, obs: Observation, gap_lane: float) -> None:
         """Something coming the other way in the passing lane while the obstacle is
-        still ahead: back behind it, if the own lane is open."""
-        p = self.params
-        oncoming = (self.path_leader.speed_mps() or 0.0) < -p.pass_max_speed_mps
-        if oncoming and gap_lane > p.wait_gap_m + 1.0 and self._lane_open(OWN, obs):
+        still ahead: back behind it, if the own lane is open and the car can still
+        stop short of the obstacle."""
+        p, v = self.params, obs.vehicle
+        stop_m = obs.speed_mps**2 / (2 * v.max_decel_mps2) + p.stop_margin_m
+        if (self._oncoming_in_path() and gap_lane > max(p.wait_gap_m + 1.0, stop_m)
+                and self._lane_open(OWN, obs)):
             self.phase, self.target_m = AVOID_RETURN, 0.0
+
+    def _oncoming_in_path(self) -> bool:
+        """Does the nearest thing in the body's path come the other way?"""
+        return (self.path_leader.speed_mps() or 0.0) < -self.params.pass_max_speed_mps
 
     def _cruise_accel(self, obs: Observation, gap_lane: float, gap_path: float,
                       following: bool, waiting: bool, turn_mps: float) -> float:
         """The acceleration when no plan fixed it: following a leader (the own
         lane's, or the passing lane's), to a stop wait_gap_m behind what is waited
-        for, or toward the cruise speed as what is ahead and the bends allow."""
+        for, or toward the cruise speed as what is ahead and the bends allow.
+        Passing with something coming the other way in the path and no way back
+        behind the obstacle (:meth:`_back_from_oncoming`), it does not slow for
+        that: the pass ends sooner."""
         p = self.params
         passing = self.phase in (AVOID_LEFT, AVOID_RIGHT)
+        if passing and self._oncoming_in_path():
+            return self._speed_accel(math.inf, obs, turn_mps)
         gap = gap_path if passing else min(gap_lane, gap_path)
         in_lane = not passing and gap == gap_lane
         if following and in_lane:
@@ -496,6 +523,30 @@ class AvoidController:
         swing_m = math.hypot(radius_m, front_m) - radius_m
         room_m = max(obs.lane_width_m / 2 - v.width_m / 2, 0.0)
         return math.copysign(min(swing_m / 2, room_m), curvature)
+
+    def _sight_needed_m(self, out_m: float, obs: Observation) -> float:
+        """How far ahead a side must be seen free to pass in it without a lane of
+        the car's own direction there: what the car drives until it is back in its
+        lane, ``out_m`` (speeding up at no more than ``follow_accel_mps2``), and
+        what a car coming the other way at ``oncoming_speed_mps`` covers meanwhile."""
+        speed = obs.speed_mps
+        accel = min(self.params.follow_accel_mps2, obs.vehicle.max_accel_mps2)
+        out_s = (math.sqrt(speed**2 + 2 * accel * out_m) - speed) / accel
+        return out_m + self.params.oncoming_speed_mps * out_s
+
+    @staticmethod
+    def _beside_m(side: float, obs: Observation) -> float:
+        """How far the map's lane of the car's direction on ``side`` runs on ahead
+        of the body centre (inf: the map does not say)."""
+        if obs.lanes_beside is None:
+            return math.inf
+        return obs.lanes_beside.left_m if side == LEFT else obs.lanes_beside.right_m
+
+    def _oncoming(self, side: float) -> bool:
+        """Does what is nearest ahead in the lane on ``side`` come the car's way
+        faster than ``pass_max_speed_mps`` (a lane of the other direction in use)?"""
+        speed = self.side_leaders[side].speed_mps()
+        return speed is not None and speed < -self.params.pass_max_speed_mps
 
     def _flows_our_way(self, side: float, obs: Observation) -> bool:
         """Does what is nearest ahead in the lane on ``side`` move the car's way

@@ -25,7 +25,8 @@ from scenarios.bodies import VehicleModel
 from sdc.car.sensors import LaneReading
 from sdc.car.vehicle import Command
 
-__all__ = ["Command", "Controller", "LaneReading", "Observation", "StopLine", "VehicleModel"]
+__all__ = ["Command", "Controller", "LaneReading", "LanesBeside", "Observation", "StopLine",
+           "VehicleModel"]
 
 #: a stop line's signal: its light's colour for the car's way, or none (no light)
 RED, YELLOW, GREEN, NO_SIGNAL = "red", "yellow", "green", "none"
@@ -39,6 +40,16 @@ class StopLine(NamedTuple):
     distance_m: float  # along the route from the front bumper to the line
     signal: str  # red | yellow | green | none (no light, or one switched off)
     give_way: bool  # the car gives way there: a sign, right before left, a green without priority
+
+
+class LanesBeside(NamedTuple):
+    """The lanes beside the car's own, as a map gives them: how far each runs on
+    ahead of the body centre, unbroken, in the car's direction and open to cars
+    [m] (0: no such lane beside the car here, a kerb or the other direction's
+    lane; inf: to the end of the map)."""
+
+    left_m: float
+    right_m: float
 
 
 class Observation(NamedTuple):
@@ -56,6 +67,7 @@ class Observation(NamedTuple):
     vehicle: VehicleModel  # the car's size and actuator limits
     lidar_range_m: float = math.inf  # the lidar's range: no return means nothing up to it
     stop_line: StopLine | None = None  # the next stop line ahead (None: none on the route)
+    lanes_beside: LanesBeside | None = None  # from the map (None: not known)
 
 
 class Controller(Protocol):

@@ -31,6 +31,7 @@ from sdc.car.controller_plugins import make_controller
 from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
+from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
@@ -90,6 +91,7 @@ class Simulation:
         self.road_frame = RoadFrame(self.road, self.lane_sensor.lane_d_m)
         self.lane_width_m = self.road.lane_width_m
         self.stop_lines = StopLineWatch(self.road.stops())
+        self.beside = LanesBesideMap(self.road.lanes_beside(spec.ego.lane))
         self.recorder = TraceRecorder()
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
@@ -115,6 +117,7 @@ class Simulation:
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
         front_s_m = self.lane.s_m + self.model.length_m / 2 if self.lane else None
         self.stop_line = self.stop_lines.update(front_s_m, snapshot.signals)
+        self.lanes_beside = self.beside.at(self.lane.s_m if self.lane else None)
         self.contacts, self.conflicts = self.road_frame.measure(self.box, state.speed_mps,
                                                                 snapshot)
 
@@ -124,7 +127,7 @@ class Simulation:
         return Observation(self.k * self.step_s, self.step_s, self.ranges,
                            self.lidar.angles_rad, self.spec.lidar.mount_ahead_m, self.lane,
                            self.lane_width_m, state.speed_mps, state.steer_rad, self.model,
-                           self.spec.lidar.max_range_m, self.stop_line)
+                           self.spec.lidar.max_range_m, self.stop_line, self.lanes_beside)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
