@@ -15,6 +15,8 @@ a table per family, and the must-shows last as ``must_show.*`` lines with Wilson
   what avoid completes of those;
 - grid-turns (a default ``netgenerate --grid`` network, routes turning at random,
   generated here): no road-edge collision;
+- give-way-grid (the same with 150 cars: priority junctions where the car gives
+  way on minor links): avoid's vehicle collisions beside lane-keep's;
 - signal-grid (sweeps/grid-town.toml: a signalised 10 x 10 grid with 2000 cars):
   avoid crosses no red light; seed and lane-keep counted beside it;
 - envelope (sweeps/seed-envelope.toml without traffic): no stuck run where the
@@ -64,8 +66,8 @@ length_m = 400.0
 route_turns = "any"
 
 [traffic]
-vehicles = 0
-warm_up_s = 0.0
+vehicles = {vehicles}
+warm_up_s = {warm_up_s}
 
 [ego]
 lane = 0
@@ -89,12 +91,16 @@ controllers = ["lane-keep", "avoid"]
 """
 
 
-def grid_turns_sweep(folder: Path) -> SweepSpec:
-    """The grid-turns family on a default ``netgenerate --grid`` network made here."""
+def grid_turns_sweep(folder: Path, vehicles: int = 0) -> SweepSpec:
+    """The grid-turns family on a default ``netgenerate --grid`` network made here (its
+    junctions give priority: minor links give way), with ``vehicles`` random trips."""
     net = folder / "default-grid.net.xml"
-    subprocess.run([sumo_binary("netgenerate"), "--grid", "--output-file", str(net)],
-                   check=True, capture_output=True)
-    (folder / "grid-turns.toml").write_text(GRID_SCENARIO.format(net=net))
+    # named relative to its folder: the file (its header names it) is the same in any
+    # folder, and so are the runs on it
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--output-file", net.name],
+                   check=True, capture_output=True, cwd=folder)
+    (folder / "grid-turns.toml").write_text(
+        GRID_SCENARIO.format(net=net, vehicles=vehicles, warm_up_s=60.0 if vehicles else 0.0))
     (folder / "grid-turns-sweep.toml").write_text(GRID_SWEEP)
     return load_sweep(folder / "grid-turns-sweep.toml")
 
@@ -102,6 +108,8 @@ def grid_turns_sweep(folder: Path) -> SweepSpec:
 def family_sweep(name: str, folder: Path) -> SweepSpec:
     if name == "grid-turns":
         return grid_turns_sweep(folder)
+    if name == "give-way-grid":
+        return grid_turns_sweep(folder, vehicles=GIVE_WAY_VEHICLES)
     if name == "signal-grid":  # with avoid, the traffic warmed up four times, shared
         sweep = load_sweep(SWEEPS / "grid-town.toml")
         return dataclasses.replace(sweep, controllers=("seed", "lane-keep", "avoid"),
@@ -111,7 +119,10 @@ def family_sweep(name: str, folder: Path) -> SweepSpec:
     return load_sweep(SWEEPS / f"{name}.toml")
 
 
-FAMILIES = ("real-traffic", "real-motorway-stop", "grid-turns", "signal-grid", "envelope")
+FAMILIES = ("real-traffic", "real-motorway-stop", "grid-turns", "give-way-grid", "signal-grid",
+            "envelope")
+#: the give-way-grid family: grid-turns with this many cars on the grid
+GIVE_WAY_VEHICLES = 150
 
 
 def run_family(name: str, out_dir: Path, samples: int | None, workers: int) -> pd.DataFrame:
@@ -209,6 +220,11 @@ def must_shows(results: dict[str, dict[str, dict[str, float]]]) -> list[str]:
         a = results["grid-turns"]["avoid"]
         lines.append(f"must_show.grid_turns.avoid_road_edge_collisions {a['hit_road_edge']} "
                      "(target 0)")
+    if "give-way-grid" in results:
+        table = results["give-way-grid"]
+        beside = ", ".join(f"{c} {f['hit_vehicle']:.0f}" for c, f in table.items())
+        lines.append(f"must_show.give_way_grid.avoid_vehicle_collisions "
+                     f"{table['avoid']['hit_vehicle']:.0f} (no target; {beside})")
     if "signal-grid" in results:
         table = results["signal-grid"]
         beside = ", ".join(f"{c} {f['red_light_violations']:.0f}" for c, f in table.items())

@@ -309,6 +309,10 @@ class AvoidParams(Spec):
     #: speed times rear_gap_time_s behind the car's rear bumper (sdc.car.rear_watch)
     rear_gap_time_s: float = num(3.0, ge=0, le=30)
     rear_min_gap_m: float = num(10.0, ge=0, le=200)
+    #: ... or, when that vehicle stands (slower than pass_max_speed_mps: a queue, a
+    #: car waiting to merge; what comes behind must stop behind it), this gap (SUMO's
+    #: default minGap)
+    rear_standing_gap_m: float = num(2.5, ge=0, le=200)
     #: ... and a lane seen empty only when it was seen so far back that a vehicle
     #: just out of sight, as fast as the fastest seen in it so far or this fast,
     #: would leave that gap (the lidar's range and shadows limit how far)
@@ -360,6 +364,18 @@ class AvoidParams(Spec):
     #: a yellow light is stopped for when stopping at its line needs no more than
     #: this fraction of the car's hardest braking (a red one whenever it can stop)
     yellow_decel_fraction: float = num(0.5, gt=0, le=1)
+    #: before a line where the car gives way (a sign, right before left, a green
+    #: without priority), within this of it, the car watches for foes: returns
+    #: outside its lane, ahead of it and within give_way_reach_m of the line's middle,
+    #: that moved more than foe_move_m over foe_track_s toward the line and reach it
+    #: within give_way_gap_s (sdc.car.foe_watch) ...
+    give_way_watch_m: float = num(60.0, ge=0, le=500)
+    give_way_reach_m: float = num(50.0, gt=0, le=500)
+    foe_move_m: float = num(1.5, gt=0, le=50)
+    foe_track_s: float = num(0.5, gt=0, le=10)
+    give_way_gap_s: float = num(5.0, ge=0, le=60)
+    #: ... and stops short of the line (if it can) until none was seen for this long
+    give_way_hold_s: float = num(1.0, ge=0, le=60)
     #: through a bend of the lane tighter than this radius the car checks the room
     #: its body sweeps against the range image and picks its line by it ...
     bend_radius_m: float = num(25.0, gt=0, le=1000)

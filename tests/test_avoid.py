@@ -224,6 +224,25 @@ def test_a_gap_too_short_for_the_closing_speed_keeps_the_lane_closed():
     assert slow.phase == AVOID_LEFT
 
 
+def test_a_car_standing_close_behind_in_the_next_lane_leaves_it_open():
+    """A car stands 3 m behind the car's rear in the lane beside (queued, waiting to
+    merge): what comes behind it must stop behind it, so the lane is open to pull
+    out into; the same car closing at 8 m/s keeps it closed."""
+    def phases(speed_mps: float) -> list[str]:
+        controller = AvoidController({})
+        rear_x = -MODEL.rear_overhang_m
+        out = []
+        for k in range(round(3.0 / STEP_S)):
+            x = rear_x - 3.0 - 2.25 - speed_mps * (3.0 - k * STEP_S)
+            road = FakeRoad([barrel(7.0), car_at(x, LANE_W)], 1, 0, ALL_ROUND)
+            controller.step(road.observe(at_speed(0.0), k * STEP_S))
+            out.append(controller.phase)
+        return out
+
+    assert AVOID_LEFT in phases(0.0)
+    assert AVOID_LEFT not in phases(8.0)
+
+
 def test_a_car_queued_behind_hides_the_next_lane():
     phases, _ = waiting_behind_a_barrel(ALL_ROUND, queued=True)
     assert AVOID_LEFT not in phases  # the lane behind it unseen is not open

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
 
@@ -128,6 +129,57 @@ def test_no_pass_where_the_map_shows_no_lane_of_ours_and_oncoming_traffic_is_out
     rows = drive(lambda t: standing, 20.0, 12.0, beside_at=left_until(0.0), lane_watch_s=0.0,
                  oncoming_speed_mps=5.0)
     assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+
+
+@pytest.mark.parametrize("gap_m, lateral_m", [(6.0, 0.0), (6.0, 0.4), (7.0, 0.0)])
+def test_from_a_standstill_behind_a_truck_the_swerve_clears_its_corner(gap_m, lateral_m):
+    """Standing 6-7 m behind a 2.5 m wide truck, the car swerves out at the tightest
+    turn: its heading then runs clear of the truck's near corner, which still lies
+    within its body's width along the lane. Before, that band held it at 0 m/s with
+    the corner beside it, for good."""
+    truck = [FRONT_AHEAD_M + gap_m + 6.0, lateral_m, 0.0, 12.0, 2.5]
+    rows = drive(lambda t: [truck], 20.0, 0.0, lane_watch_s=0.0, cruise_speed_mps=5.0)
+    assert max(x for *_, x in rows) > truck[0] + 6.0 + 2.0  # rear axle past its far end
+    assert rows[-1][1] not in PASSING
+
+
+def cross_traffic(give_way: bool, foe_speed_mps: float, from_left_m: float = 50.0,
+                  seconds: float = 14.0):
+    """avoid at 10 m/s toward a line at x = 60 (``give_way`` there or not), with a car
+    crossing its road at x = 68 from ``from_left_m`` left of it at ``foe_speed_mps``, the kerbs
+    open where the other road meets its own. Per step: (t, speed, front x, whether
+    the bodies overlap)."""
+    controller, vehicle = AvoidController({}), Vehicle(MODEL, 0.9)
+    state = VehicleState(0.0, 0.0, 0.0, 10.0, 0.0)
+    rows = []
+    for k in range(round(seconds / STEP_S)):
+        t = k * STEP_S
+        foe = [68.0, from_left_m - foe_speed_mps * t, -math.pi / 2, 4.5, 1.8]
+        road = FakeRoad([foe], lanes_left=1, lanes_right=0)
+        road.edges = np.array([[x0, y, x1, y] for y in road.edges[:, 1]
+                               for x0, x1 in ((-100.0, 55.0), (80.0, 400.0))])
+        front_x = state.x_m + FRONT_AHEAD_M
+        line = StopLine(60.0 - front_x, NO_SIGNAL, give_way) if front_x < 60.0 else None
+        command = controller.step(road.observe(state, t)._replace(stop_line=line))
+        centre_x = state.x_m + FRONT_AHEAD_M - MODEL.length_m / 2
+        overlap = (abs(centre_x - foe[0]) < (MODEL.length_m + foe[4]) / 2
+                   and abs(state.y_m - foe[1]) < (MODEL.width_m + foe[3]) / 2)
+        rows.append((t, state.speed_mps, front_x, overlap))
+        state = vehicle.step(state, command, STEP_S)
+    return rows
+
+
+def test_at_a_line_where_it_gives_way_it_waits_for_a_car_crossing_then_goes():
+    rows = cross_traffic(give_way=True, foe_speed_mps=8.0)
+    assert not any(overlap for *_, overlap in rows)
+    stopped = [front_x for _, speed, front_x, _ in rows if speed < 0.1]
+    assert stopped and max(stopped) < 60.0  # it stood before the line
+    assert rows[-1][2] > 90.0  # and went on once the car had crossed
+
+
+def test_a_car_standing_beside_the_junction_is_no_foe():
+    rows = cross_traffic(give_way=True, foe_speed_mps=0.0, from_left_m=10.0)
+    assert min(speed for t, speed, *_ in rows if t < 6.0) > 9.9
 
 
 def test_red_is_stopped_for_before_its_line_and_green_goes():

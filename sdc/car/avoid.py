@@ -24,6 +24,7 @@ from scenarios.scenario_spec import AvoidParams
 from scenarios.spec_fields import build
 from sdc.car.bend_room import Track, bend_room, track
 from sdc.car.controller_api import RED, YELLOW, Command, Observation, VehicleModel
+from sdc.car.foe_watch import FoeWatch
 from sdc.car.lane_path import TURN_WINDOW_M, LanePath
 from sdc.car.leader_watch import LeaderWatch
 from sdc.car.rear_watch import RearWatch
@@ -156,6 +157,8 @@ class AvoidController:
         self.path_leader = LeaderWatch(self.params)  # in the body's path, wherever it is
         self.side_leaders = {LEFT: LeaderWatch(self.params), RIGHT: LeaderWatch(self.params)}
         self.lines_s_m: list[float] = []  # the stop lines seen, along the road
+        self.foes = FoeWatch(self.params)  # before a line where the car gives way
+        self.foe_seen_s = -math.inf  # when a foe was seen last
         self.bend_offset_m: float | None = None  # the offset held through a tight bend
         self._cos_sin: np.ndarray | None = None
         self._rear_view = False
@@ -338,12 +341,16 @@ class AvoidController:
                         v.width_m / 2 + p.path_clearance_m)
         front_m = v.length_m / 2
         in_lane = frame.ahead(-half_lane, half_lane, front_m)
-        # the car's own path, wherever it is: its body's width along the lane
+        # the car's own path, wherever it is: its body's width along the lane (and,
+        # swerving, straight ahead of it too: a corner it heads clear of is no stop)
         body_half = v.width_m / 2 + p.edge_tolerance_m
         gap_lane, lane_s = frame.nearest(in_lane, front_m)
-        gap_path, path_s = frame.nearest(frame.ahead(offset - body_half, offset + body_half,
-                                                     front_m), front_m)
+        in_path = frame.ahead(offset - body_half, offset + body_half, front_m)
+        if self.phase in (AVOID_LEFT, AVOID_RIGHT):  # swerving: what its heading runs into
+            in_path &= np.abs(frame.xy_m[:, 1]) <= body_half
+        gap_path, path_s = frame.nearest(in_path, front_m)
         self._track(frame, obs, lane_s, path_s)
+        self._watch_foes(frame, obs, path, half_lane)
         following = self.leader.is_traffic(obs.t_s)  # not an obstacle to pass
         waiting = not following and self._waits_at_junction(obs, gap_lane)
         accel = self._decide(frame, obs, path, gap_lane, in_lane, following or waiting)
@@ -363,6 +370,7 @@ class AvoidController:
         if accel is None:
             accel = self._cruise_accel(obs, gap_lane, gap_path, following, waiting, turn_mps)
         accel = min(accel, self._signal_accel(obs, turn_mps))  # whatever else it does
+        accel = min(accel, self._give_way_accel(obs, turn_mps))
         if math.isfinite(free_m):  # no room for the body in the bend ahead: stop short
             accel = min(accel, self._speed_accel(free_m, obs, turn_mps, wait_m=p.stop_margin_m))
         if lane is None:
@@ -578,6 +586,31 @@ class AvoidController:
         in_junction = any(s <= what_s_m <= s + p.junction_depth_m for s in self.lines_s_m)
         stood_s = obs.t_s - min(self.leader.standing_since_s, obs.t_s)
         return (queued or in_junction) and stood_s < p.queue_patience_s
+
+    def _watch_foes(self, frame: LaneFrame, obs: Observation, path: LanePath,
+                    half_lane_m: float) -> None:
+        """Before a line where the car gives way, within ``give_way_watch_m``: note
+        when a foe was seen last (:mod:`sdc.car.foe_watch`)."""
+        line = obs.stop_line
+        if line is None or not line.give_way or line.distance_m > self.params.give_way_watch_m:
+            self.foes.clear()
+            return
+        front_m = obs.vehicle.length_m / 2
+        line_s_m = path.car_s_m + front_m + line.distance_m
+        if self.foes.foe_seen(obs, frame, path, half_lane_m, line_s_m):
+            self.foe_seen_s = obs.t_s
+
+    def _give_way_accel(self, obs: Observation, turn_mps: float) -> float:
+        """Stopping short of a line where the car gives way while a foe was seen in
+        the last ``give_way_hold_s``, if the car can stop there; else no limit."""
+        p, line = self.params, obs.stop_line
+        if (line is None or not line.give_way
+                or obs.t_s - self.foe_seen_s > p.give_way_hold_s + 1e-9):
+            return math.inf
+        if (obs.speed_mps > p.creep_speed_mps
+                and obs.speed_mps**2 > 2 * obs.vehicle.max_decel_mps2 * max(line.distance_m, 0.0)):
+            return math.inf  # too close to stop before it
+        return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
 
     def _signal_accel(self, obs: Observation, turn_mps: float) -> float:
         """Stopping short of the next stop line when its light is red and the car can

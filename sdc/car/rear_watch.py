@@ -9,8 +9,10 @@ behind in the own lane) cast shadows on it, and the lidar's range ends
 somewhere. The rule (``AvoidParams``):
 
 - a vehicle seen behind: open when its gap is at least ``rear_min_gap_m`` plus
-  its closing speed times ``rear_gap_time_s``; a vehicle seen for less than half
-  of ``rear_track_s``, or lost for a moment, keeps the lane closed;
+  its closing speed times ``rear_gap_time_s``, or, when it stands (slower than
+  ``pass_max_speed_mps``: queued, waiting to merge; what comes behind it must stop
+  behind it), ``rear_standing_gap_m``; a vehicle seen for less than half of
+  ``rear_track_s``, or lost for a moment, keeps the lane closed;
 - nothing seen: open when the lane was seen empty so far back that a vehicle just
   out of sight, as fast as the fastest seen in that lane so far (at least
   ``rear_unseen_speed_mps``), would still leave that gap.
@@ -98,6 +100,8 @@ class RearWatch:
             if t_s < obs.t_s or t_s - track[0][0] < p.rear_track_s / 2:
                 return False  # lost for a moment, or its speed not known yet
             closing_mps = self._closing_mps(track)
+            if closing_mps + obs.speed_mps < p.pass_max_speed_mps:  # it stands (a queue)
+                return gap_m >= p.rear_standing_gap_m
             return gap_m >= p.rear_min_gap_m + max(closing_mps, 0.0) * p.rear_gap_time_s
         unseen_mps = max(self.fastest_mps.get(side, 0.0), p.rear_unseen_speed_mps)
         need_m = p.rear_min_gap_m + max(unseen_mps - obs.speed_mps, 0.0) * p.rear_gap_time_s
