@@ -214,6 +214,12 @@ class AvoidController:
         return obs.t_s - self.free_since_s[side] >= watch_s - 1e-9
 
     # ---- decisions ---------------------------------------------------------
+    def _tightest_radius_m(self, vehicle: VehicleModel) -> float:
+        """The rear axle's radius at ``tightest_steer_fraction`` of the steering
+        limit: the tightest turn the car plans [m]."""
+        steer_rad = self.params.tightest_steer_fraction * vehicle.max_steer_rad
+        return vehicle.wheelbase_m / math.tan(steer_rad)
+
     def _swerve_distance_m(self, shift_m: float, speed_mps: float, brake_mps2: float,
                            obs: Observation) -> float:
         """How far the car travels while shifting ``shift_m`` sideways: bang-bang
@@ -231,7 +237,7 @@ class AvoidController:
         t_s = min(t_s, t_stop)
         # however slow, the turn is no tighter than the steering allows: an S of two
         # arcs of the tightest radius
-        radius_m = v.wheelbase_m / math.tan(p.tightest_steer_fraction * v.max_steer_rad)
+        radius_m = self._tightest_radius_m(v)
         half_m = min(shift_m / 2, radius_m)
         arcs_m = (2.0 * math.sqrt(half_m * (2 * radius_m - half_m))
                   + max(0.0, shift_m - 2 * radius_m))
@@ -264,7 +270,7 @@ class AvoidController:
             # a lane not open only to escape a collision braking cannot
             if can_stop and not self._lane_open(side, obs):
                 continue
-            if self._oncoming(side):
+            if self.side_leaders[side].comes_toward():  # the other direction's lane
                 continue
             edge = lat.max() if side == LEFT else lat.min()
             clear_m = abs(edge) * (1 if side * edge > 0 else -1) + v.width_m / 2
@@ -433,13 +439,9 @@ class AvoidController:
         stop short of the obstacle."""
         p, v = self.params, obs.vehicle
         stop_m = obs.speed_mps**2 / (2 * v.max_decel_mps2) + p.stop_margin_m
-        if (self._oncoming_in_path() and gap_lane > max(p.wait_gap_m + 1.0, stop_m)
+        if (self.path_leader.comes_toward() and gap_lane > max(p.wait_gap_m + 1.0, stop_m)
                 and self._lane_open(OWN, obs)):
             self.phase, self.target_m = AVOID_RETURN, 0.0
-
-    def _oncoming_in_path(self) -> bool:
-        """Does the nearest thing in the body's path come the other way?"""
-        return (self.path_leader.speed_mps() or 0.0) < -self.params.pass_max_speed_mps
 
     def _cruise_accel(self, obs: Observation, gap_lane: float, gap_path: float,
                       following: bool, waiting: bool, turn_mps: float) -> float:
@@ -451,7 +453,7 @@ class AvoidController:
         that: the pass ends sooner."""
         p = self.params
         passing = self.phase in (AVOID_LEFT, AVOID_RIGHT)
-        if passing and self._oncoming_in_path():
+        if passing and self.path_leader.comes_toward():
             return self._speed_accel(math.inf, obs, turn_mps)
         gap = gap_path if passing else min(gap_lane, gap_path)
         in_lane = not passing and gap == gap_lane
@@ -493,9 +495,8 @@ class AvoidController:
             return self._inside_of_bend_m(path, obs), math.inf, math.inf, path
         held = self.bend_offset_m is not None and bool(tight[0])
         preferred = self.bend_offset_m if held else 0.0
-        min_radius_m = v.wheelbase_m / math.tan(p.tightest_steer_fraction * v.max_steer_rad)
         room = bend_room(route, frame.xy_m, v, preferred, obs.lane_width_m / 2,
-                         p.bend_clearance_m, min_radius_m,
+                         p.bend_clearance_m, self._tightest_radius_m(v),
                          None if held else max(obs.lane_width_m / 2 - v.width_m / 2, 0.0))
         offset = preferred if math.isnan(room.offset_m) else room.offset_m
         self.bend_offset_m = offset
@@ -550,12 +551,6 @@ class AvoidController:
             return math.inf
         return obs.lanes_beside.left_m if side == LEFT else obs.lanes_beside.right_m
 
-    def _oncoming(self, side: float) -> bool:
-        """Does what is nearest ahead in the lane on ``side`` come the car's way
-        faster than ``pass_max_speed_mps`` (a lane of the other direction in use)?"""
-        speed = self.side_leaders[side].speed_mps()
-        return speed is not None and speed < -self.params.pass_max_speed_mps
-
     def _flows_our_way(self, side: float, obs: Observation) -> bool:
         """Does what is nearest ahead in the lane on ``side`` move the car's way
         faster than ``pass_max_speed_mps`` (traffic to follow there, not a car
@@ -603,14 +598,11 @@ class AvoidController:
     def _give_way_accel(self, obs: Observation, turn_mps: float) -> float:
         """Stopping short of a line where the car gives way while a foe was seen in
         the last ``give_way_hold_s``, if the car can stop there; else no limit."""
-        p, line = self.params, obs.stop_line
+        line = obs.stop_line
         if (line is None or not line.give_way
-                or obs.t_s - self.foe_seen_s > p.give_way_hold_s + 1e-9):
+                or obs.t_s - self.foe_seen_s > self.params.give_way_hold_s + 1e-9):
             return math.inf
-        if (obs.speed_mps > p.creep_speed_mps
-                and obs.speed_mps**2 > 2 * obs.vehicle.max_decel_mps2 * max(line.distance_m, 0.0)):
-            return math.inf  # too close to stop before it
-        return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
+        return self._stop_at_line_accel(obs, obs.vehicle.max_decel_mps2, turn_mps)
 
     def _signal_accel(self, obs: Observation, turn_mps: float) -> float:
         """Stopping short of the next stop line when its light is red and the car can
@@ -620,10 +612,16 @@ class AvoidController:
         if line is None or line.signal not in (RED, YELLOW):
             return math.inf
         decel = v.max_decel_mps2 * (1.0 if line.signal == RED else p.yellow_decel_fraction)
+        return self._stop_at_line_accel(obs, decel, turn_mps)
+
+    def _stop_at_line_accel(self, obs: Observation, decel_mps2: float, turn_mps: float
+                            ) -> float:
+        """To a stop ``stop_margin_m`` short of the next stop line, if the car can stop
+        there braking at ``decel_mps2``; else no limit (too close: go on across)."""
+        p, line = self.params, obs.stop_line
         if (obs.speed_mps > p.creep_speed_mps
-                and obs.speed_mps**2 > 2 * decel * max(line.distance_m, 0.0)):
-            return math.inf  # too close to stop before it: go on across
-        # to a stop stop_margin_m short of the line
+                and obs.speed_mps**2 > 2 * decel_mps2 * max(line.distance_m, 0.0)):
+            return math.inf
         return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
 
     def _brake_accel(self, gap_m: float, obs: Observation, wait_m: float | None = None

@@ -60,6 +60,11 @@ class LeaderWatch:
             return None
         return (track[-1][1] - track[0][1]) / span_s
 
+    def comes_toward(self) -> bool:
+        """Does the leader come the other way, faster than ``pass_max_speed_mps``?"""
+        speed = self.speed_mps()
+        return speed is not None and speed < -self.params.pass_max_speed_mps
+
     def is_traffic(self, t_s: float) -> bool:
         """Is the leader traffic to follow or wait for, not an obstacle to pass:
         moving faster than ``pass_max_speed_mps``, or stopped after it was seen
