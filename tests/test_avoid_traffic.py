@@ -226,3 +226,30 @@ def test_red_is_stopped_for_while_braking_for_an_obstacle_beyond_the_line():
                  line_at=lambda t, front_x: StopLine(line_x - front_x, RED, False))
     assert "brake" in {phase for _, phase, *_ in rows}  # the obstacle's plan held it
     assert max(x + FRONT_AHEAD_M for *_, x in rows) < line_x
+
+
+def test_too_close_to_stop_at_the_waiting_gap_it_stops_as_far_back_as_it_can_then_passes():
+    """A car standing 25 m ahead at 17.4 m/s: the waiting gap (7 m) is out of reach
+    and the lane beside not yet watched for ``lane_watch_s``. At its hardest
+    braking the car stops about 6 m short, room to steer round from there; easing
+    off to stop 1.5 m short had left it there for good (seed-envelope, 6 runs)."""
+    standing = [car_at(FRONT_AHEAD_M + 25.0 + 2.25, 0.0)]
+    rows = drive(lambda t: standing, 12.0, 17.4)
+    stopped = [gap for _, phase, speed, gap, _ in rows if speed < 1e-6 and gap < math.inf]
+    assert stopped and min(stopped) > 5.0
+    assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+    assert max(x for *_, x in rows) > standing[0][0] + 2.25 + 2.0  # rear axle past it
+
+
+def test_passing_in_a_lane_that_ends_it_stops_short_of_the_end():
+    """A queue standing in the own lane from 40 m to 160 m; the lane left, of the
+    car's direction, ends at x = 100 m (a merge). The car passes in it, finds the
+    queue going on, and stops short of the lane's end rather than run off it."""
+    queue = [car_at(40.0 + 6.0 * k, 0.0) for k in range(21)]
+    end_x = 100.0
+    rows = drive(lambda t: queue, 25.0, 12.0, lane_watch_s=0.0,
+                 beside_at=lambda x: LanesBeside(max(end_x - x, 0.0), 0.0))
+    assert any(phase == AVOID_LEFT for _, phase, *_ in rows)
+    front_x = max(x for *_, x in rows) + FRONT_AHEAD_M
+    assert end_x - 5.0 < front_x <= end_x
+    assert rows[-1][2] == pytest.approx(0.0, abs=0.05)

@@ -45,10 +45,11 @@ def lane_path(radius_m: float) -> LanePath:
     return LanePath(xy, s)
 
 
-def kerb_points(radius_m: float, step_m: float = 0.2) -> np.ndarray:
-    """Returns along both kerbs of the lane, ``HALF_LANE_M`` either side."""
+def kerb_points(radius_m: float, step_m: float = 0.2, lanes_right: int = 0) -> np.ndarray:
+    """Returns along both kerbs of the road: the lane's, ``HALF_LANE_M`` either
+    side, with ``lanes_right`` more lanes as wide on its right."""
     out = []
-    for side in (-HALF_LANE_M, HALF_LANE_M):
+    for side in (-HALF_LANE_M * (1 + 2 * lanes_right), HALF_LANE_M):
         line = right_turn(radius_m, side)
         for a, b in zip(line[:-1], line[1:], strict=True):
             n = max(int(np.hypot(*(b - a)) / step_m), 1)
@@ -84,30 +85,40 @@ def fits(route, offset_m: float, points: np.ndarray, poses: int) -> bool:
 
 
 GRID_M = np.round(np.arange(-HALF_LANE_M, HALF_LANE_M + 1e-9, 0.02), 6)
+OWN_LANE_M = (-HALF_LANE_M, HALF_LANE_M)
 
 
 @pytest.mark.parametrize("radius_m", [6.0, 8.0, 12.0, 30.0])
 @pytest.mark.parametrize("preferred_m", [0.0, 0.5, -0.5])
-def test_the_offset_keeps_the_body_clear_and_is_the_nearest_that_does(radius_m, preferred_m):
+@pytest.mark.parametrize("lane", [0, -1], ids=["own-lane", "lane-right"])
+def test_the_offset_keeps_the_body_clear_and_is_the_nearest_that_does(radius_m, preferred_m,
+                                                                      lane):
+    """In the car's own lane, or in the lane on its right (where it passes): the
+    offsets held to those of that lane."""
+    centre_m = 2 * HALF_LANE_M * lane
     route = track(lane_path(radius_m), 0.0, TURN_AT_M + radius_m * math.pi / 2 + 6.0)
-    points = kerb_points(radius_m)
-    room = bend_room(route, points, MODEL, preferred_m, HALF_LANE_M, CLEARANCE_M, MIN_RADIUS_M)
+    points = kerb_points(radius_m, lanes_right=-lane)
+    room = bend_room(route, points, MODEL, centre_m + preferred_m,
+                     (centre_m - HALF_LANE_M, centre_m + HALF_LANE_M), CLEARANCE_M,
+                     MIN_RADIUS_M)
     poses = len(route.s_m)
-    good = [o for o in GRID_M if fits(route, o, points, poses)]
+    good = [centre_m + o for o in GRID_M if fits(route, centre_m + o, points, poses)]
     if not good:
         assert math.isnan(room.offset_m)
         return
     assert room.free_m == math.inf
     assert fits(route, room.offset_m, points, poses)
-    nearest = min(good, key=lambda o: abs(o - preferred_m))
-    assert abs(room.offset_m - preferred_m) <= abs(nearest - preferred_m) + 1e-9
+    assert centre_m - HALF_LANE_M <= room.offset_m <= centre_m + HALF_LANE_M
+    nearest = min(good, key=lambda o: abs(o - centre_m - preferred_m))
+    assert (abs(room.offset_m - centre_m - preferred_m)
+            <= abs(nearest - centre_m - preferred_m) + 1e-9)
 
 
 def test_a_tight_turn_moves_the_car_toward_its_inside_and_a_wide_one_does_not():
     offsets = {}
     for radius_m in (20.0, 60.0):
         route = track(lane_path(radius_m), 0.0, TURN_AT_M + radius_m * math.pi / 2 + 6.0)
-        offsets[radius_m] = bend_room(route, kerb_points(radius_m), MODEL, 0.0, HALF_LANE_M,
+        offsets[radius_m] = bend_room(route, kerb_points(radius_m), MODEL, 0.0, OWN_LANE_M,
                                       CLEARANCE_M, MIN_RADIUS_M).offset_m
     assert offsets[60.0] == 0.0
     # the front swings out beyond the rear axle's track: the axle keeps to the inside
@@ -125,7 +136,7 @@ def test_where_no_offset_fits_it_says_how_far_the_car_may_go():
     across = middle + np.linspace(-2, 2, 41)[:, None] * np.array([math.cos(theta),
                                                                     math.sin(theta)])
     points = np.vstack([points, across])
-    room = bend_room(route, points, MODEL, 0.0, HALF_LANE_M, CLEARANCE_M, MIN_RADIUS_M)
+    room = bend_room(route, points, MODEL, 0.0, OWN_LANE_M, CLEARANCE_M, MIN_RADIUS_M)
     assert math.isnan(room.offset_m)
     first_blocked = next(k for k in range(1, len(route.s_m) + 1)
                          if not any(fits(route, o, points, k) for o in GRID_M)) - 1

@@ -160,6 +160,7 @@ class AvoidController:
         self.foes = FoeWatch(self.params)  # before a line where the car gives way
         self.foe_seen_s = -math.inf  # when a foe was seen last
         self.bend_offset_m: float | None = None  # the offset held through a tight bend
+        self.pass_in_lane = False  # passing in a lane of the car's direction (it may end)
         self._cos_sin: np.ndarray | None = None
         self._rear_view = False
 
@@ -369,6 +370,9 @@ class AvoidController:
         if self.phase in (CRUISE, AVOID_RETURN):
             self.target_m = 0.0
             target_m, free_m, bend_mps, steer_path = self._lane_line(frame, obs, path, lane_s)
+        elif self.phase in (AVOID_LEFT, AVOID_RIGHT):  # the line in the lane it passes in
+            target_m, free_m, bend_mps, steer_path = self._lane_line(frame, obs, path, path_s,
+                                                                     self.target_m)
 
         turn_mps = min(bend_mps, path.turn_speed_mps(p.turn_lateral_accel_mps2,
                                                      v.max_decel_mps2 * p.gap_decel_fraction,
@@ -379,6 +383,7 @@ class AvoidController:
         accel = min(accel, self._give_way_accel(obs, turn_mps))
         if math.isfinite(free_m):  # no room for the body in the bend ahead: stop short
             accel = min(accel, self._speed_accel(free_m, obs, turn_mps, wait_m=p.stop_margin_m))
+        accel = min(accel, self._lane_end_accel(obs, turn_mps))
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s)
@@ -428,10 +433,22 @@ class AvoidController:
         phase, side, target, end_s, accel = plan
         if phase == BRAKE:
             self.phase = BRAKE
-            return self._brake_accel(gap_lane, obs)
+            return self._brake_accel(gap_lane, obs, far_back=True)
         self.phase, self.side, self.target_m = phase, side, target
         self.obstacle_end_s = end_s
+        self.pass_in_lane = self._beside_m(side, obs) > 0
         return accel
+
+    def _lane_end_accel(self, obs: Observation, turn_mps: float) -> float:
+        """Passing in a lane of the car's direction that ends ahead (a merge): to a
+        stop ``stop_margin_m`` short of its end, unless back in the own lane before."""
+        if self.phase not in (AVOID_LEFT, AVOID_RIGHT) or not self.pass_in_lane:
+            return math.inf
+        end_m = self._beside_m(self.side, obs)  # from the body centre
+        if not 0 < end_m < math.inf:
+            return math.inf
+        return self._speed_accel(end_m - obs.vehicle.length_m / 2, obs, turn_mps,
+                                 wait_m=self.params.stop_margin_m)
 
     def _back_from_oncoming(self, obs: Observation, gap_lane: float) -> None:
         """Something coming the other way in the passing lane while the obstacle is
@@ -468,20 +485,22 @@ class AvoidController:
         return self._speed_accel(gap, obs, turn_mps)
 
     def _lane_line(self, frame: LaneFrame, obs: Observation, path: LanePath,
-                   leader_s: float | None) -> tuple[float, float, float, LanePath]:
-        """Where the car holds its lane: its lateral target, how far it may go (inf:
-        as far as it likes), the speed the bends ahead allow on that line and the
-        path to steer along (through a tight bend the lane smoothed as the car's track
-        is: a junction's turn is drawn as a few straight pieces).
+                   leader_s: float | None, centre_m: float = 0.0
+                   ) -> tuple[float, float, float, LanePath]:
+        """Where the car holds the lane whose centre is ``centre_m`` from its own's
+        (its own, or the one it passes in): its lateral target, how far it may go
+        (inf: as far as it likes), the speed the bends ahead allow on that line and
+        the path to steer along (through a tight bend the lane smoothed as the car's
+        track is: a junction's turn is drawn as a few straight pieces).
 
         Through bends tighter than ``bend_radius_m`` ahead (up to where the car
         stops braking at ``gap_decel_fraction`` of its hardest, and as long again
-        as the car; not past the leader) the offset nearest the lane's centre that
-        leaves the body ``bend_clearance_m`` from every return (:mod:`sdc.car.bend_room`);
-        once the rear axle is in such a bend, the offset held so far while it still
-        fits (the corner beside the car is then out of the range image). No offset
-        fits: the car stops short of where it would not. Elsewhere, the inside of a
-        gentle bend (:meth:`_inside_of_bend_m`)."""
+        as the car; not past the leader) the offset within that lane nearest its
+        centre that leaves the body ``bend_clearance_m`` from every return
+        (:mod:`sdc.car.bend_room`); once the rear axle is in such a bend, the offset
+        held so far while it still fits (the corner beside the car is then out of
+        the range image). No offset fits: the car stops short of where it would
+        not. Elsewhere, the inside of a gentle bend (:meth:`_inside_of_bend_m`)."""
         p, v = self.params, obs.vehicle
         axle_s = path.car_s_m - v.center_ahead_of_rear_axle_m
         decel = v.max_decel_mps2 * p.gap_decel_fraction
@@ -492,12 +511,14 @@ class AvoidController:
         tight = np.abs(route.curvature_1pm) > 1.0 / p.bend_radius_m
         if not tight.any():
             self.bend_offset_m = None
-            return self._inside_of_bend_m(path, obs), math.inf, math.inf, path
-        held = self.bend_offset_m is not None and bool(tight[0])
-        preferred = self.bend_offset_m if held else 0.0
-        room = bend_room(route, frame.xy_m, v, preferred, obs.lane_width_m / 2,
+            return centre_m + self._inside_of_bend_m(path, obs), math.inf, math.inf, path
+        held = (self.bend_offset_m is not None and bool(tight[0])
+                and abs(self.bend_offset_m - centre_m) <= obs.lane_width_m / 2)
+        preferred = self.bend_offset_m if held else centre_m
+        half_m, band_m = obs.lane_width_m / 2, max(obs.lane_width_m / 2 - v.width_m / 2, 0.0)
+        room = bend_room(route, frame.xy_m, v, preferred, (centre_m - half_m, centre_m + half_m),
                          p.bend_clearance_m, self._tightest_radius_m(v),
-                         None if held else max(obs.lane_width_m / 2 - v.width_m / 2, 0.0))
+                         None if held else (centre_m - band_m, centre_m + band_m))
         offset = preferred if math.isnan(room.offset_m) else room.offset_m
         self.bend_offset_m = offset
         reach_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s) + TURN_WINDOW_M
@@ -624,11 +645,13 @@ class AvoidController:
             return math.inf
         return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
 
-    def _brake_accel(self, gap_m: float, obs: Observation, wait_m: float | None = None
-                     ) -> float:
+    def _brake_accel(self, gap_m: float, obs: Observation, wait_m: float | None = None,
+                     far_back: bool = False) -> float:
         """Braking to stop ``wait_m`` (default ``wait_gap_m``) short of the obstacle
         where the car can, else ``stop_margin_m`` short of it: the deceleration that
-        needs, times ``brake_gain``, up to the car's maximum."""
+        needs, times ``brake_gain``, up to the car's maximum. ``far_back`` (an
+        obstacle to steer round once stopped): where the waiting gap is out of
+        reach, the car's hardest, to stop as far back as it can."""
         p, v = self.params, obs.vehicle
         speed = obs.speed_mps
         room_m = gap_m - p.stop_margin_m
@@ -638,6 +661,8 @@ class AvoidController:
         wait_room_m = gap_m - (p.wait_gap_m if wait_m is None else wait_m)
         if wait_room_m > 0 and speed**2 / (2 * wait_room_m) <= v.max_decel_mps2:
             room_m = wait_room_m
+        elif far_back and speed >= p.creep_speed_mps:
+            return -v.max_decel_mps2
         need = speed**2 / (2 * room_m) if room_m > 0 else math.inf
         if speed < p.creep_speed_mps:  # the last of it: stop (rather than creep ever slower)
             need = max(need, speed / obs.step_s)

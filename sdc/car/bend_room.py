@@ -58,15 +58,17 @@ def track(path: LanePath, from_s_m: float, to_s_m: float) -> Track:
 
 
 def bend_room(route: Track, points_xy: np.ndarray, vehicle: VehicleModel, preferred_m: float,
-              reach_m: float, clearance_m: float, min_radius_m: float,
-              band_m: float | None = None) -> BendRoom:
-    """The offset nearest ``preferred_m`` within ``reach_m`` of the lane's centre at
-    which the body, its rear axle on the track's parallel at every pose, keeps
-    ``clearance_m`` from each of ``points_xy`` (car frame) and turns no tighter than
-    ``min_radius_m``; when none fits every pose, the distance to the first pose
-    that none fits together with those before it."""
-    lower, upper = _radius_bounds(route.curvature_1pm, reach_m, min_radius_m)
-    pose, a_m, b_m = _blocked(route, points_xy, vehicle, clearance_m, reach_m)
+              bounds_m: tuple[float, float], clearance_m: float, min_radius_m: float,
+              band_m: tuple[float, float] | None = None) -> BendRoom:
+    """The offset nearest ``preferred_m`` within ``bounds_m`` (lowest, highest; from
+    the lane's centre, + left) at which the body, its rear axle on the track's
+    parallel at every pose, keeps ``clearance_m`` from each of ``points_xy`` (car
+    frame) and turns no tighter than ``min_radius_m``; when none fits every pose,
+    the distance to the first pose that none fits together with those before it.
+    ``band_m``: where several offsets fit, the middle of the free stretch nearest
+    ``preferred_m``, within this band, rather than the offset nearest it."""
+    lower, upper = _radius_bounds(route.curvature_1pm, bounds_m, min_radius_m)
+    pose, a_m, b_m = _blocked(route, points_xy, vehicle, clearance_m, bounds_m)
 
     def up_to(k: int) -> float:  # the offset for poses 0..k
         keep = pose <= k
@@ -88,12 +90,12 @@ def bend_room(route: Track, points_xy: np.ndarray, vehicle: VehicleModel, prefer
     return BendRoom(math.nan, float(route.s_m[fails] - route.s_m[0]))
 
 
-def _radius_bounds(curvature: np.ndarray, reach_m: float, min_radius_m: float):
+def _radius_bounds(curvature: np.ndarray, bounds_m: tuple[float, float], min_radius_m: float):
     """The offsets the turning radius allows at poses 0..k, for each k, as (lowest,
     highest): toward the inside of a bend of radius R no more than R -
-    ``min_radius_m`` (the parallel there has that radius), and within ``reach_m``."""
-    lower = np.full(len(curvature), -reach_m)
-    upper = np.full(len(curvature), reach_m)
+    ``min_radius_m`` (the parallel there has that radius), and within ``bounds_m``."""
+    lower = np.full(len(curvature), bounds_m[0])
+    upper = np.full(len(curvature), bounds_m[1])
     left, right = curvature > 1e-9, curvature < -1e-9
     upper[left] = np.minimum(upper[left], 1 / curvature[left] - min_radius_m)
     lower[right] = np.maximum(lower[right], 1 / curvature[right] + min_radius_m)
@@ -101,9 +103,10 @@ def _radius_bounds(curvature: np.ndarray, reach_m: float, min_radius_m: float):
 
 
 def _blocked(route: Track, points_xy: np.ndarray, vehicle: VehicleModel, clearance_m: float,
-             reach_m: float):
+             bounds_m: tuple[float, float]):
     """The offsets each point blocks at each pose: (pose index, from, to) for every
-    point the body at some offset could come within ``clearance_m`` of."""
+    point the body at some offset within ``bounds_m`` could come within
+    ``clearance_m`` of."""
     half_m = vehicle.width_m / 2 + clearance_m
     rel = points_xy[None, :, :] - route.xy_m[:, None, :]
     d = route.direction
@@ -111,14 +114,14 @@ def _blocked(route: Track, points_xy: np.ndarray, vehicle: VehicleModel, clearan
     lateral = rel[..., 1] * d[:, None, 0] - rel[..., 0] * d[:, None, 1]
     near = ((along >= -vehicle.rear_overhang_m - clearance_m)
             & (along <= vehicle.front_ahead_of_rear_axle_m + clearance_m)
-            & (np.abs(lateral) <= reach_m + half_m))
+            & (lateral >= bounds_m[0] - half_m) & (lateral <= bounds_m[1] + half_m))
     pose, point = np.nonzero(near)
     lat = lateral[pose, point]
     return pose, lat - half_m, lat + half_m
 
 
 def _nearest_free(lo_m: float, hi_m: float, a_m: np.ndarray, b_m: np.ndarray,
-                  preferred_m: float, band_m: float | None = None) -> float:
+                  preferred_m: float, band_m: tuple[float, float] | None = None) -> float:
     """The point of [lo_m, hi_m] outside every interval (a_m, b_m) nearest
     ``preferred_m`` (nan: none)."""
     if lo_m > hi_m:
@@ -136,5 +139,5 @@ def _nearest_free(lo_m: float, hi_m: float, a_m: np.ndarray, b_m: np.ndarray,
     k = int(np.argmin(np.abs(nearest - preferred_m)))
     if band_m is None:
         return float(nearest[k])
-    lo, hi = max(starts[k], -band_m), min(ends[k], band_m)  # its middle within the band
+    lo, hi = max(starts[k], band_m[0]), min(ends[k], band_m[1])  # its middle within the band
     return float((lo + hi) / 2) if lo <= hi else float(nearest[k])
