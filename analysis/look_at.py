@@ -10,17 +10,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from analysis.run_outcome import STUCK, UNFINISHED
+from analysis.run_outcome import COLLIDED, STUCK, UNFINISHED
 from analysis.verdicts import completed_runs
 
 #: the classes, in the order they are listed
 RANK_CLASSES = ("no outcome (error or timeout)", "collided where braking alone could stop",
                 "collided", "stuck", "unfinished")
-RANKING = ("Ranked: runs without an outcome first, then collisions where braking alone could "
-           "have stopped, other collisions, stuck runs, unfinished ones; within each, runs "
-           "whose scenario other controllers completed first, then the smallest gap to an "
-           "obstacle.")
-MAX_THUMBNAILS = 12
+RANKING = ("Per controller, the controllers under test first, the lesson's seed maneuver and "
+           "the lane-keep control group last. Ranked: runs without an outcome first, then "
+           "collisions where braking alone could have stopped, other collisions, stuck runs, "
+           "unfinished ones; within each, runs whose scenario other controllers completed "
+           "first, then the smallest gap to an obstacle.")
+#: the lesson's maneuver and the control group: listed after the controllers under test
+REFERENCE_CONTROLLERS = ("seed", "lane-keep")
+#: thumbnails drawn per controller, for its first runs with a kept trace
+THUMBNAILS_PER_CONTROLLER = 4
 
 
 def _rank_class(results: pd.DataFrame) -> pd.Series:
@@ -36,20 +40,62 @@ def _rank_class(results: pd.DataFrame) -> pd.Series:
                      index=results.index).replace(-1, np.nan)
 
 
+def controller_order(controllers) -> list[str]:
+    """The controllers under test in their order, then :data:`REFERENCE_CONTROLLERS`."""
+    controllers = list(dict.fromkeys(controllers))
+    return ([c for c in controllers if c not in REFERENCE_CONTROLLERS]
+            + [c for c in REFERENCE_CONTROLLERS if c in controllers])
+
+
 def ranked_runs(results: pd.DataFrame) -> pd.DataFrame:
-    """The runs that did not complete without a collision, ranked (:data:`RANKING`),
-    with ``why`` (their class) and ``others_completed`` (how many other controllers
-    completed the same sample)."""
+    """The runs that did not complete without a collision, per controller
+    (:func:`controller_order`) and ranked (:data:`RANKING`), with ``rank_class``
+    (their class in :data:`RANK_CLASSES`), ``why`` (:func:`what_happened`) and
+    ``others_completed`` (how many other controllers completed the same sample)."""
     done = completed_runs(results)
     completed_per_sample = done.groupby(results["sample"]).transform("sum")
     ranked = results.assign(_class=_rank_class(results),
                             others_completed=completed_per_sample - done.astype(int))
     ranked = ranked.dropna(subset=["_class"])
-    ranked = ranked.assign(why=[RANK_CLASSES[int(c)] for c in ranked._class],
+    order = {c: k for k, c in enumerate(controller_order(results.controller))}
+    ranked = ranked.assign(rank_class=[RANK_CLASSES[int(c)] for c in ranked._class],
+                           why=[what_happened(r) for r in ranked.to_dict("records")],
+                           _controller=ranked.controller.map(order),
                            _gap=ranked.min_gap_obstacle_m.fillna(np.inf),
                            _others=-ranked.others_completed)
-    return (ranked.sort_values(["_class", "_others", "_gap", "run_index"])
-            .drop(columns=["_class", "_others", "_gap"]))
+    return (ranked.sort_values(["_controller", "_class", "_others", "_gap", "run_index"])
+            .drop(columns=["_controller", "_class", "_others", "_gap"]))
+
+
+def what_happened(row: Mapping[str, Any]) -> str:
+    """A run that did not complete, in words: its error; what it hit, with which part,
+    how fast and when; or how long it stood, how far it got and how near it came to an
+    obstacle."""
+    if row["status"] != "ok":
+        return f"{row['status']}: {row['error']}"
+    value = {k: None if pd.isna(v) else v for k, v in row.items() if not isinstance(v, list)}
+    made = value.get("progress_m")
+    progress = "" if made is None else f", {made:.0f} m along the route"
+    gap = value.get("min_gap_obstacle_m")
+    nearest = (f", {gap:.1f} m from an obstacle at the closest"
+               if gap is not None and np.isfinite(gap) else "")
+    outcome = value.get("outcome")
+    if outcome == COLLIDED or (outcome is None and value["collision"]):
+        what = {"obstacle": "the obstacle", "road_edge": "the road edge"}.get(
+            value["collision_with"], "a vehicle")
+        if value.get("collision_vclass"):
+            what += f" ({value['collision_vclass']})"
+        speed = value.get("collision_speed_mps")
+        verb = "was hit by" if value.get("collision_role") == "was_hit" else "hit"
+        return (f"{verb} {what} with its {value.get('collision_part') or '?'}"
+                + (f" at {speed:.1f} m/s" if speed is not None else "")
+                + f", {value['collision_time_s']:.1f} s in"
+                + ("; braking alone could have stopped" if value.get("stop_possible") else ""))
+    stood = value.get("stood_at_end_s")
+    if outcome == STUCK:
+        return ((f"stood still for the last {stood:.1f} s" if stood is not None
+                 else "stood still at the end") + f"{progress}{nearest}")
+    return f"still moving when the run ended{progress}{nearest}"
 
 
 def params_text(row: Mapping[str, Any], columns: list[str]) -> str:

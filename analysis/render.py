@@ -105,9 +105,9 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
         title=(f"{spec.scenario.name}  controller {spec.controller.label}  seed "
-               f"{spec.scenario.seed}  ({run.get('termination', '?')}"
+               f"{spec.scenario.seed}  ({run.get('outcome') or run.get('termination', '?')}"
                + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
-                  else "") + ")"),
+                  else "") + f"; ended by {run.get('termination', '?')})"),
     )
 
 

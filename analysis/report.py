@@ -19,7 +19,14 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis import plots
-from analysis.look_at import MAX_THUMBNAILS, RANKING, params_text, ranked_runs, thumbnail
+from analysis.gate import gate, gate_bounds_line
+from analysis.look_at import (
+    RANKING,
+    THUMBNAILS_PER_CONTROLLER,
+    params_text,
+    ranked_runs,
+    thumbnail,
+)
 from analysis.plain_json import json_plain
 from analysis.run_outcome import COMPLETED
 from analysis.safety import REACTION_TIME_S
@@ -37,7 +44,6 @@ from analysis.stats import (
     rates_by,
     safe_envelope,
     stop_possible_summary,
-    upper_bound_counting_failures,
     warm_state_summary,
 )
 from analysis.verdicts import (
@@ -78,7 +84,7 @@ class Report:
     markdown_path: Path
     junit_path: Path | None
     terminal: list[str]
-    gate_failed: list[str] = dataclasses.field(default_factory=list)  # --fail-above
+    gate_failed: list[str] = dataclasses.field(default_factory=list)  # failing the gate
 
 
 def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
@@ -119,20 +125,9 @@ def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
             "samples_compared": len(shared), "runs_left_out": int((~compared).sum())}
 
 
-def gate(results: pd.DataFrame, controllers: list[str], rate: float, method: Method) -> dict:
-    """``--fail-above RATE``: which controllers' collision rate may exceed ``rate``: the
-    upper end of its 95% interval, its error and timeout runs counted as collisions,
-    clustered by warm state (``design_effects``: per controller)."""
-    bounds, design_effects = {}, {}
-    for c in controllers:
-        bounds[c], design_effects[c] = upper_bound_counting_failures(
-            results[results.controller == c], method)
-    return {"rate": rate, "upper_bounds": bounds, "design_effects": design_effects,
-            "failed": [c for c, high in bounds.items() if high > rate]}
-
-
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,
-                  shared: pd.Index, fail_above: float | None = None) -> dict:
+                  shared: pd.Index, fail_above: float | None = None,
+                  min_completed: float | None = None) -> dict:
     """Everything the report says. Controllers are compared on the ``shared`` samples,
     those every one of them ran (:func:`analysis.verdicts.shared_samples`: all of them,
     unless the sweep is partial or lost runs)."""
@@ -167,7 +162,8 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
         "by": grouped,
         "envelope": ([safe_envelope(counted, SPEED, c) for c in controllers]
                      if SPEED in counted.columns else []),
-        "gate": None if fail_above is None else gate(counted, controllers, fail_above, method),
+        "gate": (None if fail_above is None and min_completed is None
+                 else gate(counted, controllers, fail_above, method, min_completed)),
         "traffic_model": manifest.get("traffic_model"),
         "sumo_config": manifest.get("sumo_config"),
         "world": world_summary(counted),
@@ -441,19 +437,8 @@ def findings(summary: dict) -> list[str]:
             if completes_rarely(numbers)}
     lines += [_envelope(e, e["controller"] in rare) for e in summary["envelope"]]
     if summary["gate"] is not None:
-        lines.append(gate_line(summary["gate"]))
+        lines.append(gate_bounds_line(summary["gate"]))  # its verdict: the command's last line
     return lines
-
-
-def gate_line(gate: dict) -> str:
-    bounds = ", ".join(f"{c} {percent(high)}" for c, high in gate["upper_bounds"].items())
-    verdict = ("FAILED: " + ", ".join(gate["failed"]) if gate["failed"] else "passed")
-    effects = gate.get("design_effects", {})
-    widened = ("" if all(d == 1 for d in effects.values()) else
-               "; widened for runs sharing a warm state, design effects "
-               + ", ".join(f"{c} {_deff(d)}" for c, d in effects.items()))
-    return (f"--fail-above {gate['rate']:g}: {verdict} (upper 95% bounds of the collision "
-            f"rates, errors and timeouts counted as collisions: {bounds}{widened})")
 
 
 def _aligned(rows: list[list[str]]) -> list[str]:
@@ -496,24 +481,33 @@ def _row_outcome(row: dict) -> str:
     return outcome
 
 
-def _look_at_table(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str:
-    """The ranked runs as an HTML table, a thumbnail beside the first that kept a trace."""
-    head = ["#", "run", "controller", "why", "outcome", "parameters", "decisive moment",
-            "replay"]
-    body, drawn = [], 0
-    for rank, row in enumerate(bad.to_dict("records"), start=1):
-        png = thumbnail(sweep_dir, row["run_id"]) if drawn < MAX_THUMBNAILS else None
-        drawn += png is not None
-        picture = ("" if png is None else
-                   f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
-                   f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
-        cells = [str(rank), row["run_id"], row["controller"], row["why"], _row_outcome(row),
-                 params_text(row, params)]
-        body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
-                    + f"<td>{picture}</td><td><code>"
-                    f"{html.escape(replay_command(sweep_dir, row['run_id']))}</code></td></tr>")
+def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str:
+    """The ranked runs, a table per controller, thumbnails beside its first runs that
+    kept a trace."""
+    head = ["#", "run", "class", "what happened", "parameters", "decisive moment", "replay"]
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
-    return f'<table id="look-at"><tr>{header}</tr>{"".join(body)}</table>'
+    parts = []
+    for controller, rows in bad.groupby("controller", sort=False):
+        body, drawn = [], 0
+        listed = rows.head(MAX_LISTED_FAILURES)
+        for rank, row in enumerate(listed.to_dict("records"), start=1):
+            png = (thumbnail(sweep_dir, row["run_id"]) if drawn < THUMBNAILS_PER_CONTROLLER
+                   else None)
+            drawn += png is not None
+            picture = ("" if png is None else
+                       f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
+                       f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
+            cells = [str(rank), row["run_id"], row["rank_class"], row["why"],
+                     params_text(row, params)]
+            body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
+                        + f"<td>{picture}</td><td><code>"
+                        f"{html.escape(replay_command(sweep_dir, row['run_id']))}</code></td></tr>")
+        more = (f"<p>... {len(rows) - len(listed)} more in results.parquet</p>"
+                if len(rows) > len(listed) else "")
+        parts.append(f"<h3>{html.escape(str(controller))} ({len(rows)})</h3>"
+                     f'<table class="look-at" id="look-at-{html.escape(str(controller))}">'
+                     f'<tr>{header}</tr>{"".join(body)}</table>{more}')
+    return "".join(parts)
 
 
 def _markdown_table(rows: list[list[str]]) -> list[str]:
@@ -544,11 +538,14 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
                                                           RANKING, ""]
     bad = ranked_runs(results)
     params = varying_parameters(results)
-    for rank, row in enumerate(bad.head(MAX_LISTED_FAILURES).to_dict("records"), start=1):
-        lines.append(f"{rank}. `{row['run_id']}` ({row['controller']}): {_row_outcome(row)}; "
-                     f"{params_text(row, params)} — `{replay_command(sweep_dir, row['run_id'])}`")
-    if len(bad) > MAX_LISTED_FAILURES:
-        lines.append(f"- ... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet")
+    for controller, rows in bad.groupby("controller", sort=False):
+        lines += ["", f"### {controller} ({len(rows)})", ""]
+        for rank, row in enumerate(rows.head(MAX_LISTED_FAILURES).to_dict("records"), start=1):
+            lines.append(f"{rank}. `{row['run_id']}`: {row['why']}; "
+                         f"{params_text(row, params)} — "
+                         f"`{replay_command(sweep_dir, row['run_id'])}`")
+        if len(rows) > MAX_LISTED_FAILURES:
+            lines.append(f"- ... {len(rows) - MAX_LISTED_FAILURES} more in results.parquet")
     return "\n".join(lines) + "\n"
 
 
@@ -640,12 +637,10 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
                      f"{_table_html(table)}</details>")
     bad = ranked_runs(results)
     parts += [f"<h2>Runs to look at ({len(bad)})</h2>", f"<p>{html.escape(RANKING)} The "
-              f"pictures show the moment that decided the first {MAX_THUMBNAILS} runs with "
-              "a kept trace (top-down; lidar returns in orange).</p>",
-              _look_at_table(bad.head(MAX_LISTED_FAILURES), sweep_dir,
-                             varying_parameters(results))]
-    if len(bad) > MAX_LISTED_FAILURES:
-        parts.append(f"<p>... {len(bad) - MAX_LISTED_FAILURES} more in results.parquet</p>")
+              f"pictures show the moment that decided each controller's first "
+              f"{THUMBNAILS_PER_CONTROLLER} runs with a kept trace (top-down; lidar returns "
+              "in orange).</p>",
+              _look_at_tables(bad, sweep_dir, varying_parameters(results))]
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>sdc report: {html.escape(summary['sweep'])}</title>"
             f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>\n")
@@ -682,9 +677,11 @@ def by_column(results: pd.DataFrame, name: str) -> str:
 
 def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),
                  junit_path: Path | None = None, method: Method = "wilson",
-                 fail_above: float | None = None) -> Report:
-    """Write the report of ``sweep_dir``; with ``fail_above`` the summary holds the
-    gate (:func:`gate`), and ``Report.gate_failed`` lists the controllers over it."""
+                 fail_above: float | None = None, min_completed: float | None = None
+                 ) -> Report:
+    """Write the report of ``sweep_dir``; with ``fail_above`` or ``min_completed`` the
+    summary holds the gate (:func:`analysis.gate.gate`), and ``Report.gate_failed``
+    lists the controllers that fail it."""
     sweep_dir = Path(sweep_dir)
     for option, path in (("--out", html_path), ("--junit", junit_path)):
         if path is not None and not Path(path).parent.is_dir():
@@ -694,13 +691,14 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
         if by:
             raise ReportError("--by", "a search or estimate has no rates by parameter (its "
                               "runs were drawn toward failure); see its failure modes")
-        if fail_above is not None:
-            raise ReportError("--fail-above", "a search or estimate has no collision rate to "
+        if fail_above is not None or min_completed is not None:
+            raise ReportError("--fail-above" if fail_above is not None else "--min-completed",
+                              "a search or estimate has no rates to "
                               "gate (its runs were drawn toward failure); gate on a sweep")
         return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
     by = [by_column(results, column) for column in by] or varying_parameters(results)
     shared = shared_samples(results)
-    summary = build_summary(results, manifest, by, method, shared, fail_above)
+    summary = build_summary(results, manifest, by, method, shared, fail_above, min_completed)
     warm_ups = read_settling(sweep_dir)
     summary["settling"] = settling_summary(warm_ups)
     counted = results[results["sample"].isin(shared)]

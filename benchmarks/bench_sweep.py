@@ -40,7 +40,7 @@ PAIRS, SAMPLES = 3, 200  # seed-envelope samples: 400 runs a sweep
 class Clock:
     """A sweep reporter that notes when each row arrives."""
 
-    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+    def start(self, total: int, done: int, outcomes, failed: int) -> None:
         self.started, self.arrivals = time.perf_counter(), []
 
     def advance(self, row: dict) -> None:

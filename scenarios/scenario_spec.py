@@ -624,6 +624,12 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 "ego.start_m",
                 f"the ego starts inside {path} ({obstacle.kind} at {obstacle.position_m} m)",
             )
+        if obstacle.position_m + length_m / 2 <= ego.start_m - model.length_m / 2:
+            raise SpecError(
+                f"{path}.position_m",
+                f"{obstacle.position_m} puts the {obstacle.kind} behind the ego, which starts "
+                f"at ego.start_m = {ego.start_m}: the run would never meet it",
+            )
 
 
 def _check_speed_factor(spec: ScenarioSpec) -> None:

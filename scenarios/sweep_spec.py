@@ -357,7 +357,12 @@ def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
                        params: list[Param]) -> None:
     if warm_states is None:
         return
-    swept = {p.path for p in params}
+    swept = {p.path: p for p in params}
+    backend = swept.get("scenario.backend")
+    backends = set(backend.args) if backend is not None else {base.scenario.backend}
+    if "sumo" not in backends:
+        raise SpecError("sweep.warm_states", "warm states are SUMO's saved traffic; the "
+                        "sweep runs on the highway backend only, which has none to share")
     if "traffic.warm_seed" in swept:
         raise SpecError("sweep.warm_states", "and a swept traffic.warm_seed both choose the "
                         "warm-ups' seeds: keep one")

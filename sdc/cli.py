@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import shlex
 import shutil
@@ -30,6 +31,26 @@ EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 def _bad_input(message: str) -> None:
     click.echo(f"error: {message}", err=True)
     sys.exit(EXIT_BAD_INPUT)
+
+
+def _a_number(ctx, param, value: float | None) -> float | None:
+    """A number option's value, NaN refused (a range check lets it through)."""
+    if value is not None and math.isnan(value):
+        raise click.BadParameter("not a number (nan)", ctx, param)
+    return value
+
+
+def _a_finite_number(ctx, param, value: float | None) -> float | None:
+    """A number option's value, NaN and infinities refused."""
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"not a finite number ({value})", ctx, param)
+    return value
+
+
+def _check_at(at_s: float | None, end_s: float) -> None:
+    """``--at`` within the run drawn (``end_s``: its last step's time)."""
+    if at_s is not None and at_s > end_s + 1e-9:
+        _bad_input(f"--at: {at_s:g} s is past the run's end at {end_s:.3f} s")
 
 
 def _check_trace_path(trace: Path | None) -> None:
@@ -70,9 +91,10 @@ def summary_lines(name: str, row: dict) -> list[str]:
     what = row["collision_with"]
     if row.get("collision_vclass"):
         what += f" ({row['collision_vclass']})"
-    outcome = (f"COLLISION with {what} at {row['collision_time_s']:.2f} s "
-               f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
-               if row["collision"] else "no collision")
+    outcome = row["outcome"] + (
+        f": COLLISION with {what} at {row['collision_time_s']:.2f} s "
+        f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
+        if row["collision"] else " (no collision)")
     if row.get("world_overlaps"):
         outcome += (f"; WARNING: bodies other than the ego overlapped in "
                     f"{row['world_overlaps']} steps (world_overlaps)")
@@ -89,6 +111,8 @@ def summary_lines(name: str, row: dict) -> list[str]:
         f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
         f"{row['network_vehicles']} vehicles in the network"
         + (f", warm state {row['warm_state']}" if row.get("warm_state") else "") + ")",
+        f"  progress:  {_fmt(row['progress_m'], ' m', 1)} along the route, time lost "
+        f"{_fmt(row['time_lost_s'], ' s', 1)} (against driving on at the start speed)",
         f"  maneuver:  {maneuver}",
         f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
         f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
@@ -186,7 +210,11 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
         if trace is not None and row["status"] == "ok":
             click.echo(f"  trace written to {trace}")
     if row["status"] != "ok":
-        click.echo(row["traceback"] or "", err=True)
+        from sdc.run.result_row import raised_at
+
+        where = raised_at(row["traceback"])
+        click.echo(f"error: {row['error']}" + (f" (raised at {where})" if where else ""),
+                   err=True)
         sys.exit(EXIT_RUN_ERROR)
 
 
@@ -233,7 +261,7 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 @main.command()
 @click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
 @click.option("--for", "watch_s", type=click.FloatRange(20, 3600), default=600.0,
-              show_default=True, metavar="SECONDS",
+              show_default=True, metavar="SECONDS", callback=_a_number,
               help="How long to watch the traffic warm up [simulated s].")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1),
               help="The warm-up's seed (default: the spec's traffic.warm_seed, else "
@@ -265,11 +293,20 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
     from analysis.settling import settling_figure, suggest_warm_up_s
     from scenarios.world_backends import check_inputs, settling_series
 
+    if out is not None and out.suffix != ".png":
+        _bad_input(f"--out: {out} must end in .png (the series goes beside it as .csv)")
+    if out is not None and not out.parent.is_dir():
+        _bad_input(f"--out: directory {out.parent} does not exist")
     try:
         spec = load_spec(spec_file)
         if spec.scenario.backend != "sumo":
             raise SpecError("scenario.backend", "sdc settle watches SUMO's traffic; "
                             f"the spec's backend is {spec.scenario.backend!r}")
+        traffic = spec.traffic
+        if (spec.road.kind != "sumo_config" and traffic.flow_vph_per_lane == 0
+                and traffic.vehicles == 0):
+            raise SpecError("traffic", "the scenario has no background traffic to watch "
+                            "(traffic.flow_vph_per_lane and traffic.vehicles are 0)")
         if seed is not None:
             spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
                                                                          warm_seed=seed))
@@ -329,12 +366,13 @@ def _other_demo(out_dir: Path, spec) -> bool:
 
 def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] = (),
             junit: Path | None = None, interval: str = "wilson",
-            fail_above: float | None = None):
+            fail_above: float | None = None, min_completed: float | None = None):
     from analysis.report import write_report
 
     try:
         return write_report(sweep_dir, html_path=html_path, by=list(by), junit_path=junit,
-                            method=interval, fail_above=fail_above)
+                            method=interval, fail_above=fail_above,
+                            min_completed=min_completed)
     except SdcError as e:  # a ReportError too
         _bad_input(str(e))
 
@@ -352,11 +390,17 @@ def _report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] 
 @click.option("--interval", type=click.Choice(["wilson", "clopper-pearson"]),
               default="wilson", show_default=True, help="95% interval for the rates.")
 @click.option("--fail-above", type=click.FloatRange(0.0, 1.0), metavar="RATE",
+              callback=_a_number,
               help="Exit 1 when any controller's collision rate may exceed RATE: the upper "
                    "end of its 95% interval, error and timeout runs counted as collisions "
                    "(a gate for CI, e.g. 0.05).")
+@click.option("--min-completed", type=click.FloatRange(0.0, 1.0), metavar="RATE",
+              callback=_a_number,
+              help="Exit 1 when any controller's rate of runs completed without a collision "
+                   "may fall short of RATE: the lower end of its 95% interval, error and "
+                   "timeout runs counted as not completed (a gate for CI, e.g. 0.9).")
 def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: Path | None,
-           interval: str, fail_above: float | None) -> None:
+           interval: str, fail_above: float | None, min_completed: float | None) -> None:
     """How the runs of a sweep directory ended, and its collision statistics.
 
     Leads with the verdicts: per controller the runs that completed without a
@@ -366,10 +410,14 @@ def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: 
     and prints the tables. Error and timeout runs never count as safe; a partial
     sweep says so and controllers are compared on the samples they all ran.
     """
-    result = _report(sweep_dir, html_path, by, junit, interval, fail_above)
+    result = _report(sweep_dir, html_path, by, junit, interval, fail_above, min_completed)
     for line in result.terminal:
         click.echo(line)
     click.echo(f"report: {result.html_path}")
+    if result.summary.get("gate") is not None:  # the last line: the gate's verdict
+        from analysis.gate import gate_verdict_line
+
+        click.echo(gate_verdict_line(result.summary["gate"]))
     if result.gate_failed:
         sys.exit(EXIT_RUN_ERROR)
 
@@ -437,7 +485,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
     """
     from scenarios.sweep_spec import expand, load_sweep
     from sdc.batch.executors import LocalExecutor, RayExecutor
-    from sdc.batch.progress import QuietReporter, RichReporter
+    from sdc.batch.progress import QuietReporter, RichReporter, outcomes_text
     from sdc.batch.sweep_runner import run_sweep
 
     if ray_address and executor != "ray":
@@ -469,7 +517,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
     counts = outcome.counts
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout, {counts['missing']} not run; "
-               f"{outcome.collisions} collisions ({outcome.wall_time_s:.1f} s)")
+               f"{outcomes_text(outcome.outcomes)} ({outcome.wall_time_s:.1f} s)")
     click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
     if outcome.interrupted or counts["missing"]:
         hint = resume_command(sweep_file, out_dir, samples=samples, traces=traces,
@@ -569,9 +617,11 @@ def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_s
 
 
 def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
+    from sdc.batch.progress import outcomes_text
+
     counts = outcome.counts
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
-               f"{counts['timeout']} timeout; {outcome.collisions} collisions "
+               f"{counts['timeout']} timeout; {outcomes_text(outcome.outcomes)} "
                f"({outcome.wall_time_s:.1f} s)")
     from analysis.rare_report import summary_path
 
@@ -733,7 +783,8 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
               metavar="FILE.gif|.mp4|.html|.png",
               help="Draw the run: an animation (mp4 needs ffmpeg), an interactive page, or "
                    "one frame (.png: the decisive moment, or --at).")
-@click.option("--at", "at_s", type=float, metavar="T",
+@click.option("--at", "at_s", type=click.FloatRange(min=0.0, max_open=False),
+              callback=_a_finite_number, metavar="T",
               help="With --out FILE.png: draw the step at simulated time T [s] (default: the "
                    "moment that shows how the run ended: the collision, where it came to "
                    "rest, or the closest approach).")
@@ -771,6 +822,7 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
             if run_id or verify or gui:
                 _bad_input("--run, --verify and --gui need a sweep DIR, not a trace file")
             trace, metadata = read_trace(target)
+            _check_at(at_s, float(trace.floats["t_s"][-1]))
             _render(trace, metadata, out or target.with_suffix(".html"), every, at_s)
             return
         if run_id is None:
@@ -781,13 +833,14 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
     except KeyboardInterrupt:
         click.echo("interrupted", err=True)
         sys.exit(EXIT_INTERRUPTED)
-    if verify and diverged:
+    if diverged is None or (verify and diverged):
         sys.exit(EXIT_RUN_ERROR)
 
 
 def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui: bool,
-                at_s: float | None = None) -> bool:
-    """Re-simulate, compare, report and draw; True when the replay is not identical."""
+                at_s: float | None = None) -> bool | None:
+    """Re-simulate, compare, report and draw; True when the replay is not identical
+    (None: a run that failed in the sweep, not shown as far as it went)."""
     from analysis.trace_file import read_trace
     from sdc.batch.replay_check import first_divergence, load_recorded_run, version_warnings
     from sdc.run.episode import run_episode
@@ -797,7 +850,11 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     recorded_trace = read_trace(recorded.trace_path)[0] if recorded.trace_path else None
     for line in version_warnings(recorded.manifest):
         click.echo(line, err=True)
+    if recorded.row is not None and recorded.row["status"] == "ok":
+        _check_at(at_s, recorded.row["sim_time_s"])
     say_warm_up(recorded.spec)
+    if recorded.row is not None and recorded.row["status"] != "ok":
+        return _replay_failed_run(recorded, out, every, gui, at_s)
     episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
     replayed_sha = episode.trace.sha256()
     row = recorded.row
@@ -827,5 +884,46 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
                    "(the sweep kept no trace of this run to find the step; sweep with "
                    "--traces all)")
     if out is not None:
+        _check_at(at_s, float(episode.trace.floats["t_s"][-1]))
         _render(episode.trace, episode.metadata, out, every, at_s)
     return diverged
+
+
+def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
+                       at_s: float | None) -> bool | None:
+    """A run that raised or timed out in its sweep: what it was and how it ended
+    (one line), the replay's own end, and the run drawn as far as it went. True:
+    the replay ended otherwise; None: it failed alike and nothing was drawn."""
+    from sdc.run.episode import Stopped, run_as_far_as_it_goes
+    from sdc.run.result_row import PARAM_PREFIX
+
+    row = recorded.row
+    params = ", ".join(f"{k[len(PARAM_PREFIX):]}={_param_text(v)}" for k, v in row.items()
+                       if k.startswith(PARAM_PREFIX))
+    click.echo(f"{recorded.run_id}: {row['status']} in the sweep: {row['error']} "
+               f"(controller {row['controller']}, seed {row['seed']}"
+               + (f"; {params}" if params else "") + ")")
+    limit_s = row["wall_time_s"] if row["status"] == "timeout" else None
+    replayed = run_as_far_as_it_goes(recorded.spec, run_id=recorded.run_id, gui=gui,
+                                     wall_limit_s=limit_s)
+    if not isinstance(replayed, Stopped):
+        for line in summary_lines(recorded.run_id, replayed.row):
+            click.echo(line)
+        click.echo("DIVERGED: the replay ran to its end")
+        if out is not None:
+            _render(replayed.trace, replayed.metadata, out, every, at_s)
+        return True
+    where = f" at {replayed.raised_at}" if replayed.raised_at else ""
+    click.echo(f"replay: {replayed.reason}{where}, after {replayed.steps} steps")
+    if out is None:
+        return None
+    if replayed.episode is None:
+        click.echo(f"nothing drawn to {out}: the run stopped before its first step")
+        return None
+    _check_at(at_s, float(replayed.episode.trace.floats["t_s"][-1]))
+    _render(replayed.episode.trace, replayed.episode.metadata, out, every, at_s)
+    return False
+
+
+def _param_text(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)

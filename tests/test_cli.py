@@ -41,7 +41,8 @@ def test_run_json_prints_the_row_on_the_last_line(tmp_path):
 def test_run_summary_is_readable():
     result = invoke("run", LESSON, "--controller", "lane-keep")
     assert result.exit_code == 0  # a collision is an outcome, not an error
-    assert "COLLISION with obstacle" in result.output
+    assert "outcome:   collided: COLLISION with obstacle" in result.output
+    assert "  progress:  " in result.output and " m along the route, time lost " in result.output
 
 
 def _spec_file(tmp_path, lesson_plain, edit) -> str:
@@ -111,7 +112,9 @@ def test_a_run_that_raises_is_an_error_row_and_exit_1(monkeypatch):
     row = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])
     assert row["status"] == "error" and "SUMO went away" in row["error"]
     assert list(row) == list(JSON_COLUMNS) and row["trace_sha256"] is None
-    assert "RuntimeError: SUMO went away" in result.stderr  # the traceback
+    # one line naming the error and where it was raised, no traceback
+    assert result.stderr.startswith("error: RuntimeError: SUMO went away (raised at ")
+    assert "in broken)" in result.stderr and "Traceback" not in result.stderr
 
 
 @pytest.mark.slow

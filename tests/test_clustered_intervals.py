@@ -23,7 +23,8 @@ import pyarrow.parquet as pq
 import pytest
 from scipy import stats
 
-from analysis.report import FEW_WARM_STATES, gate, write_report
+from analysis.gate import gate
+from analysis.report import FEW_WARM_STATES, write_report
 from analysis.stats import (
     ClusteredCounts,
     clopper_pearson_interval,

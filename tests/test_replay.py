@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -215,6 +216,14 @@ def test_replay_bad_inputs_exit_2(sweep_dir, tmp_path):
                                                              "WAYLAND_DISPLAY": None})
     assert no_display.exit_code == 2 and "--gui: no display" in no_display.output
     assert "not a sweep directory" in run(tmp_path, "--run", RUN).output
+    png = tmp_path / "x.png"
+    for at in ("-1", "nan", "inf"):
+        refused = run(sweep_dir, "--run", RUN, "--out", png, "--at", at)
+        assert refused.exit_code == 2 and "'--at'" in refused.output, at
+    # past the run's end: refused before anything is simulated or written
+    past = run(sweep_dir, "--run", RUN, "--out", png, "--at", "1000")
+    assert past.exit_code == 2 and "--at: 1000 s is past the run's end at " in past.output
+    assert "identical" not in past.output and not png.exists()
 
 
 def test_versions_other_than_the_sweeps_are_warned_about():
@@ -260,3 +269,83 @@ def test_one_frame_as_png_at_the_decisive_moment_or_at_a_time(sweep_dir, tmp_pat
     assert trace.floats["t_s"][k] <= 2.0 < trace.floats["t_s"][k + 1]
     bad = CliRunner().invoke(main, ["replay", str(sweep_dir), "--run", crash, "--at", "2"])
     assert bad.exit_code == 2 and "--at: draws one frame" in bad.output
+
+
+HOSTILE_PLUGIN = """
+import time
+from sdc.car.controller_api import Command
+
+
+class RaisesFirst:
+    def __init__(self, params):
+        pass
+
+    def step(self, obs):
+        raise ZeroDivisionError("first step")
+
+
+class RaisesAtStep3:
+    def __init__(self, params):
+        self.k = 0
+
+    def step(self, obs):
+        self.k += 1
+        if self.k == 3:
+            raise ValueError("step three")
+        return Command(0.0)
+
+
+class Sleepy:
+    def __init__(self, params):
+        pass
+
+    def step(self, obs):
+        time.sleep(0.4)
+        return Command(0.0)
+"""
+
+
+@pytest.mark.slow
+def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_path):
+    """Plug-ins that raise in their first step and in their third, one that runs
+    past the run timeout, and a collision: each replay command the report lists
+    runs with and without a drawing, in lines (the error, where it was raised, the
+    run's parameters) and exit 0 or 1, never a traceback."""
+    (tmp_path / "hostile.py").write_text(HOSTILE_PLUGIN)
+    plugin = tmp_path / "hostile.py"
+    sweep = tmp_path / "hostile.toml"
+    sweep.write_text(SWEEP.replace('name = "replays"', 'name = "hostile"').replace(
+        'controllers = ["seed", "lane-keep"]',
+        f'controllers = ["{plugin}:RaisesFirst", "{plugin}:RaisesAtStep3", "{plugin}:Sleepy", '
+        '"lane-keep"]').replace('choice = [3.74, 9.0]', 'choice = [9.0]').replace(
+        'choice = [0, 1200]', 'choice = [0]'))
+    out = tmp_path / "out"
+
+    def sdc(*args):
+        return subprocess.run([sys.executable, "-m", "sdc", *map(str, args)],
+                              capture_output=True, text=True, timeout=300)
+
+    done = sdc("sweep", sweep, "--out", out, "--workers", "2", "--run-timeout", "2", "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    assert sdc("report", out).returncode in (0, 1)
+    commands = sorted(set(re.findall(r"sdc replay \S+ --run [\w-]+",
+                                     (out / "report.md").read_text())))
+    assert {c.rsplit(" ", 1)[1] for c in commands} == {
+        "00000-RaisesFirst", "00000-RaisesAtStep3", "00000-Sleepy", "00000-lane-keep"}
+    for command in commands:
+        run_id = command.rsplit(" ", 1)[1]
+        for extra in ((), ("--out", tmp_path / f"{run_id}.png")):
+            replay = sdc(*command.split()[1:], *extra)
+            assert "Traceback" not in replay.stdout + replay.stderr, command
+            assert replay.returncode in (0, 1), replay.stderr
+            if run_id == "00000-lane-keep":
+                continue
+            first = replay.stdout.splitlines()[0]
+            assert first.startswith(f"{run_id}: ") and "ego.speed_mps=9" in first
+    raises = sdc("replay", out, "--run", "00000-RaisesAtStep3", "--out", tmp_path / "r.png")
+    assert "ValueError: step three" in raises.stdout and f"{plugin}:" in raises.stdout
+    assert raises.returncode == 0 and (tmp_path / "r.png").stat().st_size > 0  # 2 steps
+    first = sdc("replay", out, "--run", "00000-RaisesFirst", "--out", tmp_path / "f.png")
+    assert first.returncode == 1 and "before its first step" in first.stdout
+    sleepy = sdc("replay", out, "--run", "00000-Sleepy")
+    assert sleepy.returncode == 1 and "ran past the run timeout of 2" in sleepy.stdout

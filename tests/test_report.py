@@ -27,6 +27,7 @@ from analysis.report import (
     write_report,
 )
 from analysis.stats import wilson_interval
+from analysis.verdicts import completed_runs
 from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
@@ -175,10 +176,19 @@ def test_report_page_in_headless_chromium_shows_verdicts_map_and_thumbnails(
 
     assert [w > 300 for w in decoded('img[alt^="Failure map over"]')] == [True]
     assert [w > 300 for w in decoded('img[alt="How the runs ended"]')] == [True]
-    thumbs = decoded("#look-at img.thumb")
-    assert len(thumbs) == min(len(kept), 12) and all(w > 300 for w in thumbs)
-    first = page.locator("#look-at tr").nth(1).locator("td")
-    assert first.nth(3).inner_text() == "no outcome (error or timeout)"  # errors rank first
+    thumbs = decoded(".look-at img.thumb")
+    per_controller = results[results.run_id.isin(kept)].groupby("controller").size()
+    assert len(thumbs) == sum(min(n, 4) for n in per_controller) and all(w > 300 for w in thumbs)
+    # a table per controller, the lesson's seed before the lane-keep control group
+    looked_at = results[~completed_runs(results)].groupby("controller").size()
+    assert page.locator("h3").all_inner_texts()[:2] == [
+        f"seed ({looked_at['seed']})", f"lane-keep ({looked_at['lane-keep']})"]
+    first = page.locator("#look-at-seed tr").nth(1).locator("td")
+    assert first.nth(2).inner_text() == "no outcome (error or timeout)"  # errors rank first
+    assert first.nth(3).inner_text().startswith("error: ")
+    whys = page.locator("#look-at-lane-keep tr td:nth-child(4)").all_inner_texts()
+    hits = [why for why in whys if why.startswith("hit the obstacle with its ")]
+    assert hits and all(" m/s, " in why and " s in" in why for why in hits)
     assert problems == []
     ARTIFACTS.mkdir(exist_ok=True)
     screenshot = ARTIFACTS / "report-screenshot.png"
@@ -363,13 +373,31 @@ def test_a_controller_whose_runs_all_errored_is_never_safe(small_sweep, tmp_path
 def test_fail_above_gates_a_ci_on_the_upper_bound(small_sweep):
     strict = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "0.05"])
     assert strict.exit_code == 1, strict.output
-    assert "--fail-above 0.05: FAILED: seed, lane-keep" in strict.output \
-        or "--fail-above 0.05: FAILED: lane-keep" in strict.output
+    last = strict.output.splitlines()[-1]
+    assert last.startswith("gate FAILED: ") and "lane-keep: collision rate up to " in last
+    assert ", over --fail-above 0.05" in last
     # seed: at most 8 runs, 4 of them errors counted as collisions: above 50% too
     loose = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1"])
-    assert loose.exit_code == 0 and "--fail-above 1: passed" in loose.output
-    bad = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1.5"])
-    assert bad.exit_code == 2 and "--fail-above" in bad.output
+    assert loose.exit_code == 0 and loose.output.splitlines()[-1] == "gate passed (--fail-above 1)"
+    for value in ("1.5", "nan", "-0.1"):
+        for option in ("--fail-above", "--min-completed"):
+            bad = CliRunner().invoke(main, ["report", str(small_sweep), option, value])
+            assert bad.exit_code == 2 and f"'{option}'" in bad.output, (option, value)
+
+
+def test_min_completed_gates_on_the_lower_bound_of_completed_runs(small_sweep):
+    """lane-keep completes none of its runs: it fails --min-completed whatever its
+    collisions; with both gates the last line gives each reason of each controller."""
+    both = CliRunner().invoke(main, ["report", str(small_sweep), "--fail-above", "1",
+                                     "--min-completed", "0.01"])
+    assert both.exit_code == 1, both.output
+    last = both.output.splitlines()[-1]
+    assert last.startswith("gate FAILED: ") and "lane-keep: completed as few as 0.0%" in last
+    assert "under --min-completed 0.01" in last and "over --fail-above" not in last
+    assert "gate, 95% bounds: collision rate at most" in both.output
+    none_asked = CliRunner().invoke(main, ["report", str(small_sweep), "--min-completed", "0"])
+    assert none_asked.exit_code == 0
+    assert none_asked.output.splitlines()[-1] == "gate passed (--min-completed 0)"
 
 
 def test_the_report_states_the_traffic_model_the_audit_and_who_hit_whom(small_sweep, tmp_path):

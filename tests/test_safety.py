@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 
 from analysis.safety import road_edge_gaps_m, stop_gap_m, stop_possible
 from scenarios.bodies import VEHICLE_MODELS
+from scenarios.errors import SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 
@@ -57,11 +59,14 @@ def test_stop_possible_exactly_at_the_boundary(lesson_plain):
     assert stop_possible(4.0, 8.0, None) is None
 
 
-def test_an_obstacle_behind_the_ego_is_not_in_its_path(lesson_plain):
-    behind = _spec(lesson_plain, [{"position_m": 10.0}], start_m=30.0)
-    assert _gap(behind) is None
-    both = _spec(lesson_plain, [{"position_m": 10.0}, {"position_m": 50.0}], start_m=30.0)
-    assert _gap(both) == pytest.approx(20.0 - 2.725)
+def test_an_obstacle_behind_the_ego_is_refused_so_never_in_its_path(lesson_plain):
+    """It could never be met (and the run would count as completed): the scenario is
+    bad input, alone or beside one ahead."""
+    for obstacles in ([{"position_m": 10.0}], [{"position_m": 10.0}, {"position_m": 50.0}]):
+        with pytest.raises(SpecError, match=r"^obstacles\[0\]\.position_m: .* behind the ego"):
+            _spec(copy.deepcopy(lesson_plain), obstacles, start_m=30.0)
+    ahead = _spec(lesson_plain, [{"position_m": 50.0}], start_m=30.0)
+    assert _gap(ahead) == pytest.approx(20.0 - 2.725)
 
 
 @pytest.mark.parametrize(("obstacle", "in_path"), [

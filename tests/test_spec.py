@@ -103,6 +103,16 @@ def test_bad_values_name_their_field(lesson_plain, path, value, field):
     assert str(e.value).startswith(f"{field}: ")
 
 
+def test_an_obstacle_behind_the_ego_start_is_bad_input_naming_it(lesson_plain):
+    """It could never be met, and the run would count as completed."""
+    lesson_plain["ego"]["start_m"] = 60.0  # the barrel stands at 40 m
+    with pytest.raises(SpecError, match=r"^obstacles\[0\]\.position_m: 40.0 puts the barrel "
+                                        r"behind the ego"):
+        ScenarioSpec.from_plain(lesson_plain)
+    lesson_plain["ego"]["start_m"] = 10.0
+    assert ScenarioSpec.from_plain(lesson_plain).obstacles[0].position_m == 40.0
+
+
 def test_curve_needs_a_radius_and_a_sane_one(lesson_plain):
     lesson_plain["road"]["kind"] = "curve"
     with pytest.raises(SpecError, match=r"^road\.curve_radius_m: is required"):

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from click.testing import CliRunner
 
 from analysis.report import write_report
 from analysis.settling_report import TITLE as SETTLING_TITLE
@@ -27,6 +28,7 @@ from scenarios.world_backends import make_road
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
+from sdc.cli import main
 from sdc.run.episode import run_episode
 
 REPO = Path(__file__).resolve().parent.parent
@@ -201,6 +203,36 @@ def test_warm_states_need_a_warm_up(tmp_path):
     (tmp_path / "s" / "town.toml").write_text(text.replace("warm_up_s = 20.0", "warm_up_s = 0.0"))
     with pytest.raises(SpecError, match="sweep.warm_states: the base scenario has no traffic"):
         load_sweep(path)
+
+
+def test_warm_states_on_the_highway_backend_alone_are_refused(tmp_path):
+    """highway-env has no saved traffic to share: asking for warm states there was
+    silently ignored ("0 warm states")."""
+    path = town_sweep(tmp_path / "s")
+    text = path.read_text()
+    path.write_text(text.replace("[sweep.params]",
+                                 '[sweep.params]\n"scenario.backend" = { choice = ["highway"] }'))
+    with pytest.raises(SpecError, match="sweep.warm_states: .* the highway backend only"):
+        load_sweep(path)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--for", "nan"], "'--for': not a number"),
+    (["--out", "{tmp}/missing/x.png"], "--out: directory {tmp}/missing does not exist"),
+    (["--out", "{tmp}/x.gif"], "--out: {tmp}/x.gif must end in .png"),
+])
+def test_sdc_settle_refuses_bad_options_before_simulating(tmp_path, args, message):
+    spec_file = CATALOG_DIR / "highway-obstacle.toml"
+    args = [a.format(tmp=tmp_path) for a in args]
+    result = CliRunner().invoke(main, ["settle", str(spec_file), *args])
+    assert result.exit_code == 2 and message.format(tmp=tmp_path) in result.output
+    assert "warming up" not in result.output and list(tmp_path.iterdir()) == []
+
+
+def test_sdc_settle_on_a_scenario_without_traffic_says_so(lesson_plain, tmp_path):
+    result = CliRunner().invoke(main, ["settle", str(CATALOG_DIR / "seed-lesson.toml")])
+    assert result.exit_code == 2
+    assert "traffic: the scenario has no background traffic to watch" in result.output
 
 
 def test_sdc_settle_watches_the_traffic_and_suggests_a_warm_up(tmp_path):

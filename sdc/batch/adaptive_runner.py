@@ -26,6 +26,7 @@ import hashlib
 import json
 import math
 import time
+from collections import Counter
 from pathlib import Path
 from typing import Literal
 
@@ -86,7 +87,7 @@ class AdaptiveOutcome:
     out_dir: Path
     runs: int  # runs drawn (rows)
     counts: dict[str, int]
-    collisions: int
+    outcomes: dict[str, int]  # ok rows by outcome (analysis.run_outcome.OUTCOMES)
     interrupted: bool
     wall_time_s: float
     summary: dict  # what estimate.json or search.json holds
@@ -237,7 +238,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
     seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[1])
     width = max(5, len(str(settings.max_runs - 1)))
     reporter.start(total=settings.max_runs, done=len(runs.rows),
-                   collisions=sum(bool(r["collision"]) for r in runs.rows.values()),
+                   outcomes=Counter(r["outcome"] for r in runs.rows.values() if r["outcome"]),
                    failed=sum(r["status"] != "ok" for r in runs.rows.values()))
     state, drawn, batch = "running", 0, 0
     try:
@@ -259,10 +260,10 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         planned = runs.plans.consolidate().num_rows
         table = runs.store.consolidate()
         manifest.update(runs=planned, samples=planned)
-        counts, collisions = end_session(out_dir, manifest, runs.session, table, planned,
-                                         state == "finished")
+        counts, outcomes = end_session(out_dir, manifest, runs.session, table, planned,
+                                       state == "finished")
         summary = _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
-    return AdaptiveOutcome(out_dir, table.num_rows, counts, collisions, state == "interrupted",
+    return AdaptiveOutcome(out_dir, table.num_rows, counts, outcomes, state == "interrupted",
                            time.perf_counter() - wall_start, summary)
 
 

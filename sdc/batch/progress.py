@@ -1,8 +1,10 @@
-"""Sweep progress on the terminal: runs done of total, runs/s, ETA, collisions, failures."""
+"""Sweep progress on the terminal: runs done of total, runs/s, ETA, the runs by
+outcome (completed, collided, stuck, unfinished) and the failed ones."""
 
 from __future__ import annotations
 
 import time
+from collections import Counter
 
 from rich.console import Console
 from rich.progress import (
@@ -14,6 +16,8 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from analysis.run_outcome import OUTCOMES
+
 
 class RichReporter:
     """A rich progress bar; runs/s counts only the runs of this session."""
@@ -23,28 +27,30 @@ class RichReporter:
         self._progress: Progress | None = None
         self._warm = None
 
-    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+    def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None:
         self._progress = Progress(
             TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
             TextColumn("{task.fields[rate]}"), TimeElapsedColumn(), TextColumn("ETA"),
-            TimeRemainingColumn(),
-            TextColumn("collisions {task.fields[collisions]}  failed {task.fields[failed]}"),
+            TimeRemainingColumn(), TextColumn("{task.fields[tally]}"),
             console=self.console,
         )
+        self._outcomes, self._failed, self._session = Counter(outcomes), failed, 0
         self._task = self._progress.add_task(self.label, total=total, completed=done,
-                                             collisions=collisions, failed=failed, rate="")
-        self._counts = {"collisions": collisions, "failed": failed, "session": 0}
+                                             tally=self._tally(), rate="")
         self._t0 = time.monotonic()
         self._progress.start()
 
+    def _tally(self) -> str:
+        return outcomes_text(self._outcomes) + f", {self._failed} failed"
+
     def advance(self, row: dict) -> None:
-        counts = self._counts
-        counts["collisions"] += bool(row.get("collision"))
-        counts["failed"] += row["status"] != "ok"
-        counts["session"] += 1
-        rate = counts["session"] / max(time.monotonic() - self._t0, 1e-9)
-        self._progress.update(self._task, advance=1, collisions=counts["collisions"],
-                              failed=counts["failed"], rate=f"{rate:.1f} runs/s")
+        if row.get("outcome"):
+            self._outcomes[row["outcome"]] += 1
+        self._failed += row["status"] != "ok"
+        self._session += 1
+        rate = self._session / max(time.monotonic() - self._t0, 1e-9)
+        self._progress.update(self._task, advance=1, tally=self._tally(),
+                              rate=f"{rate:.1f} runs/s")
 
     def set_total(self, total: int) -> None:
         """The runs now planned in all: the bar's length, and so its ETA."""
@@ -54,7 +60,7 @@ class RichReporter:
         """Warm states computed before the runs: a bar of their own."""
         if self._warm is None:
             self._warm = self._progress.add_task("warm states", total=total, completed=done,
-                                                 collisions="-", failed="-", rate="")
+                                                 tally="", rate="")
         self._progress.update(self._warm, completed=done)
 
     def stop(self) -> None:
@@ -62,10 +68,15 @@ class RichReporter:
             self._progress.stop()
 
 
+def outcomes_text(outcomes) -> str:
+    """``3 completed, 1 collided, 0 stuck, 0 unfinished``: runs by outcome."""
+    return ", ".join(f"{outcomes.get(o, 0)} {o}" for o in OUTCOMES)
+
+
 class QuietReporter:
     """No progress output (logs, CI)."""
 
-    def start(self, total: int, done: int, collisions: int, failed: int) -> None:
+    def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None:
         pass
 
     def advance(self, row: dict) -> None:

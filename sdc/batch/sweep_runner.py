@@ -21,6 +21,7 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.run_outcome import COLLIDED, OUTCOMES
 from analysis.stats import STATUSES
 from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
@@ -49,7 +50,7 @@ from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, r
 class Reporter(Protocol):
     """What a sweep tells about its progress (see :mod:`sdc.batch.progress`)."""
 
-    def start(self, total: int, done: int, collisions: int, failed: int) -> None: ...
+    def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None: ...
     def advance(self, row: dict) -> None: ...
     def set_total(self, total: int) -> None: ...  # the runs now planned (an estimate's change)
     def warm_states(self, done: int, total: int) -> None: ...  # warm states computed so far
@@ -70,7 +71,7 @@ class SweepOutcome:
     out_dir: Path
     runs: int  # in the plan
     counts: dict[str, int]  # rows by status; "missing" for runs without a row
-    collisions: int
+    outcomes: dict[str, int]  # ok rows by outcome (analysis.run_outcome.OUTCOMES)
     interrupted: bool
     wall_time_s: float
 
@@ -206,10 +207,10 @@ def record_warm_states(out_dir: Path, manifest: dict, session: dict, warm: dict,
         write_settling(out_dir / SETTLING_FILE, list(dict.fromkeys(keys.values())))
 
 
-def _tally(table: pa.Table) -> tuple[Counter, int]:
-    """Rows by status, and how many collided."""
+def _tally(table: pa.Table) -> tuple[Counter, Counter]:
+    """Rows by status, and the ok rows by outcome (completed, collided, ...)."""
     return (Counter(table.column("status").to_pylist()),
-            sum(bool(c) for c in table.column("collision").to_pylist()))
+            Counter(o for o in table.column("outcome").to_pylist() if o is not None))
 
 
 def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter, *,
@@ -237,8 +238,8 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
 
     session = start_session(out_dir, manifest, executor, traces, len(todo))
 
-    statuses, collisions = _tally(stored)
-    reporter.start(total=len(plan), done=len(done), collisions=collisions,
+    statuses, outcomes = _tally(stored)
+    reporter.start(total=len(plan), done=len(done), outcomes=outcomes,
                    failed=statuses["error"] + statuses["timeout"])
     interrupted = False
     try:
@@ -261,9 +262,9 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
         interrupted = True
     finally:
         reporter.stop()
-        summary, collisions = end_session(out_dir, manifest, session, store.consolidate(),
-                                          len(plan))
-    return SweepOutcome(out_dir, len(plan), summary, collisions, interrupted,
+        summary, outcomes = end_session(out_dir, manifest, session, store.consolidate(),
+                                        len(plan))
+    return SweepOutcome(out_dir, len(plan), summary, outcomes, interrupted,
                         time.perf_counter() - wall_start)
 
 
@@ -279,16 +280,19 @@ def start_session(out_dir: Path, manifest: dict, executor: Executor, traces: Tra
 
 
 def end_session(out_dir: Path, manifest: dict, session: dict, table: pa.Table,
-                planned: int, finished: bool | None = None) -> tuple[dict[str, int], int]:
+                planned: int, finished: bool | None = None
+                ) -> tuple[dict[str, int], dict[str, int]]:
     """Record the session's end and the rows' counts (``missing``: planned runs without
     a row); the sweep is complete when ``finished`` (default: nothing missing).
-    Returns the counts and the collisions."""
-    counts, collisions = _tally(table)
+    Returns the counts by status and the ok rows' by outcome."""
+    counts, by_outcome = _tally(table)
     summary = {s: counts.get(s, 0) for s in STATUSES}
     summary["missing"] = planned - table.num_rows
+    outcomes = {o: by_outcome.get(o, 0) for o in OUTCOMES}
     finished = not summary["missing"] if finished is None else finished
     session["ended_at"] = now_iso()
-    manifest.update(ended_at=session["ended_at"], counts=summary, collisions=collisions,
+    manifest.update(ended_at=session["ended_at"], counts=summary,
+                    collisions=outcomes[COLLIDED], outcomes=outcomes,
                     status="complete" if finished else "interrupted")
     write_manifest(out_dir, manifest)
-    return summary, collisions
+    return summary, outcomes

@@ -8,8 +8,11 @@ those steps; :func:`run_episode` drives it with the spec's controller.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import signal
 import time
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,7 +35,7 @@ from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
 from sdc.run.lanes_beside import LanesBesideMap
-from sdc.run.result_row import ok_row
+from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
 
@@ -226,6 +229,8 @@ class Simulation:
                                             floats["speed_mps"]),
             progress_m=round(progress_m, 6),
             time_lost_s=run_outcome.time_lost_s(t_end, progress_m, spec.ego.speed_mps),
+            collision_speed_mps=float(floats["speed_mps"][-1]) if hit else None,
+            stood_at_end_s=run_outcome.still_at_end_s(floats["t_s"], floats["speed_mps"]),
             min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
             stop_gap_m=gap_m,
             stop_possible=stop_possible(spec.ego.speed_mps,
@@ -267,3 +272,71 @@ def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
         while termination is None:
             termination = sim.control(controller)
     return sim.finish(termination, run_id)
+
+
+@dataclass(frozen=True)
+class Stopped:
+    """A run that did not end by itself: it raised, or ran past a wall-clock limit."""
+
+    reason: str  # "ZeroDivisionError: ...", or "ran past the run timeout of S s"
+    raised_at: str | None  # FILE:LINE in FUNCTION of the innermost frame; None: no raise
+    steps: int  # the steps recorded before it stopped
+    episode: Episode | None  # the run as far as it went (None: not one step recorded)
+
+
+class _PastWallLimit(Exception):
+    pass
+
+
+@contextlib.contextmanager
+def _wall_limit(seconds: float | None):
+    """Raise :class:`_PastWallLimit` in the main thread after ``seconds`` of wall
+    time (None: never)."""
+    if seconds is None:
+        yield
+        return
+
+    def expire(signum, frame):
+        raise _PastWallLimit
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def run_as_far_as_it_goes(spec: ScenarioSpec, *, run_id: str | None = None, gui: bool = False,
+                          wall_limit_s: float | None = None) -> Episode | Stopped:
+    """:func:`run_episode`, for a run that may raise or hang (a replay of a sweep's
+    error or timeout row): its :class:`Episode`, or how it stopped and the run as
+    far as it went. Call it from the main thread (the wall limit is an alarm)."""
+    sim = None
+    try:
+        with _wall_limit(wall_limit_s):
+            controller = make_controller(spec.controller)
+            with make_world(spec, make_road(spec), gui=gui) as world:
+                sim = Simulation(spec, world)
+                sim.start()
+                termination = None
+                while termination is None:
+                    termination = sim.control(controller)
+                return sim.finish(termination, run_id)
+    except _PastWallLimit:
+        return _stopped(sim, f"ran past the run timeout of {wall_limit_s:.3g} s", None, run_id)
+    except Exception as e:  # noqa: BLE001 - how the run stopped is the answer
+        return _stopped(sim, f"{type(e).__name__}: {e}", raised_at(traceback.format_exc()),
+                        run_id)
+
+
+def _stopped(sim: Simulation | None, reason: str, where: str | None,
+             run_id: str | None) -> Stopped:
+    steps = 0 if sim is None else sim.k
+    episode = None
+    if steps:
+        with contextlib.suppress(Exception):  # what cannot be summed up is not drawn
+            episode = sim.finish("stopped", run_id)
+    return Stopped(reason, where, steps, episode)
+

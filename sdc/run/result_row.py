@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -82,6 +83,11 @@ COLUMNS: tuple[Column, ...] = (
     Column("time_lost_s", pa.float64(), OUTCOME,
            "the run's time minus the time driving progress_m at the start speed would take; "
            "None: it started at rest [s]"),
+    Column("collision_speed_mps", pa.float64(), OUTCOME,
+           "the ego's speed at the collision; None unless collision [m/s]"),
+    Column("stood_at_end_s", pa.float64(), OUTCOME,
+           "how long the ego had stood still (under 0.1 m/s) when the run ended; 0 when it "
+           "was moving [s]"),
     Column("min_gap_obstacle_m", pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
     Column("min_ttc_s", pa.float64(), METRIC,
@@ -208,6 +214,16 @@ def error_row(**values: Any) -> dict:
     """The row of a run that raised or whose worker died: the identity columns,
     ``error`` and ``traceback`` (None when there is none)."""
     return _run_row("error", "error", values, (*_IDENTITY_COLUMNS, "error", "traceback"))
+
+
+def raised_at(traceback_text: str | None) -> str | None:
+    """Where a run raised, from its ``traceback`` column: ``FILE:LINE in FUNCTION``
+    of the innermost frame (None: no traceback)."""
+    frames = re.findall(r'^  File "(.*)", line (\d+), in (.*)$', traceback_text or "", re.M)
+    if not frames:
+        return None
+    file, line, function = frames[-1]
+    return f"{file}:{line} in {function}"
 
 
 def timeout_row(**values: Any) -> dict:

@@ -1,0 +1,77 @@
+"""The CI gate of ``sdc report``: which controllers fail it, and why.
+
+A controller fails when its collision rate may exceed ``--fail-above`` (the upper
+end of its 95% interval, error and timeout runs counted as collisions), or when
+its rate of runs completed without a collision may fall short of
+``--min-completed`` (the lower end, error and timeout runs counted as not
+completed). Both intervals are clustered by warm state. Missing evidence never
+passes: a controller without runs has the bounds 100% and 0%.
+"""
+
+from __future__ import annotations
+
+import pandas as pd
+
+from analysis.stats import STATUSES, Method, flag_interval, upper_bound_counting_failures
+from analysis.verdicts import completed_runs, percent
+
+
+def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None,
+         method: Method, min_completed: float | None = None) -> dict:
+    """The gate on ``results``: per controller its bounds, design effects and the
+    reasons it failed (``failed``: the controllers with a reason, in order)."""
+    upper, lower, effects, completed_effects, reasons = {}, {}, {}, {}, {}
+    for c in controllers:
+        rows = results[results.controller == c]
+        why = []
+        if fail_above is not None:
+            upper[c], effects[c] = upper_bound_counting_failures(rows, method)
+            if upper[c] > fail_above:
+                why.append(f"collision rate up to {percent(upper[c])}, over --fail-above "
+                           f"{fail_above:g}")
+        if min_completed is not None:
+            counted = rows[rows.status.isin(STATUSES)]
+            (lower[c], _), counts = flag_interval(completed_runs(counted), counted, method)
+            completed_effects[c] = counts.deff
+            if lower[c] < min_completed:
+                why.append(f"completed as few as {percent(lower[c])}, under --min-completed "
+                           f"{min_completed:g}")
+        if why:
+            reasons[c] = why
+    return {"rate": fail_above, "min_completed": min_completed, "upper_bounds": upper,
+            "design_effects": effects, "completed_lower_bounds": lower,
+            "completed_design_effects": completed_effects, "failed": list(reasons),
+            "reasons": reasons}
+
+
+def gate_bounds_line(gate: dict) -> str:
+    """The bounds the gate judged, per controller (and the design effects that widened
+    them, where runs shared a warm state)."""
+    parts = []
+    if gate["rate"] is not None:
+        parts.append("collision rate at most (errors and timeouts counted as collisions): "
+                     + _bounds(gate["upper_bounds"], gate["design_effects"]))
+    if gate["min_completed"] is not None:
+        parts.append("completed at least (errors and timeouts counted as not completed): "
+                     + _bounds(gate["completed_lower_bounds"],
+                               gate["completed_design_effects"]))
+    return "gate, 95% bounds: " + "; ".join(parts)
+
+
+def _bounds(bounds: dict[str, float], effects: dict[str, float]) -> str:
+    text = ", ".join(f"{c} {percent(b)}" for c, b in bounds.items())
+    if all(effects.get(c, 1) == 1 for c in bounds):
+        return text
+    return (text + " (widened for runs sharing a warm state, design effects "
+            + ", ".join(f"{c} {effects[c]:.2f}" for c in bounds) + ")")
+
+
+def gate_verdict_line(gate: dict) -> str:
+    """``gate passed`` or ``gate FAILED:`` with each failing controller and why."""
+    options = " ".join(f"{name} {value:g}" for name, value in
+                       (("--fail-above", gate["rate"]), ("--min-completed", gate["min_completed"]))
+                       if value is not None)
+    if not gate["failed"]:
+        return f"gate passed ({options})"
+    return "gate FAILED: " + "; ".join(f"{c}: {' and '.join(why)}"
+                                       for c, why in gate["reasons"].items())
