@@ -111,7 +111,7 @@ def params_text(row: Mapping[str, Any], columns: list[str]) -> str:
 def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:
     """The decisive moment of a run whose trace the sweep kept, as a small PNG; None
     without a trace."""
-    from analysis.render import decisive_step, frame_png, scene_from_trace
+    from analysis.render import decisive_step, scene_from_trace, thumbnail_png
     from analysis.trace_file import read_trace
 
     path = Path(sweep_dir) / "traces" / f"{run_id}.parquet"
@@ -120,4 +120,4 @@ def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:
     trace, metadata = read_trace(path)
     scene = scene_from_trace(trace, metadata)
     step = decisive_step(scene, metadata.get("run", {}).get("outcome"))
-    return frame_png(scene, step, width_px=420, height_px=220, title=False)
+    return thumbnail_png(scene, step)

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from analysis.run_outcome import STUCK
 from analysis.stats import Method, group_levels, group_values, rates_by
 from analysis.verdicts import completed_runs
 
@@ -29,6 +30,15 @@ def _label(column: str) -> str:
     return column.removeprefix("p.")
 
 
+def tick_text(value) -> str:
+    """A group's label as people read it: ``12.5 to 20`` for a bin, ``113.5`` for a value."""
+    if isinstance(value, pd.Interval):
+        return f"{value.left:.4g} to {value.right:.4g}"
+    if isinstance(value, float | np.floating):
+        return f"{value:.4g}"
+    return str(value)
+
+
 def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
     """x positions and tick labels: bin midpoints for intervals, the values for numbers,
     else categories in order."""
@@ -38,7 +48,7 @@ def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
     if values and all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
                       for v in values):
         return np.array(values, dtype=float), []
-    return np.arange(len(values)), [str(v) for v in values]
+    return np.arange(len(values)), [tick_text(v) for v in values]
 
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
@@ -57,9 +67,17 @@ def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wils
     for i, controller in enumerate(controllers):
         rows = table[table.controller == controller].dropna(subset=["collision_rate"])
         x, categories = _positions(rows.group)
+        style = {"marker": MARKERS[i % len(MARKERS)], "label": controller, "alpha": 0.85}
+        if categories:  # kinds, not a scale: no line between them, the interval as a bar
+            x = x + (i - (len(controllers) - 1) / 2) * 0.08
+            rate = rows.collision_rate.to_numpy(dtype=float)
+            below = np.clip(rate - rows.low.to_numpy(dtype=float), 0, None)  # rounding
+            above = np.clip(rows.high.to_numpy(dtype=float) - rate, 0, None)
+            ax.errorbar(x, rate, yerr=[below, above],
+                        linestyle="none", capsize=3, **style)
+            continue
         x = x + (i - (len(controllers) - 1) / 2) * 0.012 * span
-        ax.plot(x, rows.collision_rate, marker=MARKERS[i % len(MARKERS)], label=controller,
-                alpha=0.85)
+        ax.plot(x, rows.collision_rate, **style)
         ax.fill_between(x, rows.low, rows.high, alpha=0.12)
     if categories:
         ax.set_xticks(range(len(categories)), categories, rotation=30, ha="right")
@@ -72,22 +90,36 @@ def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wils
 
 def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
     """Collision rate of ``controller`` over two parameters (ok runs; a cell without one
-    says "no data")."""
+    says "no data"; a cell with runs that got stuck says how many: no collision there
+    is no safety)."""
     ok = results[(results.status == "ok") & (results.controller == controller)]
     all_x, all_y = group_values(results[x], 8), group_values(results[y], 8)
-    grid = (ok.assign(_x=all_x[ok.index], _y=all_y[ok.index])
-            .groupby(["_y", "_x"], observed=True).collision.mean().unstack("_x")
-            .reindex(index=group_levels(all_y), columns=group_levels(all_x)))
+    cells = ok.assign(_x=all_x[ok.index], _y=all_y[ok.index],
+                      _stuck=ok.outcome == STUCK if "outcome" in ok else False)
+    grouped = cells.groupby(["_y", "_x"], observed=True)
+
+    def on_grid(series: pd.Series) -> pd.DataFrame:
+        return series.unstack("_x").reindex(index=group_levels(all_y),
+                                            columns=group_levels(all_x))
+
+    grid = on_grid(grouped.collision.mean())
+    stuck, runs = on_grid(grouped._stuck.sum()), on_grid(grouped.collision.size())
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
     values = grid.to_numpy(dtype=float)
     image = ax.imshow(values, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=1)
     for iy, ix in zip(*np.nonzero(np.isnan(values)), strict=True):  # empty is not zero
         ax.text(ix, iy, "no\ndata", ha="center", va="center", fontsize=7, color="0.4")
-    ax.set_xticks(range(grid.shape[1]), [str(c) for c in grid.columns], rotation=45,
+    for iy, ix in zip(*np.nonzero(stuck.fillna(0).to_numpy() > 0), strict=True):
+        ax.text(ix, iy, f"{int(stuck.iat[iy, ix])}/{int(runs.iat[iy, ix])}\nstuck",
+                ha="center", va="center", fontsize=7, color="white",
+                bbox={"boxstyle": "round", "facecolor": "tab:orange", "alpha": 0.8,
+                      "linewidth": 0})
+    ax.set_xticks(range(grid.shape[1]), [tick_text(c) for c in grid.columns], rotation=45,
                   ha="right", fontsize=8)
-    ax.set_yticks(range(grid.shape[0]), [str(i) for i in grid.index], fontsize=8)
-    ax.set(xlabel=_label(x), ylabel=_label(y), title=f"Collision rate, {controller}")
+    ax.set_yticks(range(grid.shape[0]), [tick_text(i) for i in grid.index], fontsize=8)
+    ax.set(xlabel=_label(x), ylabel=_label(y),
+           title=f"Collision rate, {controller} (orange: runs that got stuck)")
     fig.colorbar(image, ax=ax, label="collision rate")
     return png_bytes(fig)
 

@@ -21,6 +21,8 @@ from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from analysis.metrics import central_range_m
 from analysis.run_outcome import rest_step
@@ -144,19 +146,29 @@ def view_limits_m(center_m: float, yaw_rad: float) -> tuple[float, float]:
         quarter, (center_m - VIEW_SIDE_M, center_m + VIEW_SIDE_M))
 
 
-def _scene_axes(ax, scene: Scene):
-    """Draw the static road and obstacles on ``ax``; return ``draw(k)`` for step k."""
+def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
+    """Draw the static road and obstacles on ``ax``; return ``draw(k)`` for step k
+    (``zoom``: the view that much closer round the ego)."""
     for line in scene.lane_lines:
         ax.plot(line[:, 0], line[:, 1], color="0.7", linestyle="--", linewidth=0.8)
     for edge in scene.edges:
         ax.plot(edge[:, 0], edge[:, 1], color="0.2", linewidth=1.5)
-    beams = LineCollection([], linewidths=0.6)
-    traffic = PolyCollection([], facecolors="tab:blue", edgecolors="k", linewidths=0.5)
+    # the beams under the bodies (a 360-degree lidar fans out all round the ego), what
+    # the ego touches over it (a contact shows)
+    beams = LineCollection([], linewidths=0.6, zorder=1)
+    ego = PolyCollection([], facecolors="tab:green", edgecolors="k", linewidths=1.2, zorder=2)
+    traffic = PolyCollection([], facecolors="tab:blue", edgecolors="k", linewidths=0.5,
+                             zorder=3)
     obstacles = PolyCollection(box_corners(scene.obstacles) if len(scene.obstacles) else [],
-                               facecolors="tab:red", edgecolors="k", linewidths=0.5)
-    ego = PolyCollection([], facecolors="tab:green", edgecolors="k", linewidths=0.8)
+                               facecolors="tab:red", edgecolors="k", linewidths=0.5, zorder=3)
     for artist in (beams, traffic, obstacles, ego):
         ax.add_collection(artist)
+    if legend:
+        ax.legend(handles=[Patch(facecolor="tab:green", edgecolor="k", label="ego"),
+                           Patch(facecolor="tab:blue", edgecolor="k", label="traffic"),
+                           Patch(facecolor="tab:red", edgecolor="k", label="obstacle"),
+                           Line2D([], [], color=(1.0, 0.5, 0.0), label="lidar return")],
+                  loc="lower right", fontsize=7, framealpha=0.8)
     label = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
                     family="monospace", bbox={"facecolor": "white", "alpha": 0.8})
     ax.set_aspect("equal", adjustable="box")
@@ -171,7 +183,8 @@ def _scene_axes(ax, scene: Scene):
         ego.set_verts(box_corners(scene.ego[k : k + 1]))
         cx, cy, yaw = scene.ego[k, :3]
         view = scene.view_yaw_rad[k]
-        (x0, x1), (y0, y1) = view_limits_m(cx, view), view_limits_m(cy, view - math.pi / 2)
+        (x0, x1), (y0, y1) = (np.array(view_limits_m(0.0, view)) / zoom + cx,
+                              np.array(view_limits_m(0.0, view - math.pi / 2)) / zoom + cy)
         box = ax.get_window_extent()
         grow = (x1 - x0) * box.height / ((y1 - y0) * box.width)  # > 1: the view is too wide
         if grow > 1:
@@ -228,6 +241,28 @@ def frame_png(scene: Scene, k: int, width_px: int = 800, height_px: int = 420,
     _scene_axes(ax, scene)(k)
     if title:
         fig.suptitle(scene.title, fontsize=8)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=80)
+    return buffer.getvalue()
+
+
+#: a thumbnail's view, this much closer than a frame's (a barrel is 0.6 m)
+THUMBNAIL_ZOOM = 2.0
+
+
+def thumbnail_png(scene: Scene, k: int, width_px: int = 420, height_px: int = 220) -> bytes:
+    """Step ``k`` as a small PNG for a table: the view closer round the ego, the whole
+    image the scene (no axis labels to cut), a scale bar in place of the axes."""
+    fig = _figure(figsize=(width_px / 80, height_px / 80), dpi=80)
+    ax = fig.add_axes([0.0, 0.0, 1.0, 1.0])
+    _scene_axes(ax, scene, zoom=THUMBNAIL_ZOOM, legend=False)(k)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    bar_x, bar_y = x1 - 0.05 * (x1 - x0) - 5.0, y0 + 0.08 * (y1 - y0)
+    ax.plot([bar_x, bar_x + 5.0], [bar_y, bar_y], color="k", linewidth=2)
+    ax.text(bar_x + 2.5, bar_y + 0.03 * (y1 - y0), "5 m", ha="center", fontsize=7)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=80)
     return buffer.getvalue()

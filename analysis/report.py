@@ -150,7 +150,7 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
         "interval": method,
         # runs that started from one warm state share their traffic: wider intervals
         "warm_states": warm_state_summary(counted),
-        "verdicts": verdict_summary(counted),
+        "verdicts": verdict_summary(counted, method),
         "by_controller": by_controller(counted),
         # side by side when a sweep ran on more than one world backend
         "by_backend": ({str(b): by_controller(rows) for b, rows in
@@ -327,24 +327,29 @@ def verdict_rows(summary: dict) -> list[list[str]]:
         return []
     deff = shares_traffic(summary)
     rows = [["controller", "runs", "completed without collision", "95% interval", "collided",
-             "stuck", "unfinished", "no outcome", "median time lost",
-             *([DEFF_HEAD] if deff else [])]]
+             "stuck", "unfinished", "no outcome", "median time lost (completed)",
+             "median progress", *([DEFF_HEAD] if deff else [])]]
     for controller, numbers in verdicts["by_controller"].items():
         outcomes = numbers["outcomes"]
         done = outcomes[COMPLETED]
-        lost = numbers["median_time_lost_s"]
+        lost, made = numbers["median_time_lost_s"], numbers.get("median_progress_m")
         rows.append([controller, str(numbers["runs"]),
                      f"{done['runs']} ({percent(done['rate'])})",
                      f"{percent(done['low'])} - {percent(done['high'])}",
                      *(f"{outcomes[o]['runs']} ({percent(outcomes[o]['rate'])})"
                        for o in ("collided", "stuck", "unfinished", NO_OUTCOME)),
                      "-" if lost is None else f"{lost:.1f} s",
+                     "-" if made is None else f"{made:.0f} m",
                      *([_deff(done["deff"])] if deff else [])])
     return rows
 
 
 VERDICT_TITLE = ("How the runs ended (of every run: an error or timeout has no outcome and "
-                 "never counts as completed; Wilson 95%):")
+                 "never counts as completed; 95% intervals as --interval chooses):")
+VERDICT_NOTES = ("Time lost: of the runs that completed, the run's time minus the time its "
+                 "progress takes at the start speed (a run that collided or got stuck failed; "
+                 "it is not counted as slow). Progress: how far the ok runs got along the "
+                 "route, their median.")
 NOT_RECORDED = ("How the runs ended: not recorded (results from before the outcome column); "
                 "only collisions can be judged, and a controller that never passes the "
                 "obstacle cannot be told from a safe one.")
@@ -388,6 +393,33 @@ def stop_rows(summary: dict) -> list[list[str]]:
             for c, numbers in stop.get("by_controller", {}).items()]
 
 
+COMPARISONS_TITLE = ("Pair by pair, on the scenarios both controllers ran (McNemar's exact "
+                     "test; pairs without a shared scenario left out):")
+
+
+def comparison_groups(summary: dict) -> list[tuple[str, list[str]]]:
+    """The paired comparisons, grouped: completing, colliding, and colliding where a
+    stop was possible; each a title and its sentences (empty groups left out)."""
+    groups = [
+        ("Completed without collision",
+         [_paired_completed(p) for p in summary["verdicts"].get("paired", []) if p["pairs"]]),
+        ("Collisions", [_paired(p) for p in summary["paired"] if p["pairs"]]),
+        ("Collisions where a stop was possible",
+         [_paired(p, ", where a stop was possible,")
+          for p in summary["stop_possible"].get("paired", []) if p["pairs"]]),
+    ]
+    return [(title, lines) for title, lines in groups if lines]
+
+
+def comparison_lines(summary: dict) -> list[str]:
+    """:func:`comparison_groups` as terminal lines."""
+    groups = comparison_groups(summary)
+    lines = [COMPARISONS_TITLE] if groups else []
+    for title, sentences in groups:
+        lines += [f"{title}:", *(f"  {s}" for s in sentences)]
+    return lines
+
+
 def _paired(pair: dict, where: str = "") -> str:
     return (f"{pair['a']} vs {pair['b']}{where} on {pair['pairs']} shared scenarios: only "
             f"{pair['a']} collided in {pair['only_a']}, only {pair['b']} in {pair['only_b']}, "
@@ -429,10 +461,6 @@ def findings(summary: dict) -> list[str]:
     verdicts = summary["verdicts"]
     lines = [verdict_sentence(c, numbers)
              for c, numbers in verdicts.get("by_controller", {}).items()]
-    lines += [_paired_completed(pair) for pair in verdicts.get("paired", [])]
-    lines += [_paired(pair) for pair in summary["paired"]]
-    lines += [_paired(pair, ", where a stop was possible,")
-              for pair in summary["stop_possible"].get("paired", [])]
     rare = {c for c, numbers in verdicts.get("by_controller", {}).items()
             if completes_rarely(numbers)}
     lines += [_envelope(e, e["controller"] in rare) for e in summary["envelope"]]
@@ -453,7 +481,7 @@ def terminal_table(summary: dict) -> list[str]:
     columns."""
     verdicts = verdict_rows(summary)
     lines = [*coverage_lines(summary), *warm_state_lines(summary), *world_warnings(summary)]
-    lines += [VERDICT_TITLE, *_aligned(verdicts)] if verdicts else [NOT_RECORDED]
+    lines += [VERDICT_TITLE, *_aligned(verdicts), VERDICT_NOTES] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
     return [*lines, COLLISION_TITLE, *table[:len(rows)], stop_title(summary),
@@ -527,15 +555,20 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
     for line in [*warm_state_lines(summary), *world_warnings(summary)]:  # paragraphs
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
-    lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
+    lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), "", VERDICT_NOTES, ""] if verdicts
               else [NOT_RECORDED, ""])
     lines += [COLLISION_TITLE, "", *_markdown_table(rows), "",
               f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
     lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in world_lines(summary)]
-    lines += [f"- {line}" for line in findings(summary)] + ["", "## Runs to look at", "",
-                                                          RANKING, ""]
+    lines += [f"- {line}" for line in findings(summary)]
+    groups = comparison_groups(summary)
+    if groups:
+        lines += ["", "## Comparisons", "", COMPARISONS_TITLE]
+        for title, sentences in groups:
+            lines += ["", f"### {title}", "", *(f"- {s}" for s in sentences)]
+    lines += ["", "## Runs to look at", "", RANKING, ""]
     bad = ranked_runs(results)
     params = varying_parameters(results)
     for controller, rows in bad.groupby("controller", sort=False):
@@ -604,7 +637,9 @@ def _figure_html(title: str, png: bytes) -> str:
 
 
 def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
-              images: list[tuple[str, bytes]]) -> str:
+              images: list[tuple[str, bytes]],
+              warm_up_images: list[tuple[str, bytes]] = ()) -> str:
+    """The report page; ``warm_up_images`` beside the warm-state lines they show."""
     verdicts = verdict_rows(summary)
     parts = [f"<h1>Collision report: {html.escape(summary['sweep'])}</h1>",
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
@@ -612,9 +647,11 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
              *(f'<p{_warn_class(line)}>{html.escape(line)}</p>'
                for line in [*warm_state_lines(summary), *world_warnings(summary)]),
+             *(_figure_html(title, png) for title, png in warm_up_images),
              f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
              "</p>",
              _table_html(verdicts, "verdicts") if verdicts else "",
+             f"<p>{html.escape(VERDICT_NOTES)}</p>" if verdicts else "",
              f"<h2>Collisions</h2><p>{html.escape(COLLISION_TITLE)}</p>",
              _table_html(headline_rows(summary)),
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
@@ -623,6 +660,12 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              "<h2>World</h2>",
              *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in world_lines(summary)),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
+    groups = comparison_groups(summary)
+    if groups:
+        parts += ["<h2>Comparisons</h2>", f"<p>{html.escape(COMPARISONS_TITLE)}</p>"]
+        parts += [f"<h3>{html.escape(title)}</h3><ul>"
+                  + "".join(f"<li>{html.escape(s)}</li>" for s in sentences) + "</ul>"
+                  for title, sentences in groups]
     parts += [_figure_html(title, png) for title, png in images]
     deff = shares_traffic(summary)
     for column, rows in summary["by"].items():
@@ -703,15 +746,16 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     summary["settling"] = settling_summary(warm_ups)
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
-    images = figures(counted, by, method) + settling_image(warm_ups, summary["settling"])
-    html_path.write_text(html_page(summary, results, sweep_dir, images))
+    images = figures(counted, by, method)
+    html_path.write_text(html_page(summary, results, sweep_dir, images,
+                                   settling_image(warm_ups, summary["settling"])))
     summary_path = sweep_dir / "summary.json"
     summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text(markdown(summary, results, sweep_dir))
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
-    terminal = terminal_table(summary) + findings(summary)
+    terminal = terminal_table(summary) + findings(summary) + comparison_lines(summary)
     gate_failed = summary["gate"]["failed"] if summary["gate"] else []
     return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal,
                   gate_failed)

@@ -17,7 +17,7 @@ import itertools
 import pandas as pd
 
 from analysis.run_outcome import COMPLETED, OUTCOMES
-from analysis.stats import count_warm_states, flag_interval, paired_test
+from analysis.stats import Method, count_warm_states, flag_interval, paired_test
 
 NO_OUTCOME = "no outcome"  # error and timeout runs
 #: a controller completing fewer of its runs than this is never presented as safe
@@ -38,10 +38,10 @@ def shared_samples(results: pd.DataFrame) -> pd.Index:
     return present.index[present == results.controller.nunique()]
 
 
-def _rate(flags: pd.Series, rows: pd.DataFrame) -> dict:
-    """How many of ``rows`` hold ``flags``, their rate over all the rows and its Wilson
-    95% interval, clustered by warm state (``deff``: its design effect)."""
-    (low, high), counts = flag_interval(flags, rows, "wilson")
+def _rate(flags: pd.Series, rows: pd.DataFrame, method: Method = "wilson") -> dict:
+    """How many of ``rows`` hold ``flags``, their rate over all the rows and its 95%
+    interval by ``method``, clustered by warm state (``deff``: its design effect)."""
+    (low, high), counts = flag_interval(flags, rows, method)
     k, n = int(flags.sum()), len(rows)
     return {"runs": k, "rate": k / n if n else None, "low": low, "high": high,
             "deff": counts.deff}
@@ -55,16 +55,19 @@ def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
     return flags
 
 
-def outcome_summary(rows: pd.DataFrame) -> dict:
-    """One controller's runs: each outcome's count and rate over all its runs, with
-    the runs without an outcome as :data:`NO_OUTCOME`; the median time lost and
-    progress of the ok runs; the distinct warm states of its runs (``warm_states``,
-    None for results without the column)."""
+def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> dict:
+    """One controller's runs: each outcome's count and rate over all its runs (95%
+    intervals by ``method``), with the runs without an outcome as
+    :data:`NO_OUTCOME`; the median time lost of its completed runs (what passing
+    the obstacles cost against driving on at the start speed: a run that collided or
+    got stuck lost no time, it failed) and the median progress of its ok runs; the
+    distinct warm states of its runs (``warm_states``, None for results without the
+    column)."""
     ok = rows[rows.status == "ok"]
-    time_lost = ok.time_lost_s.dropna()
+    time_lost = rows.time_lost_s[completed_runs(rows)].dropna()
     return {
         "runs": len(rows),
-        "outcomes": {o: _rate(flags, rows) for o, flags in outcome_flags(rows).items()},
+        "outcomes": {o: _rate(flags, rows, method) for o, flags in outcome_flags(rows).items()},
         "warm_states": count_warm_states(rows),
         "median_time_lost_s": float(time_lost.median()) if len(time_lost) else None,
         "median_progress_m": float(ok.progress_m.median()) if len(ok) else None,
@@ -86,14 +89,15 @@ def completed_flags(results: pd.DataFrame) -> pd.DataFrame:
         index="sample", columns="controller", values="_done", aggfunc="first")
 
 
-def verdict_summary(results: pd.DataFrame) -> dict:
-    """Per controller :func:`outcome_summary`, ranked by the completed rate (highest
-    first), and the paired comparisons of completing; ``{"recorded": False}`` for
-    results without the ``outcome`` column."""
+def verdict_summary(results: pd.DataFrame, method: Method = "wilson") -> dict:
+    """Per controller :func:`outcome_summary` (intervals by ``method``), ranked by the
+    completed rate (highest first), and the paired comparisons of completing;
+    ``{"recorded": False}`` for results without the ``outcome`` column."""
     if not outcomes_recorded(results):
         return {"recorded": False}
     controllers = list(dict.fromkeys(results.controller))
-    summaries = {c: outcome_summary(results[results.controller == c]) for c in controllers}
+    summaries = {c: outcome_summary(results[results.controller == c], method)
+                 for c in controllers}
     ranked = sorted(controllers, key=lambda c: -(summaries[c]["outcomes"][COMPLETED]["rate"]
                                                 or 0.0))
     flags = completed_flags(results)

@@ -181,7 +181,7 @@ def test_report_page_in_headless_chromium_shows_verdicts_map_and_thumbnails(
     assert len(thumbs) == sum(min(n, 4) for n in per_controller) and all(w > 300 for w in thumbs)
     # a table per controller, the lesson's seed before the lane-keep control group
     looked_at = results[~completed_runs(results)].groupby("controller").size()
-    assert page.locator("h3").all_inner_texts()[:2] == [
+    assert page.locator("h2:has-text('Runs to look at') ~ h3").all_inner_texts()[:2] == [
         f"seed ({looked_at['seed']})", f"lane-keep ({looked_at['lane-keep']})"]
     first = page.locator("#look-at-seed tr").nth(1).locator("td")
     assert first.nth(2).inner_text() == "no outcome (error or timeout)"  # errors rank first
