@@ -13,7 +13,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from analysis.run_outcome import STUCK
-from analysis.stats import Method, group_levels, group_values, rates_by
+from analysis.stats import Method, group_label, group_levels, group_values, rates_by
 from analysis.verdicts import completed_runs
 
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
@@ -30,15 +30,6 @@ def _label(column: str) -> str:
     return column.removeprefix("p.")
 
 
-def tick_text(value) -> str:
-    """A group's label as people read it: ``12.5 to 20`` for a bin, ``113.5`` for a value."""
-    if isinstance(value, pd.Interval):
-        return f"{value.left:.4g} to {value.right:.4g}"
-    if isinstance(value, float | np.floating):
-        return f"{value:.4g}"
-    return str(value)
-
-
 def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
     """x positions and tick labels: bin midpoints for intervals, the values for numbers,
     else categories in order."""
@@ -48,7 +39,7 @@ def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
     if values and all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
                       for v in values):
         return np.array(values, dtype=float), []
-    return np.arange(len(values)), [tick_text(v) for v in values]
+    return np.arange(len(values)), [group_label(v) for v in values]
 
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
@@ -115,9 +106,9 @@ def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> byte
                 ha="center", va="center", fontsize=7, color="white",
                 bbox={"boxstyle": "round", "facecolor": "tab:orange", "alpha": 0.8,
                       "linewidth": 0})
-    ax.set_xticks(range(grid.shape[1]), [tick_text(c) for c in grid.columns], rotation=45,
+    ax.set_xticks(range(grid.shape[1]), [group_label(c) for c in grid.columns], rotation=45,
                   ha="right", fontsize=8)
-    ax.set_yticks(range(grid.shape[0]), [tick_text(i) for i in grid.index], fontsize=8)
+    ax.set_yticks(range(grid.shape[0]), [group_label(i) for i in grid.index], fontsize=8)
     ax.set(xlabel=_label(x), ylabel=_label(y),
            title=f"Collision rate, {controller} (orange: runs that got stuck)")
     fig.colorbar(image, ax=ax, label="collision rate")

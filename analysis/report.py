@@ -39,6 +39,7 @@ from analysis.settling_report import (
 from analysis.stats import (
     Method,
     by_controller,
+    group_label,
     interval,
     mcnemar,
     rates_by,
@@ -136,7 +137,7 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
     grouped = {}
     for column in by:
         table = rates_by(counted, column, method)
-        grouped[column] = [{**row, "group": str(row["group"]),
+        grouped[column] = [{**row, "group": group_label(row["group"]),
                             "collision_rate": _finite(row["collision_rate"])}
                            for row in table.to_dict(orient="records")]
     status = results.status.value_counts()
@@ -354,6 +355,11 @@ NOT_RECORDED = ("How the runs ended: not recorded (results from before the outco
                 "only collisions can be judged, and a controller that never passes the "
                 "obstacle cannot be told from a safe one.")
 COLLISION_TITLE = "Collisions (of the ok runs; errors and timeouts counted apart):"
+COLLISION_NOTES = ("Rate: the collisions of the ok runs, with its 95% interval; errors and "
+                   "timeouts: runs without an outcome, never counted as safe (the gate counts "
+                   "them as collisions); design effect, where runs share a warm state: how "
+                   "much their shared traffic widens the interval (1: independent runs). The "
+                   "tables by parameter add failed: the group's errors and timeouts.")
 
 
 def headline_rows(summary: dict) -> list[list[str]]:
@@ -484,7 +490,7 @@ def terminal_table(summary: dict) -> list[str]:
     lines += [VERDICT_TITLE, *_aligned(verdicts), VERDICT_NOTES] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
-    return [*lines, COLLISION_TITLE, *table[:len(rows)], stop_title(summary),
+    return [*lines, COLLISION_TITLE, *table[:len(rows)], COLLISION_NOTES, stop_title(summary),
             *table[len(rows):], *world_lines(summary)]
 
 
@@ -557,7 +563,7 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
     lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), "", VERDICT_NOTES, ""] if verdicts
               else [NOT_RECORDED, ""])
-    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "",
+    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", COLLISION_NOTES, "",
               f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
@@ -654,6 +660,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"<p>{html.escape(VERDICT_NOTES)}</p>" if verdicts else "",
              f"<h2>Collisions</h2><p>{html.escape(COLLISION_TITLE)}</p>",
              _table_html(headline_rows(summary)),
+             f"<p>{html.escape(COLLISION_NOTES)}</p>",
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
               if summary["stop_possible"]["recorded"] else ""),

@@ -248,9 +248,11 @@ def group_levels(groups: pd.Series) -> list:
 
 
 def group_label(group) -> str:
-    """A group as people read it: a bin as ``(a, b]``, a number to 3 digits."""
-    if isinstance(group, float):
-        return f"{group:.3g}"
+    """A group as people read it: a bin as ``12.5 to 20``, a number to 4 digits."""
+    if isinstance(group, pd.Interval):
+        return f"{group.left:.4g} to {group.right:.4g}"
+    if isinstance(group, float | np.floating):
+        return f"{group:.4g}"
     return str(group)
 
 

@@ -194,6 +194,14 @@ class Simulation:
             self.advance(command)
         return termination
 
+    def run(self, controller) -> str:
+        """Start, then step under ``controller`` until the run ends; why it ended."""
+        self.start()
+        termination = None
+        while termination is None:
+            termination = self.control(controller)
+        return termination
+
     def finish(self, termination: str, run_id: str | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
         :func:`default_run_id`)."""
@@ -267,10 +275,7 @@ def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
     road = make_road(spec, cache_dir)
     with make_world(spec, road, cache_dir, gui, warm_state) as world:
         sim = Simulation(spec, world)
-        sim.start()
-        termination = None
-        while termination is None:
-            termination = sim.control(controller)
+        termination = sim.run(controller)
     return sim.finish(termination, run_id)
 
 
@@ -319,11 +324,7 @@ def run_as_far_as_it_goes(spec: ScenarioSpec, *, run_id: str | None = None, gui:
             controller = make_controller(spec.controller)
             with make_world(spec, make_road(spec), gui=gui) as world:
                 sim = Simulation(spec, world)
-                sim.start()
-                termination = None
-                while termination is None:
-                    termination = sim.control(controller)
-                return sim.finish(termination, run_id)
+                return sim.finish(sim.run(controller), run_id)
     except _PastWallLimit:
         return _stopped(sim, f"ran past the run timeout of {wall_limit_s:.3g} s", None, run_id)
     except Exception as e:  # noqa: BLE001 - how the run stopped is the answer
