@@ -355,11 +355,14 @@ NOT_RECORDED = ("How the runs ended: not recorded (results from before the outco
                 "only collisions can be judged, and a controller that never passes the "
                 "obstacle cannot be told from a safe one.")
 COLLISION_TITLE = "Collisions (of the ok runs; errors and timeouts counted apart):"
-COLLISION_NOTES = ("Rate: the collisions of the ok runs, with its 95% interval; errors and "
-                   "timeouts: runs without an outcome, never counted as safe (the gate counts "
-                   "them as collisions); design effect, where runs share a warm state: how "
-                   "much their shared traffic widens the interval (1: independent runs). The "
-                   "tables by parameter add failed: the group's errors and timeouts.")
+def collision_notes(summary: dict) -> str:
+    """What the collision table's columns mean (the design effect where it has one)."""
+    return ("Rate: the collisions of the ok runs, with its 95% interval; errors and "
+            "timeouts: runs without an outcome, never counted as safe (the gate counts them "
+            "as collisions). "
+            + ("Design effect: how much the runs' shared traffic (runs from one warm state) "
+               "widens the interval (1: independent runs). " if shares_traffic(summary) else "")
+            + "The tables by parameter add failed: the group's errors and timeouts.")
 
 
 def headline_rows(summary: dict) -> list[list[str]]:
@@ -490,7 +493,8 @@ def terminal_table(summary: dict) -> list[str]:
     lines += [VERDICT_TITLE, *_aligned(verdicts), VERDICT_NOTES] if verdicts else [NOT_RECORDED]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
-    return [*lines, COLLISION_TITLE, *table[:len(rows)], COLLISION_NOTES, stop_title(summary),
+    return [*lines, COLLISION_TITLE, *table[:len(rows)], collision_notes(summary),
+            stop_title(summary),
             *table[len(rows):], *world_lines(summary)]
 
 
@@ -563,7 +567,7 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
     lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), "", VERDICT_NOTES, ""] if verdicts
               else [NOT_RECORDED, ""])
-    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", COLLISION_NOTES, "",
+    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", collision_notes(summary), "",
               f"Collision rates {stop_title(summary)}", ""]
     if summary["stop_possible"]["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
@@ -660,7 +664,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"<p>{html.escape(VERDICT_NOTES)}</p>" if verdicts else "",
              f"<h2>Collisions</h2><p>{html.escape(COLLISION_TITLE)}</p>",
              _table_html(headline_rows(summary)),
-             f"<p>{html.escape(COLLISION_NOTES)}</p>",
+             f"<p>{html.escape(collision_notes(summary))}</p>",
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
               if summary["stop_possible"]["recorded"] else ""),
