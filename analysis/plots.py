@@ -10,8 +10,10 @@ import io
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from analysis.failure_modes import OTHER
 from analysis.run_outcome import STUCK
 from analysis.stats import Method, group_label, group_levels, group_values, rates_by
 from analysis.verdicts import completed_runs
@@ -261,19 +263,28 @@ def convergence(history: pd.DataFrame, target_rhw: float | None) -> bytes:
     return png_bytes(fig)
 
 
-def sampling_path(results: pd.DataFrame, x: str, y: str) -> bytes:
-    """Where the batches went over two parameters: each run coloured by its batch,
-    failures ringed in red."""
+def sampling_path(results: pd.DataFrame, x: str, y: str, modes: list[dict],
+                  stuck_ids: frozenset = frozenset()) -> bytes:
+    """Where the batches went over two parameters: each run a dot coloured by its
+    batch; each failure mode's runs (plain modes, the table's order) ringed in a colour
+    of their own, and the stuck runs (``stuck_ids``) marked."""
     fig = Figure(figsize=(7, 5))
     ax = fig.subplots()
-    points = ax.scatter(results[x], results[y], c=results.batch, cmap="viridis", s=12)
-    failed = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
-    ax.scatter(failed[x], failed[y], facecolors="none", edgecolors="red", s=40,
-               label="collision or no outcome")
+    points = ax.scatter(results[x], results[y], c=results.batch, cmap="viridis", s=10)
+    colours = colormaps["tab10"].colors
+    for i, mode in enumerate(modes, start=1):
+        runs = results[results.run_id.isin(mode["run_ids"])]
+        colour = "0.5" if mode["outcome"] == OTHER else colours[(i - 1) % len(colours)]
+        ax.scatter(runs[x], runs[y], facecolors="none", edgecolors=[colour], s=46,
+                   linewidths=1.4, label=f"mode {i}: {mode['outcome']}")
+    stuck = results[results.run_id.isin(stuck_ids)]
+    if len(stuck):
+        ax.scatter(stuck[x], stuck[y], marker="x", color="tab:orange", s=30, label="stuck")
     fig.colorbar(points, ax=ax, label="batch")
     ax.set(xlabel=_label(x), ylabel=_label(y), title="Runs drawn, batch by batch")
     ax.grid(alpha=0.3)
-    ax.legend(loc="best")
+    if modes or len(stuck):
+        ax.legend(loc="best", fontsize="small")
     return png_bytes(fig)
 
 

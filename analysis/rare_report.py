@@ -17,8 +17,9 @@ import numpy as np
 import pandas as pd
 
 from analysis import plots
-from analysis.failure_modes import failure_modes
+from analysis.failure_modes import OTHER, failure_modes, region_words
 from analysis.rare_events import Estimate, estimate_from_rows
+from analysis.run_outcome import OUTCOMES, outcomes_text
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import Param, parse_param
 
@@ -70,6 +71,19 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     return out
 
 
+def _weighed(results: pd.DataFrame) -> pd.Series | None:
+    """The rows whose weights measure the modes' shares: an estimate's estimation rows
+    (its P), else every row (a search's: a rough share; it estimates nothing)."""
+    estimation = results.phase == "estimate"
+    return estimation if estimation.any() else None
+
+
+def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
+               sweep_dir: Path) -> list[dict]:
+    return [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
+            for m in failure_modes(results, params, failed, _weighed(results))]
+
+
 def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
                     max_weight: float = math.inf) -> list[dict]:
     """The failure modes of a search or estimate directory's rows, plain: each with the
@@ -78,9 +92,24 @@ def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
     the report get them from."""
     if results.empty:
         return []
-    modes = [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
-             for m in failure_modes(results, params)]
-    return mode_estimates(results, modes, max_weight)
+    return mode_estimates(results, _described(results, params, _failed(results), sweep_dir),
+                          max_weight)
+
+
+def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> list[dict]:
+    """The stuck runs (no collision, standing still at the end) grouped the same way as
+    the failures, plain, each with its replay command."""
+    if results.empty or "outcome" not in results:
+        return []
+    return _described(results, params, results.outcome == "stuck", sweep_dir)
+
+
+def outcome_counts(results: pd.DataFrame) -> dict[str, int]:
+    """Runs per outcome (:data:`analysis.run_outcome.OUTCOMES`), and ``failed`` for the
+    runs without one (error, timeout)."""
+    outcomes = results.get("outcome", pd.Series(index=results.index, dtype=object))
+    counts = {o: int((outcomes[results.status == "ok"] == o).sum()) for o in OUTCOMES}
+    return {**counts, "failed": int((results.status != "ok").sum())}
 
 
 def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
@@ -124,8 +153,10 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
         "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
         "first_failure_run_id": (failed.loc[failed.run_index.idxmin(), "run_id"]
                                  if len(failed) else None),
+        "outcomes": outcome_counts(results),
         "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
                                          saved.get("max_weight") or math.inf),
+        "stuck_modes": stuck_modes(results, sweep_params(manifest), sweep_dir),
         "adaptation_levels": saved.get("adaptation_levels"),
     }
     if mode == "estimate":
@@ -177,13 +208,20 @@ def headline(summary: dict) -> list[str]:
                          f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
                          f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
             lines.append(_diagnostics(summary))
-            lines += [f"  mode {i}: {m['outcome']}, P = {m['p_collision']:.3g} "
-                      f"[{m['ci_low']:.3g}, {m['ci_high']:.3g}], {100 * m['share']:.0f}% of it"
-                      for i, m in enumerate(summary["failure_modes"], start=1)
-                      if "p_collision" in m]
     lines.append(f"{summary['failures']} failed runs" + first_failure_words(summary)
                  + ("; the drawn runs are aimed at failure, so their share is no probability"))
+    lines.append(f"outcomes: {outcomes_text(summary['outcomes'])}, "
+                 f"{summary['outcomes']['failed']} failed (no outcome); "
+                 f"{_modes_count(summary['failure_modes'], 'failure')}, "
+                 f"{_modes_count(summary['stuck_modes'], 'stuck')} (tables below)")
     return lines
+
+
+def _modes_count(modes: list[dict], what: str) -> str:
+    named = sum(m["outcome"] != OTHER for m in modes)
+    other = sum(m["runs"] for m in modes if m["outcome"] == OTHER)
+    return (f"{named} {what} mode" + ("" if named == 1 else "s")
+            + (f" (+ {other} runs in other)" if other else ""))
 
 
 def _diagnostics(summary: dict) -> str:
@@ -196,24 +234,41 @@ def _diagnostics(summary: dict) -> str:
     steps = ", ".join(f"{g:.3g}" + (f" (ESS {n:.0f})" if n is not None else "")
                       + (f" ({u} beyond its kernels)" if u else "")
                       for g, n, u in zip(levels, ess, uncovered, strict=True))
-    return (f"diagnostics: {len(summary['failure_modes'])} failure mode(s); the largest run "
+    return (f"diagnostics: the largest run "
             f"carries {100 * e['max_term_share']:.1f}% of P; adaptation thresholds {steps}")
 
 
-def mode_rows(summary: dict) -> list[list[str]]:
-    """The failure modes as a table; an estimate's with each mode's part of P."""
-    modes = summary["failure_modes"]
+def mode_rows(modes: list[dict]) -> list[list[str]]:
+    """Failure or stuck modes as a table; an estimate's with each mode's part of P."""
     split = any("p_collision" in m for m in modes)
-    rows = [["mode", "outcome", "runs"] + (["P (95% interval)", "share"] if split else [])
+    rows = [["mode", "outcome", "runs"] + (["P (95% interval)", "share of P"] if split
+                                           else ["share"])
             + ["example run", "parameter region"]]
     for i, mode in enumerate(modes, start=1):
-        region = [f"{k} = {v!r}" for k, v in mode["discrete"].items()]
-        region += [f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in mode["ranges"].items()]
-        part = ([f"{mode['p_collision']:.3g} [{mode['ci_low']:.3g}, {mode['ci_high']:.3g}]",
-                 f"{100 * mode['share']:.0f}%"] if split else [])
+        if split:
+            part = [f"{mode['p_collision']:.3g} [{mode['ci_low']:.3g}, {mode['ci_high']:.3g}]",
+                    f"{100 * mode['share']:.0f}%"]
+        else:
+            part = ["-" if mode["share"] is None else f"{100 * mode['share']:.0f}%"]
         rows.append([str(i), mode["outcome"], str(mode["runs"]), *part, mode["example_run"],
-                     "; ".join(region)])
+                     region_words(mode)])
     return rows
+
+
+def mode_columns(modes: list[dict]) -> str:
+    """What the mode table's columns mean, said under it."""
+    split = any("p_collision" in m for m in modes)
+    share = ("P (95% interval): its part of P(collision), from the estimation runs' "
+             "weights; the parts add up to the total. share of P: that part over the total."
+             if split else
+             "share: its part of the failures' importance weights, a rough guide to its "
+             "part of P (a search estimates nothing: sdc estimate measures it).")
+    return ("A mode is one connected region of one outcome kind in the parameters' normal "
+            "scores (analysis/failure_modes.py). outcome: what its runs hit (error or "
+            "timeout: no outcome; other: the modes each under 1% of the weight, folded "
+            f"together). runs: its runs, from every batch. {share} example run: its first "
+            "run drawn. parameter region: the span of each parameter over its runs (the "
+            "box they fill, not the region's true edges).")
 
 
 def adaptive_figures(results: pd.DataFrame, summary: dict,
@@ -231,7 +286,9 @@ def adaptive_figures(results: pd.DataFrame, summary: dict,
     varying = [c for c in results.columns if c.startswith("p.")
                and pd.api.types.is_numeric_dtype(results[c]) and results[c].nunique() > 1]
     if len(varying) >= 2:
-        out.append((f"Runs drawn over {varying[0]} and {varying[1]}",
-                    plots.sampling_path(results, varying[0], varying[1])))
+        stuck = frozenset(r for m in summary["stuck_modes"] for r in m["run_ids"])
+        out.append((f"Runs drawn over {varying[0]} and {varying[1]}, failures ringed by mode",
+                    plots.sampling_path(results, varying[0], varying[1],
+                                        summary["failure_modes"], stuck)))
     out.append(("What was hit", plots.collision_breakdown(results)))
     return out

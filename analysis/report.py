@@ -28,7 +28,7 @@ from analysis.look_at import (
     thumbnail,
 )
 from analysis.plain_json import json_plain
-from analysis.run_outcome import COMPLETED
+from analysis.run_outcome import COMPLETED, STUCK
 from analysis.safety import REACTION_TIME_S
 from analysis.settling_report import (
     read_settling,
@@ -499,8 +499,11 @@ def terminal_table(summary: dict) -> list[str]:
 
 
 def failures(results: pd.DataFrame) -> pd.DataFrame:
-    """Runs to look at: collisions and failed runs, failed ones first, then by run."""
-    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
+    """Runs to look at in a search or estimate: failed runs (error, timeout), then
+    collisions and stuck runs, by run."""
+    stuck = results.outcome == STUCK if "outcome" in results else False
+    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)
+                  | stuck]
     return bad.assign(_ok=bad.status == "ok").sort_values(["_ok", "run_index"]).drop(
         columns="_ok")
 
@@ -772,6 +775,21 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
                   gate_failed)
 
 
+#: what the stuck table of a search or estimate holds
+STUCK_WORDS = ("Runs that did not collide but stood still at the end (the outcome stuck), "
+               "grouped into modes the same way; P(collision) does not count them.")
+
+
+def _terminal_modes(modes: list[dict], markdown_path: Path) -> list[str]:
+    """The first :data:`MAX_TERMINAL_MODES` modes, a line each; the rest in report.md."""
+    from analysis.failure_modes import mode_line
+
+    lines = [f"  {i}. {mode_line(m)}" for i, m in enumerate(modes[:MAX_TERMINAL_MODES], 1)]
+    if len(modes) > MAX_TERMINAL_MODES:
+        lines.append(f"  ... {len(modes) - MAX_TERMINAL_MODES} more in {markdown_path}")
+    return lines or ["  none"]
+
+
 def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
                     html_path: Path | None, junit_path: Path | None) -> Report:
     """The report of a search or estimate directory (:mod:`analysis.rare_report`)."""
@@ -780,18 +798,25 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     saved = rare_report.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
     summary = rare_report.adaptive_summary(results, manifest, saved, sweep_dir)
     lines = rare_report.headline(summary)
-    modes = rare_report.mode_rows(summary)
+    modes = rare_report.mode_rows(summary["failure_modes"])
+    stuck = rare_report.mode_rows(summary["stuck_modes"])
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
     title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
     bad = failures(results)
     listed = bad.head(MAX_LISTED_FAILURES).to_dict("records")
     md = [f"# {title}", "", *lines, "", "## Failure modes", "", *_markdown_table(modes), "",
+          rare_report.mode_columns(summary["failure_modes"]), "", "## Stuck runs", "",
+          STUCK_WORDS, "",
+          *(_markdown_table(stuck) if len(stuck) > 1 else ["No run was stuck."]), "",
           "## Runs to look at", ""]
     md += [f"- `{row['run_id']}` (batch {row['batch']}): {_row_outcome(row)} — "
            f"`{replay_command(sweep_dir, row['run_id'])}`" for row in listed]
     parts = [f"<h1>{html.escape(title)}</h1>",
              "".join(f"<p>{html.escape(line)}</p>" for line in lines),
-             "<h2>Failure modes</h2>", _table_html(modes)]
+             "<h2>Failure modes</h2>", _table_html(modes),
+             f"<p>{html.escape(rare_report.mode_columns(summary['failure_modes']))}</p>",
+             "<h2>Stuck runs</h2>", f"<p>{STUCK_WORDS}</p>",
+             _table_html(stuck) if len(stuck) > 1 else "<p>No run was stuck.</p>"]
     parts += [_figure_html(t, png) for t, png in images]
     table = [["run", "batch", "outcome", "replay"]]
     table += [[row["run_id"], str(row["batch"]), _row_outcome(row),
@@ -807,9 +832,8 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     markdown_path.write_text("\n".join(md) + "\n")
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
-    terminal = lines + [f"  {r[0]}. {r[1]}: {r[2]} runs, " + "; ".join(r[3:])
-                        for r in modes[1:MAX_TERMINAL_MODES + 1]]
-    if len(modes) > MAX_TERMINAL_MODES + 1:
-        more = len(modes) - 1 - MAX_TERMINAL_MODES
-        terminal.append(f"  ... {more} more modes in {markdown_path}")
+    terminal = [*lines, "failure modes:", *_terminal_modes(summary["failure_modes"],
+                                                          markdown_path)]
+    if summary["stuck_modes"]:
+        terminal += ["stuck runs:", *_terminal_modes(summary["stuck_modes"], markdown_path)]
     return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)

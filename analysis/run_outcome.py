@@ -25,6 +25,12 @@ STUCK_SPEED_MPS = 0.1
 STUCK_HOLD_S = 3.0
 
 
+def outcomes_text(outcomes) -> str:
+    """``3 completed, 1 collided, 0 stuck, 0 unfinished``: runs by outcome (a mapping
+    from :data:`OUTCOMES`; a missing one is 0)."""
+    return ", ".join(f"{outcomes.get(o, 0)} {o}" for o in OUTCOMES)
+
+
 def rest_step(speed_mps: np.ndarray) -> int:
     """The step from which the car stood still (under :data:`STUCK_SPEED_MPS`) to the
     end of the trace; ``len(speed_mps)`` when it was moving at its last step."""

@@ -483,9 +483,10 @@ def sweep(sweep_file: Path, out_dir: Path | None, workers: int, executor: str,
     travels with the job, identified by sha256 (recorded in the manifest):
     workers, local or on any Ray node, never open the driver's paths.
     """
+    from analysis.run_outcome import outcomes_text
     from scenarios.sweep_spec import expand, load_sweep
     from sdc.batch.executors import LocalExecutor, RayExecutor
-    from sdc.batch.progress import QuietReporter, RichReporter, outcomes_text
+    from sdc.batch.progress import QuietReporter, RichReporter
     from sdc.batch.sweep_runner import run_sweep
 
     if ray_address and executor != "ray":
@@ -617,7 +618,7 @@ def _adaptive(mode: str, sweep_file: Path, options: dict, max_runs: int, batch_s
 
 
 def _adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
-    from sdc.batch.progress import outcomes_text
+    from analysis.run_outcome import outcomes_text
 
     counts = outcome.counts
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
@@ -654,8 +655,10 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     mode found, and a wide share keeps landing runs in regions no near miss warns
     of, so a scenario that fails in several ways shows each of them. Every run is
     a row of DIR (with its batch), replayable with sdc replay. DIR/search.json
-    lists the failure modes (what was hit, parameter region, runs, an example run
-    and its replay command). A search finds failures; how often it fails is not a
+    lists the failure modes, one per connected region of one outcome kind (what
+    was hit, parameter region, runs, an example run and its replay command; modes
+    under 1% of the weight folded into "other"), and the stuck runs' modes beside
+    them. A search finds failures; how often it fails is not a
     probability (sdc estimate).
     """
     from analysis.rare_report import first_failure_words
@@ -665,19 +668,22 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     summary = outcome.summary
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
                + first_failure_words(summary))
-    modes = summary.get("failure_modes") or []
-    for mode in modes[:8]:
-        click.echo(f"  {_mode_line(mode)}")
-    if len(modes) > 8:
-        click.echo(f"  ... {len(modes) - 8} more modes: sdc report {options['out_dir']}")
+    _echo_modes(summary.get("failure_modes") or [], options["out_dir"])
+    stuck = summary.get("stuck_modes") or []
+    click.echo(f"stuck (no collision, standing still at the end): "
+               f"{sum(m['runs'] for m in stuck)} of {outcome.runs} runs")
+    _echo_modes(stuck, options["out_dir"])
     _adaptive_exit(outcome, "search", options["out_dir"])
 
 
-def _mode_line(mode: dict) -> str:
-    parts = [f"{k}={v!r}" for k, v in mode["discrete"].items()]
-    parts += [f"{k} {lo:.4g}..{hi:.4g}" for k, (lo, hi) in mode["ranges"].items()]
-    return (f"{mode['outcome']}: {mode['runs']} run(s), e.g. {mode['run_ids'][0]}; "
-            + ", ".join(parts))
+def _echo_modes(modes: list[dict], out_dir: Path, shown: int = 8) -> None:
+    """The first ``shown`` modes, a line each, and where the rest are."""
+    from analysis.failure_modes import mode_line
+
+    for mode in modes[:shown]:
+        click.echo(f"  {mode_line(mode)}")
+    if len(modes) > shown:
+        click.echo(f"  ... {len(modes) - shown} more modes: sdc report {out_dir}")
 
 
 @main.command()

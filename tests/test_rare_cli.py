@@ -16,11 +16,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from analysis.failure_modes import failure_modes
 from analysis.rare_events import estimate_from_rows
 from analysis.run_score import run_score
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import Param, load_sweep
+from scenarios.sweep_spec import load_sweep
 from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
@@ -74,23 +73,6 @@ def test_a_score_is_zero_exactly_for_a_collision_or_no_outcome():
     assert run_score(_row(min_ttc_s=1.5), "ttc") == 1.5
 
 
-def test_failure_modes_split_by_outcome_discrete_values_and_distant_regions():
-    params = [Param("a", "uniform", (0.0, 10.0)), Param("k", "choice", ("x", "y"))]
-    rows = pd.DataFrame({
-        "run_id": [f"r{i}" for i in range(7)], "run_index": range(7),
-        "status": ["ok"] * 6 + ["error"], "collision": [True] * 6 + [None],
-        "collision_with": ["obstacle"] * 4 + ["road_edge"] * 2 + [None],
-        # a chain 1.0-1.5-2.0 (steps of 0.05 on the quantile scale), and 9.0 far away
-        "p.a": [1.0, 1.5, 2.0, 9.0, 1.0, 1.0, 5.0], "p.k": ["x", "x", "x", "x", "x", "y", "x"],
-    })
-    modes = failure_modes(rows, params)
-    found = sorted((m.outcome, m.run_ids) for m in modes)
-    assert found == [("error", ("r6",)), ("obstacle", ("r0", "r1", "r2")),
-                     ("obstacle", ("r3",)), ("road_edge", ("r4",)), ("road_edge", ("r5",))]
-    chain = next(m for m in modes if m.runs == 3)
-    assert chain.ranges == {"a": (1.0, 2.0)} and chain.discrete == {"k": "x"}
-
-
 # ---------------------------------------------------------------- SUMO on the executors
 
 def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
@@ -127,6 +109,45 @@ def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     assert report.returncode == 0, report.stderr
     assert "no probability" in report.stdout and "search of toy" in report.stdout
     assert "Runs drawn over" in (out / "report.html").read_text()
+
+
+# stands still when it starts above 4 m/s, else holds its speed into the barrel
+STOP_WHEN_FAST = """
+from sdc.car.controller_api import Command
+
+
+class StopWhenFast:
+    def __init__(self, params):
+        self.stop = None
+
+    def step(self, obs):
+        if self.stop is None:
+            self.stop = obs.speed_mps > 4.0
+        return Command(0.0, -8.0 if self.stop else 0.0)
+"""
+
+
+def test_a_search_reports_its_stuck_runs_beside_its_collisions(tmp_path):
+    (tmp_path / "stop.py").write_text(STOP_WHEN_FAST)
+    plugin = f"{tmp_path / 'stop.py'}:StopWhenFast"
+    sweep = write(tmp_path, "toy", TOY.replace('["seed"]', f'["{plugin}"]'))
+    out = tmp_path / "search"
+    done = sdc("search", sweep, "--out", out, "--budget", 40, "--batch-size", 20, "--quiet")
+    assert done.returncode == 0, done.stderr
+    rows = pd.read_parquet(out / "results.parquet")
+    stuck = rows[rows.outcome == "stuck"]
+    assert 0 < len(stuck) < len(rows) and (stuck["p.ego.speed_mps"] > 4.0).all()
+    summary = json.loads((out / "search.json").read_text())
+    grouped = sorted(r for m in summary["stuck_modes"] for r in m["run_ids"])
+    assert grouped == sorted(stuck.run_id)
+    assert {m["outcome"] for m in summary["stuck_modes"]} <= {"stuck", "other"}
+    assert f"stuck (no collision, standing still at the end): {len(stuck)} of 40 runs" in (
+        done.stdout)
+    report = sdc("report", out)
+    assert report.returncode == 0, report.stderr
+    assert f"{len(stuck)} stuck" in report.stdout and "stuck runs:" in report.stdout
+    page = (out / "report.html").read_text()
+    assert "<h2>Stuck runs</h2>" in page and stuck.run_id.iloc[0] in page
 
 
 def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path):

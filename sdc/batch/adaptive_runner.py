@@ -33,10 +33,11 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
+from analysis.failure_modes import OTHER
 from analysis.mode_search import ModeSearch
 from analysis.plain_json import json_plain
 from analysis.rare_events import EstimationLoop, unit_points
-from analysis.rare_report import described_modes, summary_path
+from analysis.rare_report import described_modes, stuck_modes, summary_path
 from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
@@ -272,10 +273,12 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
     """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted
     (``failure_modes`` is None while running)."""
     ordered = sorted(rows.values(), key=lambda r: r["run_index"])
-    modes = None  # grouping every failure is for the end, not for each batch
+    modes = stuck = None  # grouping every failure is for the end, not for each batch
     if state != "running":  # a search has no estimation rows, hence no max_weight
         max_weight = loop.max_weight if isinstance(loop, EstimationLoop) else math.inf
-        modes = described_modes(pd.DataFrame(ordered), sweep.params, out_dir, max_weight)
+        table = pd.DataFrame(ordered)
+        modes = described_modes(table, sweep.params, out_dir, max_weight)
+        stuck = stuck_modes(table, sweep.params, out_dir)
     summary = {
         "mode": settings.mode, "state": state,
         "controller": controller_label(settings.controller), "score": settings.score,
@@ -287,7 +290,8 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
                                for r in rows.values()),
         "invalid_samples": sum(r["score"] is None for r in rows.values()),
         "failure_modes": modes,
-        "modes_found": None if modes is None else len(modes),
+        "modes_found": None if modes is None else sum(m["outcome"] != OTHER for m in modes),
+        "stuck_modes": stuck,
     }
     if isinstance(loop, ModeSearch):
         failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]

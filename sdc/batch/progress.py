@@ -16,7 +16,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from analysis.run_outcome import OUTCOMES
+from analysis.run_outcome import outcomes_text
 
 
 class RichReporter:
@@ -66,11 +66,6 @@ class RichReporter:
     def stop(self) -> None:
         if self._progress is not None:
             self._progress.stop()
-
-
-def outcomes_text(outcomes) -> str:
-    """``3 completed, 1 collided, 0 stuck, 0 unfinished``: runs by outcome."""
-    return ", ".join(f"{outcomes.get(o, 0)} {o}" for o in OUTCOMES)
 
 
 class QuietReporter:
