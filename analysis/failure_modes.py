@@ -13,10 +13,10 @@ deviation of the nominal, whatever the parameter's unit.
 
 * **Links.** A failure's *clearance* is the distance to the nearest run that
   did not fail its way: the region reaches at least about that far round it.
-  Two failures are linked when their balls, widened by :data:`LINK_SLACK`,
-  overlap. The scale comes from the runs themselves, so a region sampled
-  sparsely in ten dimensions holds together while two regions in two
-  dimensions with runs between them stay apart.
+  Two failures (of its :data:`MAX_LINKS` nearest) are linked when their balls,
+  widened by :data:`LINK_SLACK`, overlap. The scale comes from the runs
+  themselves, so a region sampled sparsely in ten dimensions holds together
+  while two regions in two dimensions with runs between them stay apart.
 * **Persistence.** Two causes can meet far out in the tails (too fast and
   the obstacle too far left fails both ways), where a sampler's wide share
   may land a run that links them. Groups are built from the likeliest
@@ -28,9 +28,10 @@ deviation of the nominal, whatever the parameter's unit.
 The two constants were chosen on :mod:`analysis.rare_bank` and an emulator of
 the seed-modes family (``benchmarks/failure_mode_counts.py`` prints the
 counts; ``tests/test_failure_modes.py`` holds them): the modes listed equal
-the regions found in at least 9 of 10 seeds on every problem, for estimates
-and 1000-run searches alike; single linkage at a fixed distance split one
-region into up to 200 in ten dimensions.
+the regions found in 37-40 of 40 seeds of 1000-run searches and 30 of 30
+estimates on every problem; the single linkage at a fixed distance used
+before split one region into up to 246 modes in ten dimensions, and three
+regions into 4 to 11 in two.
 
 Modes that carry less than :data:`OTHER_SHARE` of the weighted failures
 (a run's importance weight ``nominal / proposal``: for an estimate, its part
@@ -49,18 +50,20 @@ import pandas as pd
 from scipy import sparse, special
 from scipy.spatial import cKDTree
 
-from scenarios.sweep_spec import Param
+from analysis.plain_json import json_plain
+from scenarios.sweep_spec import PARAM_PREFIX, Param
 
 #: linked when the distance is at most this times the sum of the two clearances
 LINK_SLACK = 1.25
 #: log-density [nats] a group must stand above where it meets a likelier one to stay apart
 PERSISTENCE_NATS = 4.0
+#: the nearest failures each failure may be linked to
+MAX_LINKS = 32
 #: modes under this share of the weighted failures are folded into ``other``
 OTHER_SHARE = 0.01
 OTHER = "other"
 #: the largest normal score (Phi^-1 of the largest double below 1 is about 8.2)
 _MAX_SCORE = 8.3
-PARAM_PREFIX = "p."
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,7 +144,7 @@ def failure_modes(results: pd.DataFrame, params: Sequence[Param], failed: pd.Ser
         first = members.iloc[0]
         modes.append(FailureMode(
             outcome=kinds[members.index[0]], runs=len(members), run_ids=tuple(members.run_id),
-            discrete={p.path: _plain(first[PARAM_PREFIX + p.path]) for p in choices},
+            discrete={p.path: json_plain(first[PARAM_PREFIX + p.path]) for p in choices},
             ranges={p.path: (float(members[PARAM_PREFIX + p.path].min()),
                              float(members[PARAM_PREFIX + p.path].max())) for p in ordinal},
             share=None if shares is None else shares[label]))
@@ -196,7 +199,8 @@ def _regions(points: np.ndarray, kinds: np.ndarray, slices: np.ndarray) -> np.nd
         for kind in dict.fromkeys(k for k in kinds[in_slice] if k):
             mine = in_slice & (kinds == kind)
             clearance = _clearances(points[mine], points[in_slice & ~mine])
-            groups = _persistent_groups(points[mine], clearance)
+            groups = (_persistent_groups(points[mine], clearance)
+                      if np.isfinite(clearance).all() else np.zeros(int(mine.sum()), int))
             labels[mine] = [f"{key}\x00{kind}\x00{g}" for g in groups]
     return labels
 
@@ -209,15 +213,14 @@ def _clearances(failures: np.ndarray, others: np.ndarray) -> np.ndarray:
 
 
 def _links(points: np.ndarray, clearance: np.ndarray) -> sparse.csr_matrix:
-    """The failures whose widened balls overlap, as a symmetric adjacency matrix. A pair
-    with ``d <= s (r_i + r_j)`` has ``d <= 2 s max(r_i, r_j)``: it is found from the end
-    with the larger clearance."""
+    """Each failure linked to those of its :data:`MAX_LINKS` nearest failures whose widened
+    balls overlap its own, as a symmetric adjacency matrix (the nearest bound the work
+    where clearances are wide: a region few passing runs came near)."""
     n = len(points)
-    reach = np.minimum(2 * LINK_SLACK * clearance, 4 * _MAX_SCORE)
-    near = cKDTree(points).query_ball_point(points, reach)
-    i = np.repeat(np.arange(n), [len(js) for js in near])
-    j = np.concatenate([np.asarray(js, dtype=int) for js in near]) if n else np.zeros(0, int)
-    distance = np.linalg.norm(points[i] - points[j], axis=1)
+    count = min(MAX_LINKS + 1, n)
+    distance, j = cKDTree(points).query(points, k=count)
+    distance, j = distance.reshape(n, count), j.reshape(n, count)
+    i = np.repeat(np.arange(n)[:, None], count, axis=1)
     keep = (i != j) & (distance <= LINK_SLACK * (clearance[i] + clearance[j]))
     adjacency = sparse.coo_matrix((np.ones(int(keep.sum())), (i[keep], j[keep])), shape=(n, n))
     return (adjacency + adjacency.T).tocsr()
@@ -255,7 +258,3 @@ def _persistent_groups(points: np.ndarray, clearance: np.ndarray) -> np.ndarray:
                 main = older
     groups = np.array([find(a) for a in range(n)])
     return np.unique(groups, return_inverse=True)[1]
-
-
-def _plain(value: Any) -> Any:
-    return value.item() if hasattr(value, "item") else value

@@ -94,11 +94,6 @@ def unit_points(z: np.ndarray) -> np.ndarray:
     return np.clip(special.ndtr(np.asarray(z, dtype=float)), 0.0, _BELOW_ONE)
 
 
-def normal_points(u: np.ndarray) -> np.ndarray:
-    """``z = Phi^-1(u)``: the inverse of :func:`unit_points` (u in the open cube)."""
-    return special.ndtri(np.asarray(u, dtype=float))
-
-
 def nominal_log_density(z: np.ndarray) -> np.ndarray:
     """Log density of ``N(0, I)`` at each row of ``z`` (n, d)."""
     z = np.atleast_2d(z)

@@ -80,8 +80,11 @@ def _weighed(results: pd.DataFrame) -> pd.Series | None:
 
 def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
                sweep_dir: Path) -> list[dict]:
+    """The modes of the ``failed`` rows among the runs (a sample that made no valid
+    scenario, score None, is no run: no evidence either way)."""
+    runs = results[results.score.notna()] if "score" in results else results
     return [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
-            for m in failure_modes(results, params, failed, _weighed(results))]
+            for m in failure_modes(runs, params, failed[runs.index], _weighed(runs))]
 
 
 def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
@@ -222,6 +225,18 @@ def _modes_count(modes: list[dict], what: str) -> str:
     other = sum(m["runs"] for m in modes if m["outcome"] == OTHER)
     return (f"{named} {what} mode" + ("" if named == 1 else "s")
             + (f" (+ {other} runs in other)" if other else ""))
+
+
+#: the terms of an estimate's headline, said under it
+ESTIMATE_TERMS = (
+    "P(collision): the importance-sampling estimate, mean(weight x failed) over the "
+    "estimation runs (a run with no outcome counts as failed). RHW: the 95% interval's "
+    "half-width over P. Plain Monte Carlo: the independent runs that would reach the same "
+    "RHW at this P. weighted: the estimation runs (the adaptation's are not counted). "
+    "ESS: Kish's effective sample size of their weights. The largest run's part of P: "
+    "above 10% the interval says little. Adaptation thresholds: each level's score "
+    "quantile (0 once its elites are failures), with its elites' ESS and the failures "
+    "it found beyond its kernels.")
 
 
 def _diagnostics(summary: dict) -> str:

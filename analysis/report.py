@@ -804,7 +804,9 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
     bad = failures(results)
     listed = bad.head(MAX_LISTED_FAILURES).to_dict("records")
-    md = [f"# {title}", "", *lines, "", "## Failure modes", "", *_markdown_table(modes), "",
+    terms = [rare_report.ESTIMATE_TERMS] if summary.get("estimate") else []
+    md = [f"# {title}", "", *lines, "", *terms, "", "## Failure modes", "",
+          *_markdown_table(modes), "",
           rare_report.mode_columns(summary["failure_modes"]), "", "## Stuck runs", "",
           STUCK_WORDS, "",
           *(_markdown_table(stuck) if len(stuck) > 1 else ["No run was stuck."]), "",
@@ -812,7 +814,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     md += [f"- `{row['run_id']}` (batch {row['batch']}): {_row_outcome(row)} — "
            f"`{replay_command(sweep_dir, row['run_id'])}`" for row in listed]
     parts = [f"<h1>{html.escape(title)}</h1>",
-             "".join(f"<p>{html.escape(line)}</p>" for line in lines),
+             "".join(f"<p>{html.escape(line)}</p>" for line in [*lines, *terms]),
              "<h2>Failure modes</h2>", _table_html(modes),
              f"<p>{html.escape(rare_report.mode_columns(summary['failure_modes']))}</p>",
              "<h2>Stuck runs</h2>", f"<p>{STUCK_WORDS}</p>",

@@ -18,7 +18,6 @@ from collections.abc import Mapping
 from typing import Any, Literal
 
 ScoreKind = Literal["gap", "ttc"]
-SCORE_KINDS: tuple[ScoreKind, ...] = ("gap", "ttc")
 #: what each kind reads from the row, and its unit
 SCORE_COLUMNS: dict[ScoreKind, tuple[str, ...]] = {
     "gap": ("min_gap_obstacle_m", "min_road_edge_gap_m"),

@@ -17,6 +17,7 @@ import numpy as np
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.controller_ref import BUILTIN_CONTROLLERS, check_name, controller_label
 from scenarios.errors import SpecError
+from scenarios.seeding import SEED_LIMIT
 from scenarios.spec_fields import Spec, build, num, to_plain
 
 spec_class = dataclasses.dataclass(frozen=True, kw_only=True)
@@ -39,7 +40,7 @@ class ScenarioMeta(Spec):
     name: str
     duration_s: float = num(gt=0, le=36_000)
     step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)  # a whole number of milliseconds
-    seed: int = num(0, ge=0, lt=2**31)
+    seed: int = num(0, ge=0, lt=SEED_LIMIT)
     backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
 
     def __post_init__(self):
@@ -147,7 +148,7 @@ class TrafficSpec(Spec):
     speed_dev: float = num(0.1, ge=0, le=1)
     warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
     vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
-    warm_seed: int | None = num(None, ge=0, lt=2**31)  # the warm-up's seed (None: scenario's)
+    warm_seed: int | None = num(None, ge=0, lt=SEED_LIMIT)  # the warm-up's seed (None: scenario's)
     lane_change_s: float = num(2.0, ge=1.0, le=10.0)  # sumo: how long a lane change takes
     enter_s: float = num(0.0, ge=0, le=86_400)  # sumo_config: SUMO's time the ego enters at
 

@@ -29,14 +29,20 @@ import numpy as np
 from scenarios.controller_ref import controller_label, resolve_file
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
+from scenarios.seeding import (
+    POINTS_STREAM,
+    RUN_SEEDS_STREAM,
+    SEED_LIMIT,
+    draw_seeds,
+    stream_rng,
+    warm_rng,
+)
 from scenarios.spec_fields import Spec, build, num
 from scenarios.toml_io import load_spec, read_toml
 
-SAMPLERS = ("grid", "random", "sobol", "lhs")
+#: a swept parameter's result column: p.<path>, e.g. p.ego.speed_mps
+PARAM_PREFIX = "p."
 MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
-#: the warm-up seeds of a sweep are drawn from numpy.random.default_rng([seed, WARM_STREAM]),
-#: a stream apart from its samples' (children of SeedSequence(seed))
-WARM_STREAM = 3
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 
@@ -225,7 +231,7 @@ class _SweepTable(Spec):
     base: str
     samples: int | None = num(None, gt=0, le=MAX_SAMPLES)
     sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
-    seed: int = num(0, ge=0, lt=2**31)
+    seed: int = num(0, ge=0, lt=SEED_LIMIT)
     levels: int | None = num(None, ge=2, le=1000)
     warm_states: int | None = num(None, ge=1, le=MAX_SAMPLES)
     controllers: tuple = ("seed",)
@@ -376,8 +382,7 @@ def warm_seeds(sweep: SweepSpec) -> list[int] | None:
     each sample warms up from its own seed)."""
     if sweep.warm_states is None:
         return None
-    rng = np.random.default_rng([sweep.seed, WARM_STREAM])
-    return [int(s) for s in rng.integers(0, 2**31 - 1, size=sweep.warm_states)]
+    return [int(s) for s in draw_seeds(warm_rng(sweep.seed), sweep.warm_states)]
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -422,7 +427,7 @@ def _unit_points(sweep: SweepSpec, rng: np.random.Generator) -> np.ndarray:
 
 def sample_values(sweep: SweepSpec) -> list[dict[str, Any]]:
     """Each sample's parameter values, in plan order."""
-    point_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(2)[0])
+    point_rng = stream_rng(sweep.seed, POINTS_STREAM)
     if sweep.sampler == "grid":
         axes = [p.grid(sweep.levels) for p in sweep.params]
         return [{p.path: v for p, v in zip(sweep.params, combo, strict=True)}
@@ -438,8 +443,7 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
     comparison), unless ``scenario.seed`` is itself a swept parameter.
     """
     samples = sample_values(sweep)
-    seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(2)[1])
-    seeds = seed_rng.integers(0, 2**31 - 1, size=len(samples))
+    seeds = draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples))
     return plan_samples(sweep, samples, [int(s) for s in seeds])
 
 

@@ -23,6 +23,7 @@ from scenarios.compiled_kernels import kernel_choice
 from scenarios.controller_ref import resolve_file
 from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import ScenarioSpec
+from scenarios.seeding import SEED_LIMIT
 from scenarios.toml_io import load_spec
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -162,7 +163,7 @@ def main() -> None:
 
 @main.command()
 @click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
-@click.option("--seed", type=click.IntRange(0, 2**31 - 1),
+@click.option("--seed", type=click.IntRange(0, SEED_LIMIT - 1),
               help="Override the spec's scenario.seed (SUMO's and the lidar noise's seed).")
 @click.option("--controller", metavar="NAME",
               help="Override the spec's controller: a built-in (seed, lane-keep, avoid), "
@@ -263,7 +264,7 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 @click.option("--for", "watch_s", type=click.FloatRange(20, 3600), default=600.0,
               show_default=True, metavar="SECONDS", callback=_a_number,
               help="How long to watch the traffic warm up [simulated s].")
-@click.option("--seed", type=click.IntRange(0, 2**31 - 1),
+@click.option("--seed", type=click.IntRange(0, SEED_LIMIT - 1),
               help="The warm-up's seed (default: the spec's traffic.warm_seed, else "
                    "scenario.seed).")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.png",
@@ -900,8 +901,8 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
     """A run that raised or timed out in its sweep: what it was and how it ended
     (one line), the replay's own end, and the run drawn as far as it went. True:
     the replay ended otherwise; None: it failed alike and nothing was drawn."""
+    from scenarios.sweep_spec import PARAM_PREFIX
     from sdc.run.episode import Stopped, run_as_far_as_it_goes
-    from sdc.run.result_row import PARAM_PREFIX
 
     row = recorded.row
     params = ", ".join(f"{k[len(PARAM_PREFIX):]}={_param_text(v)}" for k, v in row.items()

@@ -37,6 +37,7 @@ from gymnasium import spaces
 from scenarios import CATALOG_DIR
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
+from scenarios.seeding import draw_seeds
 from scenarios.toml_io import load_spec
 from scenarios.world_backends import BACKENDS, make_road, make_world
 from sdc.car.vehicle import Command
@@ -97,7 +98,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         self.close()
-        scenario_seed = seed if seed is not None else int(self.np_random.integers(2**31 - 1))
+        scenario_seed = seed if seed is not None else int(draw_seeds(self.np_random, 1)[0])
         spec = self.scenario.with_seed(scenario_seed)
         self.road = make_road(spec, self.cache_dir)  # a network route depends on the seed
         self._world = make_world(spec, self.road, self.cache_dir)

@@ -199,7 +199,13 @@ def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path)
     report = sdc("report", whole)
     assert report.returncode == 0, report.stderr
     assert f"P(collision) = {saved['p_collision']:.3g}" in report.stdout
-    assert "Convergence" in (whole / "report.html").read_text()
+    # the modes are listed once, in their own table, and the terms are defined
+    assert report.stdout.count("failure modes:") == 1
+    first = saved["failure_modes"][0]
+    assert report.stdout.count(f"e.g. {first['example_run']}") == 1
+    page = (whole / "report.html").read_text()
+    assert "Convergence" in page and "RHW: the 95% interval&#x27;s half-width" in page
+    assert "P (95% interval): its part of P(collision)" in page
     summary = json.loads((whole / "summary.json").read_text())
     assert summary["estimate"]["p_collision"] == saved["p_collision"]
 

@@ -42,6 +42,7 @@ from analysis.run_score import ScoreKind, run_score
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
 from scenarios.errors import SdcError, SpecError
+from scenarios.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
 from scenarios.sweep_spec import PlannedRun, SweepSpec, plan_samples
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
@@ -122,7 +123,7 @@ def settings_sha256(sweep: SweepSpec, settings: AdaptiveSettings) -> str:
 
 
 def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | ModeSearch:
-    rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[2])
+    rng = stream_rng(sweep.seed, SAMPLER_STREAM)
     dims = len(sweep.params)
     if settings.mode == "search":
         return ModeSearch(dims, settings.max_runs, rng, settings.batch_size,
@@ -236,7 +237,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         manifest["adaptive"] = settings.to_plain()
     runs = _Runs(out_dir, sweep, executor, reporter, traces, settings, manifest)
     loop = _loop(sweep, settings)
-    seed_rng = np.random.default_rng(np.random.SeedSequence(sweep.seed).spawn(3)[1])
+    seed_rng = stream_rng(sweep.seed, RUN_SEEDS_STREAM)
     width = max(5, len(str(settings.max_runs - 1)))
     reporter.start(total=settings.max_runs, done=len(runs.rows),
                    outcomes=Counter(r["outcome"] for r in runs.rows.values() if r["outcome"]),
@@ -246,7 +247,7 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         while (z := loop.ask()) is not None:
             phase = "adapt" if loop.adapting else settings.mode
             weights = np.exp(loop.log_weights(z))
-            seeds = seed_rng.integers(0, 2**31 - 1, size=len(z))
+            seeds = draw_seeds(seed_rng, len(z))
             rows = runs.run(batch, phase, _batch_plan(sweep, z, seeds, drawn, width), weights)
             loop.tell(z, _scores(rows))
             reporter.set_total(loop.planned_runs)  # the ETA from the runs still planned

@@ -27,7 +27,7 @@ from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.sumo_net.sumo_config import config_manifest
-from scenarios.sweep_spec import PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.warm_state import SETTLING_FILE
 from scenarios.world_backends import prepare_network
 from sdc.batch.job_files import FileCatalog
@@ -44,7 +44,7 @@ from sdc.batch.manifest import (
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
 from sdc.batch.warm_states import prepare_warm_states, with_warm_state, write_settling
-from sdc.run.result_row import PARAM_PREFIX, SweepColumns, invalid_sample_row, result_schema
+from sdc.run.result_row import SweepColumns, invalid_sample_row, result_schema
 
 
 class Reporter(Protocol):

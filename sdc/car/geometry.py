@@ -192,18 +192,6 @@ def box_gap_m(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return np.where(boxes_overlap(box, boxes), 0.0, gap_m)
 
 
-def boxes_within_m(point_xy: np.ndarray, boxes: np.ndarray, reach_m: float) -> np.ndarray:
-    """(N,) bool: which boxes' bounding circles come within ``reach_m`` of ``point_xy``.
-
-    A cheap, conservative cull before the exact kernels: every box that a ray of
-    length ``reach_m`` from the point, or a disc of radius ``reach_m``, can touch is kept.
-    """
-    b = as_boxes(boxes)
-    half_diag_m = 0.5 * np.hypot(b[:, 3], b[:, 4])
-    centre_m = np.hypot(b[:, 0] - point_xy[0], b[:, 1] - point_xy[1])
-    return centre_m <= reach_m + half_diag_m
-
-
 def _extents_m(box: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Half extents of boxes along the frame's x and y axes [m]."""
     c, s = np.cos(box[..., 2]), np.sin(box[..., 2])

@@ -29,9 +29,11 @@ from typing import Any
 
 import pyarrow as pa
 
+from analysis.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
+from scenarios.sweep_spec import PARAM_PREFIX
+
 IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
 ADAPTIVE = "adaptive"
-PARAM_PREFIX = "p."  # a swept parameter's column: p.<path>, e.g. p.ego.speed_mps
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,8 +78,9 @@ COLUMNS: tuple[Column, ...] = (
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),
     Column("outcome", pa.string(), OUTCOME,
            "how the run ended (analysis/run_outcome.py): completed (passed every obstacle "
-           "ahead of its start, no collision) | collided | stuck (neither; under 0.1 m/s for "
-           "the last 3 s or more) | unfinished (neither; still moving when it ended)"),
+           "ahead of its start, no collision) | collided | stuck (neither; under "
+           f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more) | unfinished "
+           "(neither; still moving when it ended)"),
     Column("progress_m", pa.float64(), OUTCOME,
            "distance the body centre made along the route, measured along the ego's lane [m]"),
     Column("time_lost_s", pa.float64(), OUTCOME,
@@ -86,8 +89,8 @@ COLUMNS: tuple[Column, ...] = (
     Column("collision_speed_mps", pa.float64(), OUTCOME,
            "the ego's speed at the collision; None unless collision [m/s]"),
     Column("stood_at_end_s", pa.float64(), OUTCOME,
-           "how long the ego had stood still (under 0.1 m/s) when the run ended; 0 when it "
-           "was moving [s]"),
+           f"how long the ego had stood still (under {STUCK_SPEED_MPS:g} m/s) when the run "
+           "ended; 0 when it was moving [s]"),
     Column("min_gap_obstacle_m", pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
     Column("min_ttc_s", pa.float64(), METRIC,
