@@ -19,7 +19,7 @@ import pandas as pd
 from analysis import plots
 from analysis.failure_modes import OTHER, failure_modes, region_words
 from analysis.rare_events import Estimate, estimate_from_rows
-from analysis.run_outcome import OUTCOMES, outcomes_text
+from analysis.run_outcome import OUTCOMES, STUCK, outcomes_text
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import Param, parse_param
 
@@ -104,7 +104,7 @@ def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> 
     the failures, plain, each with its replay command."""
     if results.empty or "outcome" not in results:
         return []
-    return _described(results, params, results.outcome == "stuck", sweep_dir)
+    return _described(results, params, results.outcome == STUCK, sweep_dir)
 
 
 def outcome_counts(results: pd.DataFrame) -> dict[str, int]:
