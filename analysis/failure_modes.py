@@ -108,6 +108,23 @@ def mode_line(mode: dict) -> str:
     return f"{mode['outcome']}: {runs}{share}; {region_words(mode)}; e.g. {mode['example_run']}"
 
 
+def weighed_rows(results: pd.DataFrame) -> pd.Series | None:
+    """The rows of a search or estimate whose weights measure the modes' shares: an
+    estimate's estimation rows (its P), else every row (a search's: a rough share; it
+    estimates nothing)."""
+    estimation = results.phase == "estimate"
+    return estimation if estimation.any() else None
+
+
+def mode_lines(modes: list[dict], shown: int, rest: str) -> list[str]:
+    """The first ``shown`` plain modes, numbered, a :func:`mode_line` each; then how
+    many more there are and ``rest``, where to read them."""
+    lines = [f"  {i}. {mode_line(m)}" for i, m in enumerate(modes[:shown], start=1)]
+    if len(modes) > shown:
+        lines.append(f"  ... {len(modes) - shown} more modes: {rest}")
+    return lines
+
+
 def run_kinds(results: pd.DataFrame, failed: pd.Series) -> pd.Series:
     """How each failed run failed: ``collision_with``, else its status, else its
     outcome (``stuck``); empty for the rest."""

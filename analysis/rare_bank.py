@@ -22,6 +22,8 @@ import numpy as np
 import pandas as pd
 from scipy import special
 
+from scenarios.sweep_spec import PARAM_PREFIX, Param
+
 ScoreFn = Callable[[np.ndarray], np.ndarray]
 RegionFn = Callable[[np.ndarray], np.ndarray]
 KindFn = Callable[[np.ndarray], np.ndarray]
@@ -63,21 +65,23 @@ def _three_region_parts(z: np.ndarray) -> np.ndarray:
     return np.stack([z[:, 0] >= 3.66, z[:, 1] >= 3.6775, z[:, 1] <= -3.6775], axis=1)
 
 
+def _four_branches(z: np.ndarray, k: float) -> list[np.ndarray]:
+    """The four branch scores of the series system; it fails where one is <= 0."""
+    a, b = z[:, 0], z[:, 1]
+    bent = 3.0 + 0.1 * (a - b) ** 2
+    return [bent - (a + b) / _ROOT2, bent + (a + b) / _ROOT2,
+            (a - b) + k / _ROOT2, (b - a) + k / _ROOT2]
+
+
 def _four_branch(k: float) -> ScoreFn:
     def score(z: np.ndarray) -> np.ndarray:
-        a, b = z[:, 0], z[:, 1]
-        bent = 3.0 + 0.1 * (a - b) ** 2
-        return np.minimum.reduce([bent - (a + b) / _ROOT2, bent + (a + b) / _ROOT2,
-                                  (a - b) + k / _ROOT2, (b - a) + k / _ROOT2])
+        return np.minimum.reduce(_four_branches(z, k))
     return score
 
 
 def _four_branch_parts(k: float) -> RegionFn:
     def parts(z: np.ndarray) -> np.ndarray:
-        a, b = z[:, 0], z[:, 1]
-        bent = 3.0 + 0.1 * (a - b) ** 2
-        return np.stack([bent <= (a + b) / _ROOT2, bent <= -(a + b) / _ROOT2,
-                         a - b <= -k / _ROOT2, b - a <= -k / _ROOT2], axis=1)
+        return np.stack(_four_branches(z, k), axis=1) <= 0
     return parts
 
 
@@ -250,31 +254,33 @@ def sampled_runs(case: Problem, mode: str, seed: int, max_runs: int) -> pd.DataF
         weights, scores = np.exp(loop.log_weights(z)), case.score(z)
         loop.tell(z, scores)
         parts.append(pd.DataFrame({"phase": phase, "weight": weights, "score": scores,
-                                   **{f"p.z{k}": z[:, k] for k in range(case.dims)}}))
+                                   **{PARAM_PREFIX + p.path: z[:, k]
+                                      for k, p in enumerate(normal_params(case.dims))}}))
     runs = pd.concat(parts, ignore_index=True)
     failed = runs.score <= 0
-    kinds = (case.kinds(runs.filter(like="p.z").to_numpy()) if case.kinds is not None
+    kinds = (case.kinds(_normal_scores(runs, case.dims)) if case.kinds is not None
              else np.full(len(runs), "failure"))
     return runs.assign(run_id=[f"r{i}" for i in range(len(runs))], run_index=runs.index,
                        status="ok", collision=failed,
                        collision_with=np.where(failed, kinds, None))
 
 
-def normal_params(dims: int) -> list:
+def normal_params(dims: int) -> list[Param]:
     """``dims`` standard normal sweep parameters ``z0, z1, ...``."""
-    from scenarios.sweep_spec import Param
-
     return [Param(f"z{k}", "normal", (0.0, 1.0)) for k in range(dims)]
+
+
+def _normal_scores(runs: pd.DataFrame, dims: int) -> np.ndarray:
+    """The runs' z (n, dims), from their :func:`normal_params` columns."""
+    return runs[[PARAM_PREFIX + p.path for p in normal_params(dims)]].to_numpy()
 
 
 def mode_count(case: Problem, mode: str, seed: int, max_runs: int) -> tuple[int, int]:
     """(the failure modes listed, ``other`` aside; the regions of ``case`` that hold a
     failure) for one seed's estimate or search (:func:`sampled_runs`)."""
-    from analysis.failure_modes import OTHER, failure_modes
+    from analysis.failure_modes import OTHER, failure_modes, weighed_rows
 
     runs = sampled_runs(case, mode, seed, max_runs)
-    estimation = runs.phase == "estimate"
-    modes = failure_modes(runs, normal_params(case.dims), runs.score <= 0,
-                          estimation if estimation.any() else None)
-    return sum(m.outcome != OTHER for m in modes), case.regions_hit(
-        runs.filter(like="p.z").to_numpy())
+    modes = failure_modes(runs, normal_params(case.dims), runs.score <= 0, weighed_rows(runs))
+    return (sum(m.outcome != OTHER for m in modes),
+            case.regions_hit(_normal_scores(runs, case.dims)))

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from analysis import plots
-from analysis.failure_modes import OTHER, failure_modes, region_words
+from analysis.failure_modes import OTHER, failure_modes, region_words, weighed_rows
 from analysis.rare_events import Estimate, estimate_from_rows
 from analysis.run_outcome import OUTCOMES, STUCK, outcomes_text
 from scenarios.file_read import read_json
@@ -71,20 +71,13 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     return out
 
 
-def _weighed(results: pd.DataFrame) -> pd.Series | None:
-    """The rows whose weights measure the modes' shares: an estimate's estimation rows
-    (its P), else every row (a search's: a rough share; it estimates nothing)."""
-    estimation = results.phase == "estimate"
-    return estimation if estimation.any() else None
-
-
 def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
                sweep_dir: Path) -> list[dict]:
     """The modes of the ``failed`` rows among the runs (a sample that made no valid
     scenario, score None, is no run: no evidence either way)."""
     runs = results[results.score.notna()] if "score" in results else results
     return [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
-            for m in failure_modes(runs, params, failed[runs.index], _weighed(runs))]
+            for m in failure_modes(runs, params, failed[runs.index], weighed_rows(runs))]
 
 
 def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,

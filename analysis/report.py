@@ -780,20 +780,11 @@ STUCK_WORDS = ("Runs that did not collide but stood still at the end (the outcom
                "grouped into modes the same way; P(collision) does not count them.")
 
 
-def _terminal_modes(modes: list[dict], markdown_path: Path) -> list[str]:
-    """The first :data:`MAX_TERMINAL_MODES` modes, a line each; the rest in report.md."""
-    from analysis.failure_modes import mode_line
-
-    lines = [f"  {i}. {mode_line(m)}" for i, m in enumerate(modes[:MAX_TERMINAL_MODES], 1)]
-    if len(modes) > MAX_TERMINAL_MODES:
-        lines.append(f"  ... {len(modes) - MAX_TERMINAL_MODES} more in {markdown_path}")
-    return lines or ["  none"]
-
-
 def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
                     html_path: Path | None, junit_path: Path | None) -> Report:
     """The report of a search or estimate directory (:mod:`analysis.rare_report`)."""
     from analysis import rare_report
+    from analysis.failure_modes import mode_lines
 
     saved = rare_report.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
     summary = rare_report.adaptive_summary(results, manifest, saved, sweep_dir)
@@ -834,8 +825,10 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     markdown_path.write_text("\n".join(md) + "\n")
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
-    terminal = [*lines, "failure modes:", *_terminal_modes(summary["failure_modes"],
-                                                          markdown_path)]
+    terminal = [*lines, "failure modes:", *(mode_lines(summary["failure_modes"],
+                                                       MAX_TERMINAL_MODES, str(markdown_path))
+                                            or ["  none"])]
     if summary["stuck_modes"]:
-        terminal += ["stuck runs:", *_terminal_modes(summary["stuck_modes"], markdown_path)]
+        terminal += ["stuck runs:", *mode_lines(summary["stuck_modes"], MAX_TERMINAL_MODES,
+                                                str(markdown_path))]
     return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)

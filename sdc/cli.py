@@ -27,6 +27,7 @@ from scenarios.seeding import SEED_LIMIT
 from scenarios.toml_io import load_spec
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+SHOWN_MODES = 8  # failure modes a search prints; all are in DIR/search.json
 
 
 def _bad_input(message: str) -> None:
@@ -662,6 +663,7 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     them. A search finds failures; how often it fails is not a
     probability (sdc estimate).
     """
+    from analysis.failure_modes import mode_lines
     from analysis.rare_report import first_failure_words
 
     outcome = _adaptive("search", sweep_file, options, budget, batch_size,
@@ -669,22 +671,15 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     summary = outcome.summary
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
                + first_failure_words(summary))
-    _echo_modes(summary.get("failure_modes") or [], options["out_dir"])
+    rest = f"sdc report {options['out_dir']}"
+    for line in mode_lines(summary.get("failure_modes") or [], SHOWN_MODES, rest):
+        click.echo(line)
     stuck = summary.get("stuck_modes") or []
     click.echo(f"stuck (no collision, standing still at the end): "
                f"{sum(m['runs'] for m in stuck)} of {outcome.runs} runs")
-    _echo_modes(stuck, options["out_dir"])
+    for line in mode_lines(stuck, SHOWN_MODES, rest):
+        click.echo(line)
     _adaptive_exit(outcome, "search", options["out_dir"])
-
-
-def _echo_modes(modes: list[dict], out_dir: Path, shown: int = 8) -> None:
-    """The first ``shown`` modes, a line each, and where the rest are."""
-    from analysis.failure_modes import mode_line
-
-    for mode in modes[:shown]:
-        click.echo(f"  {mode_line(mode)}")
-    if len(modes) > shown:
-        click.echo(f"  ... {len(modes) - shown} more modes: sdc report {out_dir}")
 
 
 @main.command()
