@@ -40,7 +40,7 @@ import pandas as pd
 from avoid_roads import HITS, OUTCOMES  # beside this script
 from avoid_roads import figures as road_figures
 
-from analysis.stats import wilson_interval
+from analysis.stats.rates import wilson_interval
 from scenarios import CATALOG_DIR
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.sweep_spec import SweepSpec, expand, load_sweep

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.stats import wilson_interval
+from analysis.stats.rates import wilson_interval
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
 from scenarios.world_backends import check_inputs

@@ -1,6 +1,6 @@
 """The rare-event estimator on the bank of problems with exact truths, beside OpenTURNS NAIS.
 
-For each problem of :mod:`analysis.rare_bank` (target RHW 0.3, ``SEEDS`` seeds):
+For each problem of :mod:`analysis.rare.rare_bank` (target RHW 0.3, ``SEEDS`` seeds):
 coverage of the 95 % interval, mean estimate over the truth, the mean
 coefficient of variation the estimates reported against the error they made
 (root mean square of ``p / truth - 1``), and the median runs. Then OpenTURNS'
@@ -27,7 +27,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from analysis.rare_bank import BANK, BankResult, problem, run_bank  # noqa: E402
+from analysis.rare.rare_bank import BANK, BankResult, problem, run_bank  # noqa: E402
 
 SEEDS = 200
 REFERENCE_SEEDS = 100

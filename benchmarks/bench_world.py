@@ -10,7 +10,7 @@ bare SUMO step of the same scenario with the same options (bench_perf.bare_sumo_
 - ``world.<name>.step_ratio``: our whole closed-loop step, with over without;
 - ``world.<name>.overhead_vs_bare_sumo``: our step over bare SUMO's, both with the
   model's options (``..._without``: both without);
-- ``world.audit_ms_per_step``: the world audit (analysis.world_audit) over a trace of
+- ``world.audit_ms_per_step``: the world audit (analysis.run.world_audit) over a trace of
   the 100-vehicle highway, per step;
 - ``world.ego_pose_us``: telling SUMO where the ego is (``SumoWorld._ego_pose``: its
   lateral position by the model's rule), per step, with the options or without.
@@ -30,7 +30,7 @@ import time
 import bench_perf
 import numpy as np
 
-from analysis.world_audit import world_overlaps
+from analysis.run.world_audit import world_overlaps
 from scenarios import traffic_model
 from scenarios.sumo_world import SumoWorld
 from scenarios.world_backends import make_road

@@ -1,8 +1,8 @@
 """How many failure modes are listed, against the true regions found, seed by seed.
 
-Part one, without SUMO: every problem of :mod:`analysis.rare_bank` and the
+Part one, without SUMO: every problem of :mod:`analysis.rare.rare_bank` and the
 emulated seed-modes family, an estimate (target RHW 0.3) and a 1000-run search
-(:func:`analysis.rare_bank.mode_count`) over ``--seeds`` seeds. Part two, with
+(:func:`analysis.rare.rare_bank.mode_count`) over ``--seeds`` seeds. Part two, with
 ``--sumo``: the catalog's seed-modes family for real, an estimate and a search
 (``--search-runs``) for each sweep seed 1..N, each failure placed in its true
 region by the truth file's boundaries (low-speed failures, 0.016 % of P, are
@@ -32,8 +32,8 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from analysis.failure_modes import OTHER  # noqa: E402
-from analysis.rare_bank import BANK, SEED_MODES_EMULATED, mode_count  # noqa: E402
+from analysis.rare.failure_modes import OTHER  # noqa: E402
+from analysis.rare.rare_bank import BANK, SEED_MODES_EMULATED, mode_count  # noqa: E402
 from scenarios import CATALOG_DIR  # noqa: E402
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"

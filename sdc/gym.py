@@ -144,8 +144,8 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
 
 def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     """sdc's drawing of the simulation's current step."""
-    from analysis.metrics import central_range_m
-    from analysis.render import Scene, frame_rgb, road_heading_rad, road_lines
+    from analysis.report.render import Scene, frame_rgb, road_heading_rad, road_lines
+    from analysis.run.metrics import central_range_m
     from scenarios.scenario_spec import beam_angles_rad
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane

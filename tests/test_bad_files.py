@@ -19,7 +19,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from analysis.trace_file import Trace
+from analysis.run.trace_file import Trace
 from scenarios import CATALOG_DIR
 from scenarios.errors import SdcError
 from scenarios.road_geometry import RoadGeometry

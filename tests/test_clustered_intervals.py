@@ -23,9 +23,9 @@ import pyarrow.parquet as pq
 import pytest
 from scipy import stats
 
-from analysis.gate import gate
-from analysis.report import FEW_WARM_STATES, write_report
-from analysis.stats import (
+from analysis.report.sweep_report import FEW_WARM_STATES, write_report
+from analysis.stats.gate import gate
+from analysis.stats.rates import (
     ClusteredCounts,
     clopper_pearson_interval,
     clustered_counts,
@@ -35,7 +35,7 @@ from analysis.stats import (
     warm_state_summary,
     wilson_interval,
 )
-from analysis.verdicts import outcome_summary
+from analysis.stats.verdicts import outcome_summary
 
 COUNTS = [(0, 1), (1, 1), (0, 10), (10, 10), (3, 10), (1, 40), (57, 200), (999, 1000)]
 

@@ -1,4 +1,4 @@
-"""Failed runs grouped into modes (analysis/failure_modes.py): one mode per connected
+"""Failed runs grouped into modes (analysis/rare/failure_modes.py): one mode per connected
 region of one outcome kind, checked against problems whose regions are known."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.failure_modes import OTHER, failure_modes, mode_line, region_words
-from analysis.rare_bank import SEED_MODES_EMULATED, mode_count, problem
+from analysis.rare.failure_modes import OTHER, failure_modes, mode_line, region_words
+from analysis.rare.rare_bank import SEED_MODES_EMULATED, mode_count, problem
 from scenarios.sweep_spec import Param
 
 PARAMS = [Param("a", "uniform", (0.0, 10.0)), Param("k", "choice", ("x", "y"))]

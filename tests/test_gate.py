@@ -1,4 +1,4 @@
-"""The CI gate of ``sdc report`` (analysis/gate.py) on a real sweep: a plug-in that
+"""The CI gate of ``sdc report`` (analysis/stats/gate.py) on a real sweep: a plug-in that
 only brakes never collides and never completes; the gate on collisions alone
 passes it, the gate on completed runs fails it, naming why; avoid fails a bound
 its few runs cannot show, with its reason."""

@@ -1,4 +1,4 @@
-"""analysis.grid_probability against probabilities known in closed form."""
+"""analysis.rare.grid_probability against probabilities known in closed form."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from analysis.grid_probability import (
+from analysis.rare.grid_probability import (
     box_probability,
     cell_edges,
     grid_probability,

@@ -19,12 +19,12 @@ import matplotlib
 before = dict.__getitem__(matplotlib.rcParams, "backend")  # read without resolving it
 import gymnasium
 import pandas as pd
-import analysis.render
-import analysis.report
+import analysis.report.render
+import analysis.report.sweep_report
 import sdc.cli
 import sdc.gym
-from analysis import plots
-from analysis.trace_file import read_trace
+from analysis.report import plots
+from analysis.run.trace_file import read_trace
 from scenarios import CATALOG_DIR
 from scenarios.toml_io import load_spec
 from sdc.run.episode import run_episode
@@ -38,8 +38,8 @@ results = pd.DataFrame({"controller": ["seed", "seed"], "status": ["ok", "error"
 png = plots.collision_breakdown(results)
 trace_path = Path(sys.argv[1]) / "run.parquet"
 run_episode(load_spec(CATALOG_DIR / "seed-lesson.toml")).write_trace(trace_path)
-scene = analysis.render.scene_from_trace(*read_trace(trace_path))
-frames = analysis.render.animate(scene, Path(sys.argv[1]) / "run.gif", every=30)
+scene = analysis.report.render.scene_from_trace(*read_trace(trace_path))
+frames = analysis.report.render.animate(scene, Path(sys.argv[1]) / "run.gif", every=30)
 print(json.dumps({
     "unchanged": dict.__getitem__(matplotlib.rcParams, "backend") is before,
     "backend": str(dict.__getitem__(matplotlib.rcParams, "backend")),

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from analysis.mode_search import ModeSearch
-from analysis.rare_bank import problem
+from analysis.rare.mode_search import ModeSearch
+from analysis.rare.rare_bank import problem
 
 THREE = problem("three-regions")
 

@@ -13,8 +13,8 @@ import math
 import numpy as np
 import pytest
 
-import analysis.world_audit as world_audit
-from analysis.world_audit import pairs_overlap, world_overlaps
+import analysis.run.world_audit as world_audit
+from analysis.run.world_audit import pairs_overlap, world_overlaps
 from scenarios import traffic_model
 from scenarios.boxes import as_boxes
 from scenarios.errors import SpecError

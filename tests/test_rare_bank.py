@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.rare_bank import BANK, problem, run_bank
+from analysis.rare.rare_bank import BANK, problem, run_bank
 
 SEEDS = range(40)
 

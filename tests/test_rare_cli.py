@@ -16,8 +16,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from analysis.rare_events import estimate_from_rows
-from analysis.run_score import run_score
+from analysis.rare.rare_events import estimate_from_rows
+from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive

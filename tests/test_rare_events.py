@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from analysis.rare_events import (
+from analysis.rare.rare_events import (
     EstimationLoop,
     MultilevelIS,
     estimate,

@@ -18,7 +18,7 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
-from analysis.report import (
+from analysis.report.sweep_report import (
     COLLISION_TITLE,
     NOT_RECORDED,
     VERDICT_TITLE,
@@ -26,8 +26,8 @@ from analysis.report import (
     world_summary,
     write_report,
 )
-from analysis.stats import wilson_interval
-from analysis.verdicts import completed_runs
+from analysis.stats.rates import wilson_interval
+from analysis.stats.verdicts import completed_runs
 from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor

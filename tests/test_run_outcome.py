@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis import run_outcome
-from analysis.run_outcome import (
+from analysis.run import run_outcome
+from analysis.run.run_outcome import (
     COLLIDED,
     COMPLETED,
     STUCK,

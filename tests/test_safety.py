@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from analysis.safety import road_edge_gaps_m, stop_gap_m, stop_possible
+from analysis.run.safety import road_edge_gaps_m, stop_gap_m, stop_possible
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.errors import SpecError
 from scenarios.road_geometry import RoadGeometry

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from analysis.grid_probability import box_probability, grid_probability
+from analysis.rare.grid_probability import box_probability, grid_probability
 from scenarios import CATALOG_DIR
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sweep_spec import expand, load_sweep, set_path
@@ -68,7 +68,7 @@ def test_the_recorded_truth_is_rare_tight_and_the_sum_of_its_modes():
 
 
 def test_the_truth_recomputes_from_the_recorded_boundaries():
-    """benchmarks/seed_modes_truth.py's integral over the recorded brackets and the
+    """truths/seed_modes_truth.py's integral over the recorded brackets and the
     recorded low-speed region, without SUMO."""
     b = TRUTH["boundaries"]
     v_e, d_l, d_r = tuple(b["speed_mps"]), tuple(b["left_offset_m"]), tuple(b["right_offset_m"])
@@ -160,7 +160,7 @@ def test_search_finds_every_mode_in_four_seeds_of_five(tmp_path):
 
     import pandas as pd
 
-    from analysis.failure_modes import OTHER
+    from analysis.rare.failure_modes import OTHER
     from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from analysis.grid_probability import threshold_probability
+from analysis.rare.grid_probability import threshold_probability
 from scenarios import CATALOG_DIR
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sweep_spec import expand, load_sweep, set_path
@@ -41,7 +41,7 @@ def test_the_recorded_truth_is_rare_and_tight():
 
 
 def test_the_truth_recomputes_from_the_recorded_swing():
-    """The integral of benchmarks/seed_rare_truth.py over the stored C(v), without SUMO."""
+    """The integral of truths/seed_rare_truth.py over the stored C(v), without SUMO."""
     scan = TRUTH["truth_scan"]
     speeds = np.linspace(*scan["speed_grid"])
     normals = {name: tuple(table["normal"]) for name, table in TRUTH["nominal"].items()}

@@ -9,13 +9,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.settling import (
+from analysis.report.settling_report import settling_figure
+from analysis.stats.settling import (
     batch_length,
     batch_means,
     mser_statistic,
     mser_truncation,
     overlapping_batch_means,
-    settling_figure,
     suggest_warm_up_s,
 )
 

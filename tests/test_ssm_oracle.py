@@ -24,7 +24,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from analysis.safety import lane_scale
+from analysis.run.safety import lane_scale
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_world import SumoWorld

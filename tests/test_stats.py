@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from analysis.stats import (
+from analysis.stats.rates import (
     by_controller,
     clopper_pearson_interval,
     group_values,

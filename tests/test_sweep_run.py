@@ -350,7 +350,7 @@ def test_a_directory_left_before_its_manifest_is_taken_and_others_are_refused(tm
 
 
 def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
-    from sdc.cli import resume_command
+    from sdc.cli.sweep import resume_command
 
     hint = resume_command(tmp_path / "my sweep.toml", tmp_path / "out", samples=200,
                           traces="all", executor="ray", workers=4, ray_address="10.0.0.1:6379",

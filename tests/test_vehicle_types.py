@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.trace_file import read_trace
+from analysis.run.trace_file import read_trace
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_world import SumoWorld
 from scenarios.world_backends import make_road

@@ -15,8 +15,8 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from analysis.report import write_report
-from analysis.settling_report import TITLE as SETTLING_TITLE
+from analysis.report.settling_report import TITLE as SETTLING_TITLE
+from analysis.report.sweep_report import write_report
 from scenarios import CATALOG_DIR
 from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import ScenarioSpec

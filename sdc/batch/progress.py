@@ -16,7 +16,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from analysis.run_outcome import outcomes_text
+from analysis.run.run_outcome import outcomes_text
 
 
 class RichReporter:

@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from analysis.trace_file import FLOAT_COLUMNS, Trace
+from analysis.run.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.errors import FileError, SdcError, SpecError
 from scenarios.file_read import read_parquet
 from scenarios.scenario_spec import ScenarioSpec
@@ -136,3 +136,33 @@ def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
     if len(recorded) != len(replayed):
         return Divergence(n, "steps", len(recorded), len(replayed))
     return None
+
+
+def replay_verdict(row: dict | None, recorded_trace: Trace | None, replayed: Trace,
+                   sweep_dir: Path, run_id: str) -> tuple[bool, str]:
+    """Whether a replay diverged from its recorded run, and the line that says so.
+
+    ``row``: the recorded result row (None when the sweep has none yet);
+    ``recorded_trace``: the recorded steps, when the sweep kept them. A replay is
+    identical only when it can be compared and its steps and sha256 both agree;
+    anything that cannot be compared counts as diverged.
+    """
+    replayed_sha = replayed.sha256()
+    if row is None:
+        return True, f"not comparable: {sweep_dir} has no result for {run_id} yet"
+    if row["status"] != "ok":
+        return True, (f"not comparable: the recorded run ended with status {row['status']}: "
+                      f"{row['error']}")
+    if recorded_trace is not None:  # the recorded steps: compare step by step
+        divergence = first_divergence(recorded_trace, replayed)
+        if divergence is not None:
+            return True, f"DIVERGED: {divergence.describe()}"
+        if row["trace_sha256"] != replayed_sha:
+            return True, (f"DIVERGED: the replay equals the recorded trace file, but its "
+                          f"sha256 {replayed_sha} is not the result row's "
+                          f"{row['trace_sha256']}")
+    elif row["trace_sha256"] != replayed_sha:
+        return True, (f"DIVERGED: trace sha256 {replayed_sha} != recorded "
+                      f"{row['trace_sha256']} (the sweep kept no trace of this run to find "
+                      "the step; sweep with --traces all)")
+    return False, f"identical: trace sha256 {replayed_sha}"

@@ -11,7 +11,7 @@ import traceback
 from pathlib import Path
 from typing import Literal
 
-from analysis.run_outcome import COMPLETED
+from analysis.run.run_outcome import COMPLETED
 from scenarios.atomic_write import write_atomic
 from scenarios.scenario_spec import ScenarioSpec
 from sdc.batch.job_files import JobFile

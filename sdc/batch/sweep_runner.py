@@ -21,8 +21,8 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from analysis.run_outcome import COLLIDED, OUTCOMES
-from analysis.stats import STATUSES
+from analysis.run.run_outcome import COLLIDED, OUTCOMES
+from analysis.stats.rates import STATUSES
 from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
@@ -71,7 +71,7 @@ class SweepOutcome:
     out_dir: Path
     runs: int  # in the plan
     counts: dict[str, int]  # rows by status; "missing" for runs without a row
-    outcomes: dict[str, int]  # ok rows by outcome (analysis.run_outcome.OUTCOMES)
+    outcomes: dict[str, int]  # ok rows by outcome (analysis.run.run_outcome.OUTCOMES)
     interrupted: bool
     wall_time_s: float
 

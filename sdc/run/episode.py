@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis import run_outcome
-from analysis.metrics import trace_metrics
-from analysis.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
-from analysis.trace_file import Trace
-from analysis.world_audit import world_overlaps
+from analysis.run import run_outcome
+from analysis.run.metrics import trace_metrics
+from analysis.run.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
+from analysis.run.trace_file import Trace
+from analysis.run.world_audit import world_overlaps
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec

@@ -6,7 +6,7 @@ columns come in parts, each filled by one party:
 - ``identity``: which run (the task or ``sdc run`` names it; the spec gives the rest)
 - ``status``: ok | error | timeout, and why a run has no outcome
 - ``outcome``: what the episode measured (None when the run produced no outcome)
-- ``metric``: the outcome columns that :func:`analysis.metrics.trace_metrics` computes
+- ``metric``: the outcome columns that :func:`analysis.run.metrics.trace_metrics` computes
 - ``sweep``: where the run sits in its sweep, with one ``p.<path>`` column per
   swept parameter; only in a sweep's ``results.parquet``
 - ``adaptive``: the batch, phase, importance weight and score of a run drawn by
@@ -29,7 +29,7 @@ from typing import Any
 
 import pyarrow as pa
 
-from analysis.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
+from analysis.run.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
 from scenarios.sweep_spec import PARAM_PREFIX
 
 IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
@@ -72,12 +72,12 @@ COLUMNS: tuple[Column, ...] = (
            "motorcycle, bicycle, ...; None unless collision_with is vehicle"),
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle overlapped another one or an obstacle within "
-           "the sensing radius (analysis.world_audit); 0 in a consistent world"),
+           "the sensing radius (analysis.run.world_audit); 0 in a consistent world"),
     Column("red_light_violations", pa.int64(), OUTCOME,
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),
     Column("outcome", pa.string(), OUTCOME,
-           "how the run ended (analysis/run_outcome.py): completed (passed every obstacle "
+           "how the run ended (analysis/run/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under "
            f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more) | unfinished "
            "(neither; still moving when it ended)"),
@@ -112,7 +112,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("stop_possible", pa.bool_(), OUTCOME,
            "braking alone could stop the car before it: start speed^2 / (2 * min(the "
            "vehicle model's max_decel_mps2, friction_mu * g)) <= stop_gap_m, braking from "
-           "the first step (analysis.safety.REACTION_TIME_S = 0); None: no obstacle in the "
+           "the first step (analysis.run.safety.REACTION_TIME_S = 0); None: no obstacle in the "
            "path"),
     Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
     Column("detection_range_m", pa.float64(), METRIC,
@@ -159,7 +159,7 @@ def _names(*parts: str) -> tuple[str, ...]:
 RUN_COLUMNS = _names(IDENTITY, STATUS, OUTCOME, METRIC)
 #: what ``sdc run --json`` prints: the run's row but its traceback (which goes to stderr)
 JSON_COLUMNS = tuple(n for n in RUN_COLUMNS if n != "traceback")
-#: the columns :func:`analysis.metrics.trace_metrics` returns
+#: the columns :func:`analysis.run.metrics.trace_metrics` returns
 METRIC_COLUMNS = _names(METRIC)
 _IDENTITY_COLUMNS = _names(IDENTITY)
 _ARROW_TYPES = {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}

@@ -2,7 +2,7 @@
 
     sdc sweep scenarios/catalog/sweeps/seed-rare-truth.toml --out runs/rare-truth
     sdc sweep scenarios/catalog/sweeps/seed-rare-check.toml --out runs/rare-check
-    python benchmarks/seed_rare_truth.py runs/rare-truth runs/rare-check [--write]
+    python truths/seed_rare_truth.py runs/rare-truth runs/rare-check [--write]
 
 The family (scenarios/catalog/sweeps/seed-rare.toml) draws the ego's speed V
 and the lane width W from independent normals. The road is straight, the car
@@ -21,14 +21,14 @@ k W_ref - min_road_edge_gap_m. The right edge is as far away as the left
 far as it swings left, so the gap is the left edge's; were it the right's,
 C(v) would be over-stated (the gap is the nearer edge's), erring towards
 more failures. The integral over the speed cells, with bounds from each
-cell's neighbours, is :func:`analysis.grid_probability.threshold_probability`.
+cell's neighbours, is :func:`analysis.rare.grid_probability.threshold_probability`.
 
 **The check** (seed-rare-check.toml) is a plain grid over (V, W) that tests
 the claim above run by run: in each speed column, the run at W = W_ref gives
 the swing, and every other run must have min_road_edge_gap_m = that run's -
 k (W_ref - W) (where the left edge is the nearer: the gap is never larger) and
 collide exactly when that is below zero. The same grid also gives a coarser,
-assumption-free estimate (:func:`analysis.grid_probability.grid_probability`).
+assumption-free estimate (:func:`analysis.rare.grid_probability.grid_probability`).
 
 Prints the result as JSON; ``--write`` stores it beside the family as
 ``seed-rare.truth.json``.
@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # beside this script
 
-from analysis.grid_probability import grid_probability, threshold_probability
+from analysis.rare.grid_probability import grid_probability, threshold_probability
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
 
@@ -153,7 +153,7 @@ def truth(scan_dir: Path, check_dir: Path) -> dict:
         "method": ("C(v) from one run per speed at lane width W_ref; P = sum over speed "
                    "cells of nominal mass x Phi((C(v)/2.5 - mean_w)/sd_w); bounds from each "
                    "cell's neighbours' C; plus the nominal mass outside the speed grid "
-                   "(benchmarks/seed_rare_truth.py)"),
+                   "(truths/seed_rare_truth.py)"),
         "truth_scan": {**sweep_record(scan_dir, scan_rows, scan_manifest),
                        "file": "scenarios/catalog/sweeps/seed-rare-truth.toml",
                        "reference_width_m": w_ref, "speed_grid": [float(speeds[0]),
@@ -173,7 +173,7 @@ def truth(scan_dir: Path, check_dir: Path) -> dict:
         "commands": [
             "sdc sweep scenarios/catalog/sweeps/seed-rare-truth.toml --out runs/rare-truth",
             "sdc sweep scenarios/catalog/sweeps/seed-rare-check.toml --out runs/rare-check",
-            "python benchmarks/seed_rare_truth.py runs/rare-truth runs/rare-check --write",
+            "python truths/seed_rare_truth.py runs/rare-truth runs/rare-check --write",
         ],
     }
 

@@ -18,25 +18,25 @@ from xml.etree import ElementTree
 
 import pandas as pd
 
-from analysis import plots
-from analysis.gate import gate, gate_bounds_line
-from analysis.look_at import (
+from analysis.report import plots
+from analysis.report.look_at import (
     RANKING,
     THUMBNAILS_PER_CONTROLLER,
     params_text,
     ranked_runs,
     thumbnail,
 )
-from analysis.plain_json import json_plain
-from analysis.run_outcome import COMPLETED, STUCK
-from analysis.safety import REACTION_TIME_S
-from analysis.settling_report import (
+from analysis.report.settling_report import (
     read_settling,
     settling_image,
     settling_lines,
     settling_summary,
 )
-from analysis.stats import (
+from analysis.run.run_outcome import COMPLETED, STUCK
+from analysis.run.safety import REACTION_TIME_S
+from analysis.run.world_audit import ROLE_TEXT
+from analysis.stats.gate import gate, gate_bounds_line
+from analysis.stats.rates import (
     Method,
     by_controller,
     group_label,
@@ -47,7 +47,7 @@ from analysis.stats import (
     stop_possible_summary,
     warm_state_summary,
 )
-from analysis.verdicts import (
+from analysis.stats.verdicts import (
     NO_OUTCOME,
     completes_rarely,
     outcomes_recorded,
@@ -56,9 +56,9 @@ from analysis.verdicts import (
     verdict_sentence,
     verdict_summary,
 )
-from analysis.world_audit import ROLE_TEXT
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
+from scenarios.plain_json import json_plain
 
 SPEED = "p.ego.speed_mps"
 MAX_LISTED_FAILURES = 500
@@ -130,7 +130,7 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
                   shared: pd.Index, fail_above: float | None = None,
                   min_completed: float | None = None) -> dict:
     """Everything the report says. Controllers are compared on the ``shared`` samples,
-    those every one of them ran (:func:`analysis.verdicts.shared_samples`: all of them,
+    those every one of them ran (:func:`analysis.stats.verdicts.shared_samples`: all of them,
     unless the sweep is partial or lost runs)."""
     counted = results[results["sample"].isin(shared)]
     controllers = list(dict.fromkeys(results.controller))
@@ -737,7 +737,7 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
                  fail_above: float | None = None, min_completed: float | None = None
                  ) -> Report:
     """Write the report of ``sweep_dir``; with ``fail_above`` or ``min_completed`` the
-    summary holds the gate (:func:`analysis.gate.gate`), and ``Report.gate_failed``
+    summary holds the gate (:func:`analysis.stats.gate.gate`), and ``Report.gate_failed``
     lists the controllers that fail it."""
     sweep_dir = Path(sweep_dir)
     for option, path in (("--out", html_path), ("--junit", junit_path)):
@@ -782,12 +782,13 @@ STUCK_WORDS = ("Runs that did not collide but stood still at the end (the outcom
 
 def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
                     html_path: Path | None, junit_path: Path | None) -> Report:
-    """The report of a search or estimate directory (:mod:`analysis.rare_report`)."""
-    from analysis import rare_report
-    from analysis.failure_modes import mode_lines
+    """The report of a search or estimate directory (:mod:`analysis.report.rare_report`)."""
+    from analysis.rare import adaptive_summary as summaries
+    from analysis.rare.failure_modes import mode_lines
+    from analysis.report import rare_report
 
-    saved = rare_report.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
-    summary = rare_report.adaptive_summary(results, manifest, saved, sweep_dir)
+    saved = summaries.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
+    summary = summaries.adaptive_summary(results, manifest, saved, sweep_dir)
     lines = rare_report.headline(summary)
     modes = rare_report.mode_rows(summary["failure_modes"])
     stuck = rare_report.mode_rows(summary["stuck_modes"])

@@ -13,10 +13,10 @@ import pandas as pd
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from analysis.failure_modes import OTHER
-from analysis.run_outcome import STUCK
-from analysis.stats import Method, group_label, group_levels, group_values, rates_by
-from analysis.verdicts import completed_runs
+from analysis.rare.failure_modes import OTHER
+from analysis.run.run_outcome import STUCK
+from analysis.stats.rates import Method, group_label, group_levels, group_values, rates_by
+from analysis.stats.verdicts import completed_runs
 
 COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 

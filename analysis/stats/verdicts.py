@@ -2,10 +2,10 @@
 
 The headline rate is *completed without collision* over **every** run of a
 controller: an error or a timeout is a run that did not complete, never a safe
-one. Each outcome's rate (:mod:`analysis.run_outcome`) has a Wilson 95% interval
+one. Each outcome's rate (:mod:`analysis.run.run_outcome`) has a Wilson 95% interval
 over the same runs, with the runs without an outcome (error, timeout) beside
 them, so the rates add up to one. Runs that started from the same warm state
-count as a cluster (:func:`analysis.stats.clustered_counts`), which widens the
+count as a cluster (:func:`analysis.stats.rates.clustered_counts`), which widens the
 interval by the rate's design effect. Controllers are compared on the samples they
 all ran (:func:`shared_samples`), pair by pair with McNemar's exact test.
 """
@@ -16,8 +16,8 @@ import itertools
 
 import pandas as pd
 
-from analysis.run_outcome import COMPLETED, OUTCOMES
-from analysis.stats import Method, count_warm_states, flag_interval, paired_test
+from analysis.run.run_outcome import COMPLETED, OUTCOMES
+from analysis.stats.rates import Method, count_warm_states, flag_interval, paired_test
 
 NO_OUTCOME = "no outcome"  # error and timeout runs
 #: a controller completing fewer of its runs than this is never presented as safe

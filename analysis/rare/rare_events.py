@@ -27,7 +27,7 @@ Two phases:
   a kernel mixture keeps every region its elites reached, each with the
   weight its points carry, where one Gaussian would settle on one region and
   the estimate would miss the others with a confident interval (measured on
-  the bank of :mod:`analysis.rare_bank`: 6 % coverage on three regions).
+  the bank of :mod:`analysis.rare.rare_bank`: 6 % coverage on three regions).
   A fifth of every batch comes from a wide Gaussian ``N(0, 4 I)``: a
   region whose score gives no warning (a detection that misses, where the
   margin jumps from metres to a collision) is found only by runs that land in

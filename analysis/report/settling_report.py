@@ -3,7 +3,7 @@
 A sweep whose runs start from warm states keeps how the traffic settled in up to
 20 of them (``warm-states.json``: per warm state, the series
 ``scenarios.warm_state.SETTLING_COLUMNS`` over its warm-up). The warm-up truncation
-rule of :mod:`analysis.settling` is applied to their mean: where it finds the
+rule of :mod:`analysis.stats.settling` is applied to their mean: where it finds the
 traffic still settling by the end of the warm-up, the runs started in transient
 traffic, and the report says so as a WARNING (missing evidence of settled traffic
 is not taken for settled traffic).
@@ -12,13 +12,18 @@ is not taken for settled traffic).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 
 import pandas as pd
+from matplotlib.figure import Figure
 
-from analysis.settling import settling_figure, suggest_warm_up_s
+from analysis.report.plots import png_bytes
+from analysis.stats.settling import suggest_warm_up_s
 from scenarios.warm_state import SETTLING_FILE
 
+PANELS = (("vehicles", "vehicles"), ("mean_speed_mps", "mean speed [m/s]"),
+          ("halting", "halting (< 0.1 m/s)"))
 TITLE = "Traffic warm-up: how the network's traffic settled before the ego entered"
 
 
@@ -78,3 +83,49 @@ def settling_image(frames: list[pd.DataFrame], summary: dict | None) -> list[tup
     png = settling_figure(frames, summary["suggestion"], "warm-ups of the sweep's warm states",
                           current_warm_up_s=summary["warm_up_s"])
     return [(TITLE, png)]
+
+
+def _suggestion_line(ax, suggestion: dict, label: bool) -> None:
+    """The suggested warm-up as a solid line, or, not settled, its lower bound dashed."""
+    if suggestion["settled"]:
+        name = suggestion["rule"].split(" ")[0].rstrip(",:")
+        text = f"{name} warm-up {suggestion['warm_up_s']:g} s"
+        ax.axvline(suggestion["warm_up_s"], color="tab:red", linewidth=1.5,
+                   label=text if label else None)
+    else:
+        text = (f"not settled within {suggestion['observed_s']:.0f} s: "
+                f"warm-up >= {suggestion['warm_up_at_least_s']:g} s")
+        ax.axvline(suggestion["warm_up_at_least_s"], color="tab:red", linewidth=1.5,
+                   linestyle="--", label=text if label else None)
+
+
+def settling_figure(series: pd.DataFrame | Sequence[pd.DataFrame], suggestion: dict,
+                    title: str, current_warm_up_s: float | None = None) -> bytes:
+    """The warm-up series as PNG bytes: vehicles, mean speed and halting over time in
+    three stacked panels, with the warm-up ``suggestion`` (of
+    :func:`suggest_warm_up_s`) as a vertical line, each measure's own truncation time
+    dotted in its panel, and ``current_warm_up_s`` (if given) as a grey line. Several
+    series (a list, e.g. one per warm state) are drawn faintly over each other."""
+    many = not isinstance(series, pd.DataFrame)
+    frames = list(series) if many else [series]
+    fig = Figure(figsize=(8, 7))
+    axes = fig.subplots(len(PANELS), 1, sharex=True)
+    for i, (ax, (column, ylabel)) in enumerate(zip(axes, PANELS, strict=True)):
+        for frame in frames:
+            if column in frame:
+                ax.plot(frame["t_s"], frame[column], color="tab:blue",
+                        linewidth=0.8 if many else 1.0, alpha=0.35 if many else 0.9)
+        truncation = suggestion["measures"].get(column)
+        if truncation is not None:
+            ax.axvline(truncation["truncation_s"], color="tab:red", linestyle=":",
+                       linewidth=1.0, label="this measure's truncation" if i == 0 else None)
+        _suggestion_line(ax, suggestion, label=i == 0)
+        if current_warm_up_s is not None:
+            ax.axvline(current_warm_up_s, color="0.35", linewidth=1.5,
+                       label=f"current warm-up {current_warm_up_s:g} s" if i == 0 else None)
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="best", fontsize=8)
+    axes[-1].set_xlabel("simulation time [s]")
+    fig.suptitle(title)
+    return png_bytes(fig)

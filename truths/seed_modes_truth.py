@@ -5,7 +5,7 @@
     sdc sweep $S/seed-modes-truth-left.toml --out runs/modes-left --traces none
     sdc sweep $S/seed-modes-truth-right.toml --out runs/modes-right --traces none
     sdc sweep $S/seed-modes-check.toml --out runs/modes-check --traces none
-    python benchmarks/seed_modes_truth.py runs/modes-speed runs/modes-left runs/modes-right \\
+    python truths/seed_modes_truth.py runs/modes-speed runs/modes-left runs/modes-right \\
         runs/modes-check [--write]
 
 The family (scenarios/catalog/sweeps/seed-modes.toml) draws the ego's speed V and
@@ -34,7 +34,7 @@ So, up to the small low-speed region, the failures are three boxes in (V, D):
     obstacle, left:   any V,          d*_L < D < f_L
     obstacle, right:  any V,         -f_R  < D < -d*_R
 
-and P(collision) is their nominal mass (:func:`analysis.grid_probability.box_probability`)
+and P(collision) is their nominal mass (:func:`analysis.rare.grid_probability.box_probability`)
 plus the low-speed region's. The corner V > v_e with the barrel undetected is the
 obstacle modes' (the car hits the barrel there; it never swings).
 
@@ -49,7 +49,7 @@ f from the grid itself, the same in every row); the maneuver must start exactly 
 the detected band; in each speed row the road-edge gap must be one value across
 the detected band. The low-speed region is measured on the grid (it must be, in
 every offset column, a run of the lowest speeds) and integrated there
-(:func:`analysis.grid_probability.grid_probability`). The grid also gives an
+(:func:`analysis.rare.grid_probability.grid_probability`). The grid also gives an
 assumption-free coarse estimate of the whole.
 
 Bounds: each boundary anywhere within its scan bracket (the modes' ``p_low`` and
@@ -71,8 +71,8 @@ import numpy as np
 import pandas as pd
 from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # beside this script
 
-from analysis.grid_probability import Bracket, box_probability, grid_probability
-from analysis.run_score import run_score
+from analysis.rare.grid_probability import Bracket, box_probability, grid_probability
+from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
 
 SWEEPS = "scenarios/catalog/sweeps"
@@ -87,7 +87,7 @@ COMMANDS = [
     f"sdc sweep {SWEEPS}/seed-modes-truth-left.toml --out runs/modes-left --traces none",
     f"sdc sweep {SWEEPS}/seed-modes-truth-right.toml --out runs/modes-right --traces none",
     f"sdc sweep {SWEEPS}/seed-modes-check.toml --out runs/modes-check --traces none",
-    "python benchmarks/seed_modes_truth.py runs/modes-speed runs/modes-left runs/modes-right "
+    "python truths/seed_modes_truth.py runs/modes-speed runs/modes-left runs/modes-right "
     "runs/modes-check --write",
 ]
 
@@ -419,7 +419,7 @@ def truth(speed_dir: Path, left_dir: Path, right_dir: Path, check_dir: Path) -> 
                    "the product of two normal CDF differences, plus the low-speed region's "
                    "mass on the check grid; p with every face at its bracket's midpoint, "
                    "bounds with every face at its bracket's ends "
-                   "(benchmarks/seed_modes_truth.py)"),
+                   "(truths/seed_modes_truth.py)"),
         "modes": found,
         "boundaries": {
             **boundaries,

@@ -24,9 +24,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from analysis.metrics import central_range_m
-from analysis.run_outcome import rest_step
-from analysis.trace_file import Trace
+from analysis.run.metrics import central_range_m
+from analysis.run.run_outcome import rest_step
+from analysis.run.trace_file import Trace
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec, beam_angles_rad
@@ -266,6 +266,11 @@ def thumbnail_png(scene: Scene, k: int, width_px: int = 420, height_px: int = 22
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=80)
     return buffer.getvalue()
+
+
+def can_write_mp4() -> bool:
+    """Can :func:`animate` write an MP4 here (is ffmpeg on PATH)?"""
+    return animation.writers.is_available("ffmpeg")
 
 
 def animate(scene: Scene, path: Path, every: int = 1, fps: int = 15,

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from analysis.run_outcome import COLLIDED, STUCK, UNFINISHED
-from analysis.verdicts import completed_runs
+from analysis.run.run_outcome import COLLIDED, STUCK, UNFINISHED
+from analysis.stats.verdicts import completed_runs
 
 #: the classes, in the order they are listed
 RANK_CLASSES = ("no outcome (error or timeout)", "collided where braking alone could stop",
@@ -111,8 +111,8 @@ def params_text(row: Mapping[str, Any], columns: list[str]) -> str:
 def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:
     """The decisive moment of a run whose trace the sweep kept, as a small PNG; None
     without a trace."""
-    from analysis.render import decisive_step, scene_from_trace, thumbnail_png
-    from analysis.trace_file import read_trace
+    from analysis.report.render import decisive_step, scene_from_trace, thumbnail_png
+    from analysis.run.trace_file import read_trace
 
     path = Path(sweep_dir) / "traces" / f"{run_id}.parquet"
     if not path.exists():

@@ -6,7 +6,7 @@ same way (``collision_with``; error or timeout for a run with no outcome; or
 ``stuck``), took the same value of every ``choice`` parameter, and lie in one
 connected failure region of the other parameters.
 
-The space is the samplers' (:mod:`analysis.rare_events`): each parameter at
+The space is the samplers' (:mod:`analysis.rare.rare_events`): each parameter at
 ``Phi^-1`` of its quantile (:meth:`scenarios.sweep_spec.Param.quantile_of`),
 where the nominal density is ``N(0, I)`` and one unit is one standard
 deviation of the nominal, whatever the parameter's unit.
@@ -25,7 +25,7 @@ deviation of the nominal, whatever the parameter's unit.
   joins the other only when its likeliest run is less than
   :data:`PERSISTENCE_NATS` of log-density above that failure.
 
-The two constants were chosen on :mod:`analysis.rare_bank` and an emulator of
+The two constants were chosen on :mod:`analysis.rare.rare_bank` and an emulator of
 the seed-modes family (``benchmarks/failure_mode_counts.py`` prints the
 counts; ``tests/test_failure_modes.py`` holds them): the modes listed equal
 the regions found in 37-40 of 40 seeds of 1000-run searches and 30 of 30
@@ -50,7 +50,7 @@ import pandas as pd
 from scipy import sparse, special
 from scipy.spatial import cKDTree
 
-from analysis.plain_json import json_plain
+from scenarios.plain_json import json_plain
 from scenarios.sweep_spec import PARAM_PREFIX, Param
 
 #: linked when the distance is at most this times the sum of the two clearances

@@ -83,7 +83,8 @@ batches, by a cycle or more. On 900 s of a 45-s sawtooth with noise, the suggest
 is within 50 s in 70 % of seeds without a start-up transient, and with a 60-s one it
 is 45-150 s in 75 % (exactly 60 s in 44 %); 4 % are not settled.
 
-:func:`settling_figure` draws the series and the suggestion.
+:func:`analysis.report.settling_report.settling_figure` draws the series and the
+suggestion.
 """
 
 from __future__ import annotations
@@ -93,9 +94,6 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
-
-from analysis.plots import png_bytes
 
 #: the measures the rule is applied to, each on its own
 MEASURES = ("mean_speed_mps", "halting", "vehicles")
@@ -113,9 +111,6 @@ EDGE_FRACTION = 0.1
 PERIOD_PEAK = 0.5
 #: below this the ACF counts as decorrelated
 DECORRELATED = 1 / math.e
-
-PANELS = (("vehicles", "vehicles"), ("mean_speed_mps", "mean speed [m/s]"),
-          ("halting", "halting (< 0.1 m/s)"))
 
 
 def batch_means(values: np.ndarray, batch_size: int = BATCH_SIZE) -> np.ndarray:
@@ -290,49 +285,3 @@ def suggest_warm_up_s(series: pd.DataFrame, measures: Sequence[str] = MEASURES,
     return {"rule": RULE, "measures": per_measure, "settled": all_settled,
             "warm_up_s": at_least_s if all_settled else None,
             "warm_up_at_least_s": at_least_s, "observed_s": float(times_s[-1])}
-
-
-def _suggestion_line(ax, suggestion: dict, label: bool) -> None:
-    """The suggested warm-up as a solid line, or, not settled, its lower bound dashed."""
-    if suggestion["settled"]:
-        name = suggestion["rule"].split(" ")[0].rstrip(",:")
-        text = f"{name} warm-up {suggestion['warm_up_s']:g} s"
-        ax.axvline(suggestion["warm_up_s"], color="tab:red", linewidth=1.5,
-                   label=text if label else None)
-    else:
-        text = (f"not settled within {suggestion['observed_s']:.0f} s: "
-                f"warm-up >= {suggestion['warm_up_at_least_s']:g} s")
-        ax.axvline(suggestion["warm_up_at_least_s"], color="tab:red", linewidth=1.5,
-                   linestyle="--", label=text if label else None)
-
-
-def settling_figure(series: pd.DataFrame | Sequence[pd.DataFrame], suggestion: dict,
-                    title: str, current_warm_up_s: float | None = None) -> bytes:
-    """The warm-up series as PNG bytes: vehicles, mean speed and halting over time in
-    three stacked panels, with the warm-up ``suggestion`` (of
-    :func:`suggest_warm_up_s`) as a vertical line, each measure's own truncation time
-    dotted in its panel, and ``current_warm_up_s`` (if given) as a grey line. Several
-    series (a list, e.g. one per warm state) are drawn faintly over each other."""
-    many = not isinstance(series, pd.DataFrame)
-    frames = list(series) if many else [series]
-    fig = Figure(figsize=(8, 7))
-    axes = fig.subplots(len(PANELS), 1, sharex=True)
-    for i, (ax, (column, ylabel)) in enumerate(zip(axes, PANELS, strict=True)):
-        for frame in frames:
-            if column in frame:
-                ax.plot(frame["t_s"], frame[column], color="tab:blue",
-                        linewidth=0.8 if many else 1.0, alpha=0.35 if many else 0.9)
-        truncation = suggestion["measures"].get(column)
-        if truncation is not None:
-            ax.axvline(truncation["truncation_s"], color="tab:red", linestyle=":",
-                       linewidth=1.0, label="this measure's truncation" if i == 0 else None)
-        _suggestion_line(ax, suggestion, label=i == 0)
-        if current_warm_up_s is not None:
-            ax.axvline(current_warm_up_s, color="0.35", linewidth=1.5,
-                       label=f"current warm-up {current_warm_up_s:g} s" if i == 0 else None)
-        ax.set_ylabel(ylabel)
-        ax.grid(alpha=0.3)
-    axes[0].legend(loc="best", fontsize=8)
-    axes[-1].set_xlabel("simulation time [s]")
-    fig.suptitle(title)
-    return png_bytes(fig)

@@ -1,7 +1,7 @@
 """What the truth scripts of the rare-failure families share: reading a finished grid
 sweep's directory and summarising it for the truth file (how it ran, on what code).
 
-Used by benchmarks/seed_rare_truth.py and benchmarks/seed_modes_truth.py, which run
+Used by truths/seed_rare_truth.py and truths/seed_modes_truth.py, which run
 as scripts and import it from beside them.
 """
 

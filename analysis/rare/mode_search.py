@@ -15,7 +15,7 @@ Each batch, in standard-normal space ``z``, has four parts:
   mode's cone. Ranked by penalised score (below), the lowest of them, as many
   as it takes for their importance weights to be worth ``elites`` runs (Kish
   ESS), are its elites; a weighted Gaussian-kernel mixture on them
-  (:func:`~analysis.rare_events.kernel_mixture_fit`) draws its runs. This is
+  (:func:`~analysis.rare.rare_events.kernel_mixture_fit`) draws its runs. This is
   the cross-entropy step: near misses lead it to failures before any has been
   seen, and the elites come from every run so far, so when a mode is found the
   descent goes on from the best runs heading elsewhere, which earlier batches
@@ -60,7 +60,7 @@ import math
 
 import numpy as np
 
-from analysis.rare_events import (
+from analysis.rare.rare_events import (
     KernelMixture,
     Proposal,
     check_budget,
@@ -154,7 +154,7 @@ class ModeSearch:
     ``tell(z, scores)`` hands its scores back (+inf for a run with no outcome:
     it is kept but never guides the descent).
 
-    Options (defaults chosen on :mod:`analysis.rare_bank` at batch 20, 200 seeds;
+    Options (defaults chosen on :mod:`analysis.rare.rare_bank` at batch 20, 200 seeds;
     every value below found every mode of three-regions, four-branch-k7,
     opposite-d6 and unequal-modes-d4 in all seeds within 1000 runs, so they were
     told apart by the seeds with every mode after 300 runs):
@@ -173,9 +173,9 @@ class ModeSearch:
       0.05-0.15 alike. 0.3 gives each of three modes some 55-75 failures in
       1000 runs.
     * ``explore_share`` (0.1) and ``explore_scale`` (2.0): the wide part, as
-      the estimator's (:class:`~analysis.rare_events.MultilevelIS`).
+      the estimator's (:class:`~analysis.rare.rare_events.MultilevelIS`).
     * ``shrinkage`` (0.4), ``bandwidth_scale`` (1.0): the kernels', as in
-      :func:`~analysis.rare_events.kernel_mixture_fit` (0.4 is the estimator's).
+      :func:`~analysis.rare.rare_events.kernel_mixture_fit` (0.4 is the estimator's).
     * ``revisit_kernels`` (30): at most this many failures (the heaviest) per
       mode carry its revisit kernels, which bounds the cost of a large mode.
 
@@ -185,7 +185,7 @@ class ModeSearch:
     nears a region and jumps up when a new mode puts the runs near that region
     in a cone.
     :attr:`mode_failures` and :attr:`mode_directions` describe the modes found
-    (a region may be split into several modes; :mod:`analysis.failure_modes`
+    (a region may be split into several modes; :mod:`analysis.rare.failure_modes`
     groups the failures for the report).
     """
 

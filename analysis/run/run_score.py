@@ -1,6 +1,6 @@
 """A run's score: how far from a collision it stayed, for search and estimate.
 
-The adaptive samplers (:mod:`analysis.rare_events`) move toward low scores and
+The adaptive samplers (:mod:`analysis.rare.rare_events`) move toward low scores and
 count a run as failed when its score is <= 0. A score must therefore be 0 for
 a collision and positive otherwise, and shrink as a run comes closer to one, so
 near misses lead the search before any collision has been seen.

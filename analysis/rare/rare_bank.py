@@ -1,7 +1,7 @@
 """Reliability problems with exactly known failure probabilities, to check estimators on.
 
 Each :class:`Problem` lives in standard-normal space ``z`` (the space of
-:mod:`analysis.rare_events`) and fails where its vectorised score ``g(z) <= 0``.
+:mod:`analysis.rare.rare_events`) and fails where its vectorised score ``g(z) <= 0``.
 The bank holds the standard cases where a sampler that adapts to one failure
 region goes wrong: several regions of equal or unequal mass, regions on
 opposite sides, curved boundaries, and one region in ten dimensions.
@@ -219,9 +219,9 @@ class BankResult:
 
 def run_bank(case: Problem, seeds: range, target_rhw: float = 0.3, max_runs: int = 20_000,
              **options) -> BankResult:
-    """:func:`analysis.rare_events.estimate` on ``case`` once per seed (``options`` go to
+    """:func:`analysis.rare.rare_events.estimate` on ``case`` once per seed (``options`` go to
     it), summed up against the truth."""
-    from analysis.rare_events import Z_95, estimate
+    from analysis.rare.rare_events import Z_95, estimate
 
     found = [estimate(case.score, case.dims, target_rhw, max_runs, np.random.default_rng(seed),
                       **options)[0] for seed in seeds]
@@ -242,8 +242,8 @@ def sampled_runs(case: Problem, mode: str, seed: int, max_runs: int) -> pd.DataF
     of 20) on ``case``, as a search or estimate directory's rows: ``run_id``,
     ``run_index``, ``status``, ``collision``, ``collision_with``, ``phase``, ``weight``,
     ``score`` and one ``p.z<k>`` column per dimension (standard normal parameters)."""
-    from analysis.mode_search import ModeSearch
-    from analysis.rare_events import EstimationLoop
+    from analysis.rare.mode_search import ModeSearch
+    from analysis.rare.rare_events import EstimationLoop
 
     rng = np.random.default_rng(seed)
     loop = (EstimationLoop(case.dims, 0.3, max_runs, rng, 500) if mode == "estimate"
@@ -278,7 +278,7 @@ def _normal_scores(runs: pd.DataFrame, dims: int) -> np.ndarray:
 def mode_count(case: Problem, mode: str, seed: int, max_runs: int) -> tuple[int, int]:
     """(the failure modes listed, ``other`` aside; the regions of ``case`` that hold a
     failure) for one seed's estimate or search (:func:`sampled_runs`)."""
-    from analysis.failure_modes import OTHER, failure_modes, weighed_rows
+    from analysis.rare.failure_modes import OTHER, failure_modes, weighed_rows
 
     runs = sampled_runs(case, mode, seed, max_runs)
     modes = failure_modes(runs, normal_params(case.dims), runs.score <= 0, weighed_rows(runs))

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from analysis.stats import STATUSES, Method, flag_interval, upper_bound_counting_failures
-from analysis.verdicts import completed_runs, percent
+from analysis.stats.rates import STATUSES, Method, flag_interval, upper_bound_counting_failures
+from analysis.stats.verdicts import completed_runs, percent
 
 
 def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None,

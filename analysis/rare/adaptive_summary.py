@@ -1,0 +1,168 @@
+"""What a search or estimate directory says of itself, from its rows: the
+importance-sampling estimate recomputed from the rows' weights (it equals
+``estimate.json``'s), how it converged, its outcomes, and its failures and stuck runs
+grouped into modes (:mod:`analysis.rare.failure_modes`). Plain data for the report
+(:mod:`analysis.report.rare_report`) and for ``search.json`` / ``estimate.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from analysis.rare.failure_modes import failure_modes, weighed_rows
+from analysis.rare.rare_events import Estimate, estimate_from_rows
+from analysis.run.run_outcome import OUTCOMES, STUCK
+from scenarios.file_read import read_json
+from scenarios.sweep_spec import Param, parse_param
+
+
+def sweep_params(manifest: dict) -> list[Param]:
+    """The swept parameters as the manifest records them."""
+    table = manifest["sweep"]["sweep"].get("params", {})
+    return [parse_param(path, dist, f'sweep.params."{path}"') for path, dist in table.items()]
+
+
+def _failed(rows: pd.DataFrame) -> pd.Series:
+    return rows.score.notna() & (rows.score <= 0)
+
+
+def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
+                max_weight: float = math.inf) -> Estimate | None:
+    """The estimate from the rows' weights: the estimation-phase rows (of batches up to
+    ``upto_batch``), counting every run drawn so far. None before the estimation phase."""
+    rows = results if upto_batch is None else results[results.batch <= upto_batch]
+    estimation = rows[rows.phase == "estimate"]
+    if estimation.empty:
+        return None
+    return estimate_from_rows(estimation.weight.to_numpy(dtype=float),
+                              _failed(estimation).to_numpy(), runs=len(rows),
+                              max_weight=max_weight)
+
+
+def mode_estimates(results: pd.DataFrame, modes: list[dict],
+                   max_weight: float = math.inf) -> list[dict]:
+    """Each failure mode's part of the estimate: ``p_k = mean(w * 1{row in mode k})`` over
+    the estimation rows, with its own interval (:func:`estimate_from_rows`, so a mode
+    with no estimation failure gets 0 and the rule-of-three bound). Every failed row is
+    in exactly one mode, so the parts add up to the total. ``modes``: plain failure
+    modes (``FailureMode.to_plain``); returns them with ``p_collision, ci_low,
+    ci_high, share`` (of the total) and ``estimation_failures`` added."""
+    estimation = results[results.phase == "estimate"]
+    if estimation.empty:
+        return modes
+    weights = estimation.weight.to_numpy(dtype=float)
+    failed = _failed(estimation).to_numpy()
+    total = float(np.mean(weights * failed))
+    out = []
+    for mode in modes:
+        in_mode = failed & estimation.run_id.isin(mode["run_ids"]).to_numpy()
+        part = estimate_from_rows(weights, in_mode, max_weight=max_weight)
+        out.append({**mode, "p_collision": part.p_collision, "ci_low": part.ci_low,
+                    "ci_high": part.ci_high, "share": part.p_collision / total if total else 0.0,
+                    "estimation_failures": part.failures})
+    return out
+
+
+def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
+               sweep_dir: Path) -> list[dict]:
+    """The modes of the ``failed`` rows among the runs (a sample that made no valid
+    scenario, score None, is no run: no evidence either way)."""
+    runs = results[results.score.notna()] if "score" in results else results
+    return [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
+            for m in failure_modes(runs, params, failed[runs.index], weighed_rows(runs))]
+
+
+def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
+                    max_weight: float = math.inf) -> list[dict]:
+    """The failure modes of a search or estimate directory's rows, plain: each with the
+    command that replays its example run and, where there are estimation rows, its part
+    of P (:func:`mode_estimates`). The one place ``search.json``, ``estimate.json`` and
+    the report get them from."""
+    if results.empty:
+        return []
+    return mode_estimates(results, _described(results, params, _failed(results), sweep_dir),
+                          max_weight)
+
+
+def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> list[dict]:
+    """The stuck runs (no collision, standing still at the end) grouped the same way as
+    the failures, plain, each with its replay command."""
+    if results.empty or "outcome" not in results:
+        return []
+    return _described(results, params, results.outcome == STUCK, sweep_dir)
+
+
+def outcome_counts(results: pd.DataFrame) -> dict[str, int]:
+    """Runs per outcome (:data:`analysis.run.run_outcome.OUTCOMES`), and ``failed`` for the
+    runs without one (error, timeout)."""
+    outcomes = results.get("outcome", pd.Series(index=results.index, dtype=object))
+    counts = {o: int((outcomes[results.status == "ok"] == o).sum()) for o in OUTCOMES}
+    return {**counts, "failed": int((results.status != "ok").sum())}
+
+
+def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
+    """The estimate after each estimation batch: runs, p_collision, ci_low, ci_high, rhw."""
+    batches = sorted(results[results.phase == "estimate"].batch.unique())
+    points = []
+    for batch in batches:
+        e = estimate_of(results, batch, max_weight)
+        points.append({"runs": e.runs, "p_collision": e.p_collision, "ci_low": e.ci_low,
+                       "ci_high": e.ci_high, "rhw": e.rhw})
+    return pd.DataFrame(points, columns=["runs", "p_collision", "ci_low", "ci_high", "rhw"])
+
+
+def summary_path(sweep_dir: Path, mode: str) -> Path:
+    """Where a search or estimate says how it stands: DIR/search.json, DIR/estimate.json."""
+    return Path(sweep_dir) / f"{mode}.json"
+
+
+def saved_summary(sweep_dir: Path, mode: str) -> dict:
+    """What the search or estimate wrote of itself (empty when it wrote nothing yet)."""
+    path = summary_path(sweep_dir, mode)
+    return read_json(path, f"the {mode} summary") if path.exists() else {}
+
+
+def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
+                     sweep_dir: Path) -> dict:
+    """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
+    settings = manifest["adaptive"]
+    mode = settings["mode"]
+    failed = results[_failed(results)]
+    summary = {
+        "mode": mode,
+        "sweep": manifest["sweep"]["sweep"]["name"],
+        "controller": saved.get("controller", results.controller.iloc[0]),
+        "runs": len(results),
+        "counts": {s: int((results.status == s).sum()) for s in ("ok", "error", "timeout")},
+        "state": saved.get("state", manifest.get("status")),
+        "score": settings["score"],
+        "batches": int(results.batch.max()) + 1,
+        "failures": len(failed),
+        "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
+        "first_failure_run_id": (failed.loc[failed.run_index.idxmin(), "run_id"]
+                                 if len(failed) else None),
+        "outcomes": outcome_counts(results),
+        "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
+                                         saved.get("max_weight") or math.inf),
+        "stuck_modes": stuck_modes(results, sweep_params(manifest), sweep_dir),
+        "adaptation_levels": saved.get("adaptation_levels"),
+    }
+    if mode == "estimate":
+        max_weight = saved.get("max_weight") or math.inf
+        estimate = estimate_of(results, max_weight=max_weight)
+        summary["target_rhw"] = settings["target_rhw"]
+        summary["stopped"] = saved.get("stopped")
+        summary["level_ess"] = saved.get("level_ess")
+        summary["level_uncovered"] = saved.get("level_uncovered")
+        summary["estimate"] = None if estimate is None else {
+            "p_collision": estimate.p_collision, "ci_low": estimate.ci_low,
+            "ci_high": estimate.ci_high, "rhw": estimate.rhw, "runs": estimate.runs,
+            "estimation_runs": estimate.estimation_runs, "failures": estimate.failures,
+            "ess": estimate.ess, "max_term_share": estimate.max_term_share,
+            "mc_equivalent_runs": estimate.mc_equivalent_runs,
+            "acceleration": estimate.mc_equivalent_runs / estimate.runs}
+    return summary

@@ -1,0 +1,150 @@
+"""The report of a search or estimate directory (``sdc search``, ``sdc estimate``).
+
+Its runs were drawn toward failure on purpose, so their plain collision rate is
+no probability and is not shown as one. An estimate's report recomputes the
+importance-sampling estimate from the rows' weights (it equals
+``estimate.json``'s), shows how it converged, and what plain Monte Carlo would
+have cost; a search's report says how soon it found a collision. Both group the
+failures into modes (:mod:`analysis.rare.failure_modes`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from analysis.rare.adaptive_summary import convergence
+from analysis.rare.failure_modes import OTHER, region_words
+from analysis.report import plots
+from analysis.run.run_outcome import outcomes_text
+
+
+def first_failure_words(summary: dict) -> str:
+    """", the first: run ID, after N runs" (ids count from 0, N from 1), or nothing."""
+    first = summary.get("first_failure_run")
+    if not first:
+        return ""
+    return f", the first: run {summary['first_failure_run_id']}, after {first} runs"
+
+
+def headline(summary: dict) -> list[str]:
+    """The lines that say what the directory found."""
+    counts = summary["counts"]
+    lines = [f"{summary['mode']} of {summary['sweep']} for {summary['controller']}: "
+             f"{summary['runs']} runs in {summary['batches']} batches ({counts['ok']} ok, "
+             f"{counts['error']} error, {counts['timeout']} timeout); {summary['state']}"]
+    if summary["mode"] == "estimate":
+        e = summary["estimate"]
+        if e is None:
+            lines.append("no estimate yet: the adaptation has not ended")
+        elif e["failures"] == 0:
+            lines.append(f"P(collision) <= {e['ci_high']:.3g} (95%): no collision in "
+                         f"{e['estimation_runs']} weighted runs")
+        else:
+            stopped = {"target_rhw": "target RHW reached",
+                       "budget": "budget spent before the target RHW"}.get(
+                summary["stopped"], "not finished")
+            lines.append(f"P(collision) = {e['p_collision']:.3g}, 95% interval "
+                         f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
+                         f"(target {summary['target_rhw']:g}; {stopped})")
+            lines.append(f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
+                         f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
+                         f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
+            lines.append(_diagnostics(summary))
+    lines.append(f"{summary['failures']} failed runs" + first_failure_words(summary)
+                 + ("; the drawn runs are aimed at failure, so their share is no probability"))
+    lines.append(f"outcomes: {outcomes_text(summary['outcomes'])}, "
+                 f"{summary['outcomes']['failed']} failed (no outcome); "
+                 f"{_modes_count(summary['failure_modes'], 'failure')}, "
+                 f"{_modes_count(summary['stuck_modes'], 'stuck')} (tables below)")
+    return lines
+
+
+def _modes_count(modes: list[dict], what: str) -> str:
+    named = sum(m["outcome"] != OTHER for m in modes)
+    other = sum(m["runs"] for m in modes if m["outcome"] == OTHER)
+    return (f"{named} {what} mode" + ("" if named == 1 else "s")
+            + (f" (+ {other} runs in other)" if other else ""))
+
+
+#: the terms of an estimate's headline, said under it
+ESTIMATE_TERMS = (
+    "P(collision): the importance-sampling estimate, mean(weight x failed) over the "
+    "estimation runs (a run with no outcome counts as failed). RHW: the 95% interval's "
+    "half-width over P. Plain Monte Carlo: the independent runs that would reach the same "
+    "RHW at this P. weighted: the estimation runs (the adaptation's are not counted). "
+    "ESS: Kish's effective sample size of their weights. The largest run's part of P: "
+    "above 10% the interval says little. Adaptation thresholds: each level's score "
+    "quantile (0 once its elites are failures), with its elites' ESS and the failures "
+    "it found beyond its kernels.")
+
+
+def _diagnostics(summary: dict) -> str:
+    """The sampler's own diagnostics, one line."""
+    e, levels = summary["estimate"], summary.get("adaptation_levels") or []
+    ess = list(summary.get("level_ess") or [])
+    ess += [None] * (len(levels) - len(ess))
+    uncovered = list(summary.get("level_uncovered") or [])
+    uncovered += [0] * (len(levels) - len(uncovered))
+    steps = ", ".join(f"{g:.3g}" + (f" (ESS {n:.0f})" if n is not None else "")
+                      + (f" ({u} beyond its kernels)" if u else "")
+                      for g, n, u in zip(levels, ess, uncovered, strict=True))
+    return (f"diagnostics: the largest run "
+            f"carries {100 * e['max_term_share']:.1f}% of P; adaptation thresholds {steps}")
+
+
+def mode_rows(modes: list[dict]) -> list[list[str]]:
+    """Failure or stuck modes as a table; an estimate's with each mode's part of P."""
+    split = any("p_collision" in m for m in modes)
+    rows = [["mode", "outcome", "runs"] + (["P (95% interval)", "share of P"] if split
+                                           else ["share"])
+            + ["example run", "parameter region"]]
+    for i, mode in enumerate(modes, start=1):
+        if split:
+            part = [f"{mode['p_collision']:.3g} [{mode['ci_low']:.3g}, {mode['ci_high']:.3g}]",
+                    f"{100 * mode['share']:.0f}%"]
+        else:
+            part = ["-" if mode["share"] is None else f"{100 * mode['share']:.0f}%"]
+        rows.append([str(i), mode["outcome"], str(mode["runs"]), *part, mode["example_run"],
+                     region_words(mode)])
+    return rows
+
+
+def mode_columns(modes: list[dict]) -> str:
+    """What the mode table's columns mean, said under it."""
+    split = any("p_collision" in m for m in modes)
+    share = ("P (95% interval): its part of P(collision), from the estimation runs' "
+             "weights; the parts add up to the total. share of P: that part over the total."
+             if split else
+             "share: its part of the failures' importance weights, a rough guide to its "
+             "part of P (a search estimates nothing: sdc estimate measures it).")
+    return ("A mode is one connected region of one outcome kind in the parameters' normal "
+            "scores (analysis/rare/failure_modes.py). outcome: what its runs hit (error or "
+            "timeout: no outcome; other: the modes each under 1% of the weight, folded "
+            f"together). runs: its runs, from every batch. {share} example run: its first "
+            "run drawn. parameter region: the span of each parameter over its runs (the "
+            "box they fill, not the region's true edges).")
+
+
+def adaptive_figures(results: pd.DataFrame, summary: dict,
+                     max_weight: float = math.inf) -> list[tuple[str, bytes]]:
+    out = []
+    if summary["mode"] == "estimate":
+        history = convergence(results, max_weight)
+        if len(history):
+            out.append(("Convergence: the estimate and its relative half-width against runs",
+                        plots.convergence(history, summary["target_rhw"])))
+        split = [m for m in summary["failure_modes"] if "p_collision" in m]
+        if split and summary["estimate"] and summary["estimate"]["failures"]:
+            out.append(("Where P(collision) comes from: each failure mode's part",
+                        plots.mode_probabilities(split, summary["estimate"])))
+    varying = [c for c in results.columns if c.startswith("p.")
+               and pd.api.types.is_numeric_dtype(results[c]) and results[c].nunique() > 1]
+    if len(varying) >= 2:
+        stuck = frozenset(r for m in summary["stuck_modes"] for r in m["run_ids"])
+        out.append((f"Runs drawn over {varying[0]} and {varying[1]}, failures ringed by mode",
+                    plots.sampling_path(results, varying[0], varying[1],
+                                        summary["failure_modes"], stuck)))
+    out.append(("What was hit", plots.collision_breakdown(results)))
+    return out

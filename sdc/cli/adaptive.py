@@ -1,0 +1,65 @@
+"""What ``sdc search`` and ``sdc estimate`` share: running one from the options."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from scenarios.controller_ref import resolve_file
+from scenarios.errors import SdcError, SpecError
+from sdc.cli.common import (
+    bad_input,
+    check_controllers,
+    check_executor_options,
+    exit_after_runs,
+    exit_interrupted,
+    make_executor,
+    make_reporter,
+)
+
+
+def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
+                     batch_size: int, target_rhw: float | None = None,
+                     stop_after: int | None = None):
+    """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
+    from scenarios.sweep_spec import load_sweep
+    from scenarios.world_backends import check_inputs
+    from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
+
+    check_executor_options(options)
+    try:
+        spec = load_sweep(sweep_file)
+        check_inputs(spec.base)
+        check_controllers(spec, sweep_file)
+        controller = options["controller"]
+        if controller is None:
+            if len(spec.controllers) > 1:
+                raise SpecError("--controller", f"the sweep lists {len(spec.controllers)} "
+                                f"controllers ({', '.join(spec.controllers)}); {mode} judges "
+                                "one: name it")
+            controller = spec.controllers[0]
+        settings = AdaptiveSettings(mode, resolve_file(controller, Path.cwd(), "--controller")
+                                    if controller not in spec.controllers else controller,
+                                    max_runs, batch_size, target_rhw, options["score"],
+                                    stop_after=stop_after)
+        return run_adaptive(spec, options["out_dir"], make_executor(options),
+                            make_reporter(options, mode), settings,
+                            traces=options["traces"], resume=options["resume"])
+    except SdcError as e:
+        bad_input(str(e))
+
+
+def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
+    """The counts and where the summary is, then the exit code of a batch of runs."""
+    from analysis.rare.adaptive_summary import summary_path
+    from analysis.run.run_outcome import outcomes_text
+
+    counts = outcome.counts
+    click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
+               f"{counts['timeout']} timeout; {outcomes_text(outcome.outcomes)} "
+               f"({outcome.wall_time_s:.1f} s)")
+    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: sdc report {out_dir}")
+    if outcome.interrupted:
+        exit_interrupted("interrupted; to finish, run the same command with --resume")
+    exit_after_runs(counts)

@@ -1,0 +1,146 @@
+"""What every sdc command shares: exit codes, the bad-input exit, option checks, the
+executor options and the exit-code rule of a batch of runs."""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from pathlib import Path
+from typing import NoReturn
+
+import click
+
+from scenarios.errors import SpecError
+from scenarios.scenario_spec import ScenarioSpec
+
+EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def bad_input(message: str) -> NoReturn:
+    click.echo(f"error: {message}", err=True)
+    sys.exit(EXIT_BAD_INPUT)
+
+
+def a_number(ctx, param, value: float | None) -> float | None:
+    """A number option's value, NaN refused (a range check lets it through)."""
+    if value is not None and math.isnan(value):
+        raise click.BadParameter("not a number (nan)", ctx, param)
+    return value
+
+
+def a_finite_number(ctx, param, value: float | None) -> float | None:
+    """A number option's value, NaN and infinities refused."""
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"not a finite number ({value})", ctx, param)
+    return value
+
+
+def check_at(at_s: float | None, end_s: float) -> None:
+    """``--at`` within the run drawn (``end_s``: its last step's time)."""
+    if at_s is not None and at_s > end_s + 1e-9:
+        bad_input(f"--at: {at_s:g} s is past the run's end at {end_s:.3f} s")
+
+
+def say_warm_up(spec: ScenarioSpec) -> None:
+    """Tell the user (on stderr) when the run first warms its traffic up: minutes, once."""
+    from scenarios.world_backends import warm_state_path
+
+    path = warm_state_path(spec)
+    if path is not None and not path.is_file():
+        click.echo(f"warming the traffic up: {spec.traffic.warm_up_s:g} s of SUMO, once "
+                   f"(the warm state is cached in {path.parent})", err=True)
+
+
+def check_controllers(sweep, sweep_file: Path) -> None:
+    """Build each of the sweep's controllers once on its base scenario: one that
+    cannot be found or built is bad input, before any run."""
+    from sdc.car.controller_plugins import make_controller
+
+    for i, name in enumerate(sweep.controllers):
+        try:
+            make_controller(sweep.base.with_controller(name).controller,
+                            f"sweep.controllers[{i}]")
+        except SpecError as e:
+            raise e.in_file(sweep_file) from None
+
+
+def _options(command, options: list):
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def executor_options(command):
+    """How a command that runs batches of runs runs them: the options ``sdc sweep``,
+    ``sdc search`` and ``sdc estimate`` share (:func:`make_executor`,
+    :func:`make_reporter` read them)."""
+    return _options(command, [
+        click.option("--workers", type=click.IntRange(1, 1024), default=os.cpu_count() or 1,
+                     show_default="all cores",
+                     help="Worker processes (local) or CPUs of a local Ray."),
+        click.option("--executor", type=click.Choice(["local", "ray"]), default="local",
+                     show_default=True, help="Local process pool, or Ray."),
+        click.option("--ray-address", metavar="ADDR",
+                     help="Join this Ray cluster (default: start and stop a local one)."),
+        click.option("--run-timeout", type=click.FloatRange(min=0, min_open=True), metavar="S",
+                     help="Stop a run after S wall seconds; it becomes a timeout row."),
+        click.option("--traces", type=click.Choice(["none", "failures", "all"]),
+                     default="failures", show_default=True,
+                     help="Write DIR/traces/<run_id>.parquet for no run, runs that did not "
+                          "complete (collided, stuck, unfinished), or all."),
+        click.option("--quiet", is_flag=True, help="No progress bar; only the final summary."),
+    ])
+
+
+def adaptive_options(command):
+    """The options ``sdc search`` and ``sdc estimate`` add to :func:`executor_options`."""
+    return _options(executor_options(command), [
+        click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+                     metavar="DIR", required=True, help="Its directory (a sweep directory)."),
+        click.option("--resume", is_flag=True,
+                     help="Continue the one in DIR (same file and options): it draws the "
+                          "same batches again and runs only the runs without a row."),
+        click.option("--controller", metavar="NAME",
+                     help="The controller judged, one of the sweep's  [default: its only "
+                          "one]."),
+        click.option("--score", type=click.Choice(["gap", "ttc"]), default="gap",
+                     show_default=True,
+                     help="What guides the sampling: the closest approach to an obstacle or "
+                          "road edge [m], or the run's min_ttc_s, the smallest time to "
+                          "collision measured along the road [s]."),
+    ])
+
+
+def make_executor(options: dict, batch_runs: int | None = None):
+    """The executor :func:`executor_options` asked for (``--batch``: Ray's runs per task)."""
+    from sdc.batch.executors import LocalExecutor, RayExecutor
+
+    if options["executor"] == "ray":
+        return RayExecutor(options["workers"], options["run_timeout"], options["ray_address"],
+                           batch_runs=batch_runs)
+    return LocalExecutor(options["workers"], options["run_timeout"])
+
+
+def check_executor_options(options: dict) -> None:
+    """Exit 2 when a Ray-only option is given without ``--executor ray``."""
+    if options["ray_address"] and options["executor"] != "ray":
+        bad_input("--ray-address: only applies with --executor ray")
+
+
+def make_reporter(options: dict, label: str = "sweep"):
+    """A progress bar labelled ``label``, or none with ``--quiet``."""
+    from sdc.batch.progress import QuietReporter, RichReporter
+
+    return QuietReporter() if options["quiet"] else RichReporter(label=label)
+
+
+def exit_after_runs(counts: dict) -> NoReturn:
+    """The exit code of a batch of runs that finished: 1 when any run errored or timed
+    out, else 0 (a collision is an outcome, not an error)."""
+    sys.exit(EXIT_RUN_ERROR if counts["error"] or counts["timeout"] else EXIT_OK)
+
+
+def exit_interrupted(message: str) -> NoReturn:
+    click.echo(message, err=True)
+    sys.exit(EXIT_INTERRUPTED)

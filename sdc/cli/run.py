@@ -1,0 +1,135 @@
+"""``sdc run``: one scenario, its outcome printed."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from analysis.run.world_audit import ROLE_TEXT
+from scenarios.controller_ref import resolve_file
+from scenarios.errors import SdcError, SpecError
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.seeding import SEED_LIMIT
+from scenarios.toml_io import load_spec
+from sdc.cli.common import EXIT_RUN_ERROR, bad_input, exit_interrupted, say_warm_up
+
+
+def check_trace_path(trace: Path | None) -> None:
+    if trace is None:
+        return
+    if trace.suffix != ".parquet":
+        bad_input(f"--trace: {trace} must end in .parquet")
+    if not trace.parent.is_dir():
+        bad_input(f"--trace: directory {trace.parent} does not exist")
+
+
+def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
+    """Run a spec; a failure inside the run becomes a row with ``status`` error."""
+    from sdc.batch.run_task import RunTask, execute
+    from sdc.run.episode import default_run_id
+
+    say_warm_up(spec)
+    return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
+
+
+def _fmt(value, unit: str = "", digits: int = 2) -> str:
+    return "-" if value is None else f"{value:.{digits}f}{unit}"
+
+
+def summary_lines(name: str, row: dict) -> list[str]:
+    if row["status"] != "ok":
+        return [f"{name}: run failed: {row['error']}"]
+    what = row["collision_with"]
+    if row.get("collision_vclass"):
+        what += f" ({row['collision_vclass']})"
+    outcome = row["outcome"] + (
+        f": COLLISION with {what} at {row['collision_time_s']:.2f} s "
+        f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
+        if row["collision"] else " (no collision)")
+    if row.get("world_overlaps"):
+        outcome += (f"; WARNING: bodies other than the ego overlapped in "
+                    f"{row['world_overlaps']} steps (world_overlaps)")
+    if row.get("red_light_violations"):
+        outcome += f"; crossed {row['red_light_violations']} red light(s)"
+    maneuver = "not started"
+    if row["maneuver_started"]:
+        returned = (f"returned to lane after {row['return_time_s']:.2f} s"
+                    if row["returned_to_lane"] else "did not return to lane")
+        maneuver = f"started at {_fmt(row['detection_range_m'], ' m')}, {returned}"
+    return [
+        f"{name}  controller={row['controller']}  seed={row['seed']}  backend={row['backend']}",
+        f"  outcome:   {outcome}; ended by {row['termination']} after "
+        f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
+        f"{row['network_vehicles']} vehicles in the network"
+        + (f", warm state {row['warm_state']}" if row.get("warm_state") else "") + ")",
+        f"  progress:  {_fmt(row['progress_m'], ' m', 1)} along the route, time lost "
+        f"{_fmt(row['time_lost_s'], ' s', 1)} (against driving on at the start speed)",
+        f"  maneuver:  {maneuver}",
+        f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
+        f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
+        f"min TTC {_fmt(row['min_ttc_s'], ' s')}, "
+        f"closest to road edge {_fmt(row['min_road_edge_gap_m'], ' m')}",
+        f"  max DRAC {_fmt(row['max_drac_mps2'], ' m/s^2')}, "
+        f"min headway {_fmt(row['min_headway_s'], ' s')}",
+        f"  trace sha256 {row['trace_sha256']}",
+    ]
+
+
+@click.command()
+@click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
+@click.option("--seed", type=click.IntRange(0, SEED_LIMIT - 1),
+              help="Override the spec's scenario.seed (SUMO's and the lidar noise's seed).")
+@click.option("--controller", metavar="NAME",
+              help="Override the spec's controller: a built-in (seed, lane-keep, avoid), "
+                   "FILE.py:Class (from the working directory), package.module:Class, or an "
+                   "installed plug-in's name (shared parameters carry over).")
+@click.option("--backend", type=click.Choice(["sumo", "highway"]),
+              help="Override the spec's scenario.backend (the world simulator).")
+@click.option("--trace", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.parquet",
+              help="Write one row per step (pose, steering, lane offset, phase, lidar, traffic).")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the result row as one JSON object on the last line.")
+def run(spec_file: Path, seed: int | None, controller: str | None, backend: str | None,
+        trace: Path | None, as_json: bool) -> None:
+    """Run one scenario and print its outcome."""
+    check_trace_path(trace)
+    try:
+        spec = load_spec(spec_file)
+        if seed is not None:
+            spec = spec.with_seed(seed)
+        if controller is not None:
+            spec = spec.with_controller(resolve_file(controller, Path.cwd(), "--controller"))
+        if backend is not None:
+            spec = spec.with_backend(backend)
+        from scenarios.world_backends import check_inputs
+        from sdc.car.controller_plugins import make_controller
+
+        check_inputs(spec)
+        try:  # a plug-in that cannot be built is bad input, before any run
+            make_controller(spec.controller, "--controller" if controller else "controller.name")
+        except SpecError as e:
+            raise (e if controller else e.in_file(spec_file)) from None
+        row = run_one(spec, trace)
+    except SdcError as e:
+        bad_input(str(e))
+    except KeyboardInterrupt:
+        exit_interrupted("interrupted")
+    if as_json:
+        from sdc.run.result_row import JSON_COLUMNS
+
+        click.echo(json.dumps({k: row[k] for k in JSON_COLUMNS}))
+    else:
+        for line in summary_lines(spec.scenario.name, row):
+            click.echo(line)
+        if trace is not None and row["status"] == "ok":
+            click.echo(f"  trace written to {trace}")
+    if row["status"] != "ok":
+        from sdc.run.result_row import raised_at
+
+        where = raised_at(row["traceback"])
+        click.echo(f"error: {row['error']}" + (f" (raised at {where})" if where else ""),
+                   err=True)
+        sys.exit(EXIT_RUN_ERROR)

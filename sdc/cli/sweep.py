@@ -1,0 +1,123 @@
+"""``sdc sweep``: every sample of a scenario family under each of its controllers."""
+
+from __future__ import annotations
+
+import shlex
+from pathlib import Path
+
+import click
+
+from scenarios.errors import SdcError
+from sdc.cli.common import (
+    bad_input,
+    check_controllers,
+    check_executor_options,
+    executor_options,
+    exit_after_runs,
+    exit_interrupted,
+    make_executor,
+    make_reporter,
+)
+
+
+def _plan_lines(sweep, plan) -> list[str]:
+    invalid = sum(run.spec is None for run in plan)
+    samples = len({run.sample for run in plan})
+    lines = [f"sweep {sweep.name}: {samples} samples x {len(sweep.controllers)} controllers = "
+             f"{len(plan)} runs ({sweep.sampler} sampler, seed {sweep.seed}); "
+             f"{invalid} runs with an invalid scenario"]
+    warm = {run.spec.traffic.warm_seed for run in plan if run.spec is not None
+            and run.spec.traffic.warm_up_s > 0 and run.spec.scenario.backend == "sumo"}
+    if sweep.warm_states is not None:
+        lines.append(f"the samples draw their traffic from {len(warm)} warm states "
+                     f"(sweep.warm_states = {sweep.warm_states})")
+    paths = [p.path for p in sweep.params]
+    lines.append("  ".join(["run_id", "seed"] + paths))
+    for run in plan:
+        values = [f"{v:.6g}" if isinstance(v, float) else str(v) for v in run.params.values()]
+        line = "  ".join([run.run_id, str(run.seed)] + values)
+        lines.append(line + (f"  INVALID: {run.error}" if run.error else ""))
+    return lines
+
+
+@click.command()
+@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              metavar="DIR", help="Sweep directory (required unless --dry-run).")
+@executor_options
+@click.option("--batch", "batch_runs", type=click.IntRange(min=1), metavar="N",
+              help="Ray only: runs per Ray task, at most (default: about 0.3 s of runs, "
+                   "from the run times measured so far). Each run keeps its own row and "
+                   "timeout; a task never takes more than 1/(2 x CPUs) of the runs left.")
+@click.option("--resume", is_flag=True,
+              help="Continue the sweep in DIR: run only the runs that have no row yet.")
+@click.option("--samples", type=click.IntRange(min=1), metavar="N",
+              help="Override the sweep's sample count (not for the grid sampler).")
+@click.option("--dry-run", is_flag=True, help="Print the plan (one line per run) and stop.")
+def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume: bool,
+          samples: int | None, dry_run: bool, **options) -> None:
+    """Run every sample of a scenario family under each of its controllers.
+
+    Results stream into DIR/parts/ as runs finish and end in DIR/results.parquet
+    (one row per run, one p.<path> column per swept parameter); DIR/manifest.json
+    records the sweep, the versions and the counts. A run that raises, hangs past
+    --run-timeout or kills its worker becomes an error or timeout row. After a
+    kill or Ctrl-C, the same command with --resume finishes the sweep.
+
+    What a run reads besides its spec (network files, plug-in controller files)
+    travels with the job, identified by sha256 (recorded in the manifest):
+    workers, local or on any Ray node, never open the driver's paths.
+    """
+    from analysis.run.run_outcome import outcomes_text
+    from scenarios.sweep_spec import expand, load_sweep
+    from scenarios.world_backends import check_inputs
+    from sdc.batch.sweep_runner import run_sweep
+
+    check_executor_options(options)
+    if batch_runs and options["executor"] != "ray":
+        bad_input("--batch: only applies with --executor ray (local workers take one run "
+                  "at a time)")
+    try:
+        spec = load_sweep(sweep_file)
+        if samples is not None:
+            spec = spec.with_samples(samples)
+        check_inputs(spec.base)
+        check_controllers(spec, sweep_file)
+        if dry_run:
+            for line in _plan_lines(spec, expand(spec)):
+                click.echo(line)
+            return
+        if out_dir is None:
+            bad_input("--out: a sweep directory is required")
+        outcome = run_sweep(spec, out_dir, make_executor(options, batch_runs),
+                            make_reporter(options), traces=options["traces"], resume=resume)
+    except SdcError as e:
+        bad_input(str(e))
+    counts = outcome.counts
+    click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
+               f"{counts['timeout']} timeout, {counts['missing']} not run; "
+               f"{outcomes_text(outcome.outcomes)} ({outcome.wall_time_s:.1f} s)")
+    click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
+    if outcome.interrupted or counts["missing"]:
+        hint = resume_command(sweep_file, out_dir, samples=samples, traces=options["traces"],
+                              executor=options["executor"], workers=options["workers"],
+                              ray_address=options["ray_address"],
+                              run_timeout=options["run_timeout"], batch_runs=batch_runs)
+        exit_interrupted(f"interrupted; to finish: {hint}")
+    exit_after_runs(counts)
+
+
+def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
+                   executor: str, workers: int, ray_address: str | None,
+                   run_timeout: float | None, batch_runs: int | None) -> str:
+    """The command that finishes an interrupted sweep: every option that shaped its plan
+    (--samples; another plan is refused) and how it ran, then --resume; shell-quoted."""
+    words = ["sdc", "sweep", str(sweep_file), "--out", str(out_dir)]
+    optional = [("--samples", samples), ("--traces", None if traces == "failures" else traces),
+                ("--executor", None if executor == "local" else executor),
+                ("--workers", workers), ("--ray-address", ray_address),
+                ("--run-timeout", run_timeout), ("--batch", batch_runs)]
+    for option, value in optional:
+        if value is not None:
+            words += [option, str(value)]
+    return shlex.join([*words, "--resume"])
