@@ -28,6 +28,18 @@ def temporary_cache(tmp_path_factory):
         os.environ["SDC_CACHE_DIR"] = before
 
 
+@pytest.fixture(scope="session")
+def ray_session(temporary_cache):
+    """One local Ray session (2 CPUs) for this process's tests that compare Ray with local
+    processes: a RayExecutor uses a session its process holds and leaves it running, so
+    those tests start Ray once, not once each."""
+    import ray
+
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level="ERROR")
+    yield
+    ray.shutdown()
+
+
 @pytest.fixture
 def chromium_page():
     """A page of headless Chromium (Debian's, driven by Playwright) and the list its

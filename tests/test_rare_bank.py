@@ -13,14 +13,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.rare.rare_bank import BANK, problem, run_bank
+from analysis.rare.rare_bank import BANK, EMULATED, problem, run_bank
+from analysis.rare.rare_events import mc_equivalent_runs
 
 SEEDS = range(40)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [p.name for p in BANK])
+@pytest.mark.parametrize("name", [p.name for p in (*BANK, *EMULATED)])
 def test_the_interval_covers_the_truth_and_the_reported_error_is_the_real_one(name):
+    """The bank's problems, and the emulators of the catalog's rare families."""
     result = run_bank(problem(name), SEEDS)
     # at a true 93 % coverage, 40 seeds fall below 80 % with probability ~0.1 %
     assert result.coverage >= 0.80, result
@@ -30,6 +32,8 @@ def test_the_interval_covers_the_truth_and_the_reported_error_is_the_real_one(na
     assert 0.7 <= result.error_ratio <= 1.4, result
     assert result.median_runs <= 6000, result
     assert result.budget_stops <= 1, result
+    if name in {p.name for p in EMULATED}:  # the families' claim: 20x fewer runs than MC
+        assert result.median_runs * 20 <= mc_equivalent_runs(problem(name).truth, 0.3), result
 
 
 def test_the_bank_truths_agree_with_plain_monte_carlo():

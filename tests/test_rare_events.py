@@ -201,3 +201,16 @@ def test_tell_rejects_a_batch_of_the_wrong_shape_or_with_nan_scores():
         sampler.tell(z, np.full(10, np.nan))
     with pytest.raises(ValueError, match="z"):
         sampler.tell(z[:, :1], np.ones(10))
+
+
+@pytest.mark.parametrize("bad", [{"shrinkage": 0.0}, {"shrinkage": 1.5}, {"bandwidth_scale": 0.0},
+                                 {"explore_scale": -1.0}, {"elite_fraction": 1.0}])
+def test_both_samplers_refuse_the_same_kernel_options(bad):
+    from analysis.rare.mode_search import ModeSearch
+
+    rng = np.random.default_rng(0)
+    name = next(iter(bad))
+    with pytest.raises(ValueError, match=name):
+        MultilevelIS(2, rng, 20, **bad)
+    with pytest.raises(ValueError, match=name):
+        ModeSearch(2, 100, rng, 20, **bad)

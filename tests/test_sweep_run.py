@@ -110,7 +110,7 @@ def _in_a_run(pid: int) -> bool:
     return False
 
 
-def test_local_and_ray_executors_give_identical_results(tmp_path):
+def test_local_and_ray_executors_give_identical_results(tmp_path, ray_session):
     path = write(tmp_path, "tiny", TINY)
     sweep = load_sweep(path)
     for name, executor in [("w1", LocalExecutor(1)), ("w2", LocalExecutor(2)),
@@ -359,3 +359,18 @@ def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
         "sdc", "sweep", str(tmp_path / "my sweep.toml"), "--out", str(tmp_path / "out"),
         "--samples", "200", "--traces", "all", "--executor", "ray", "--workers", "4",
         "--ray-address", "10.0.0.1:6379", "--run-timeout", "30.0", "--resume"]
+
+
+@pytest.mark.slow
+def test_a_ray_session_the_process_holds_is_used_and_left_running(tmp_path, ray_session):
+    import ray
+
+    from scenarios.errors import SdcError
+
+    run = expand(load_sweep(write(tmp_path, "one", TINY)))[0]
+    with RayExecutor(2) as executor:
+        (row,) = executor.map([RunTask(run.run_id, run.spec)])
+    assert row["status"] == "ok" and ray.is_initialized()
+    with pytest.raises(SdcError, match="already holds a Ray session"), \
+            RayExecutor(2, address="127.0.0.1:1"):
+        pass

@@ -50,6 +50,7 @@ import pandas as pd
 from scipy import sparse, special
 from scipy.spatial import cKDTree
 
+from analysis.run.run_outcome import collided
 from scenarios.plain_json import json_plain
 from scenarios.sweep_spec import PARAM_PREFIX, Param
 
@@ -129,7 +130,7 @@ def run_kinds(results: pd.DataFrame, failed: pd.Series) -> pd.Series:
     """How each failed run failed: ``collision_with``, else its status, else its
     outcome (``stuck``); empty for the rest."""
     kind = np.where(results.status != "ok", results.status.astype(str),
-                    np.where(results.collision.fillna(False).astype(bool),
+                    np.where(collided(results),
                              results.collision_with.astype(str),
                              results.get("outcome", pd.Series("", index=results.index))
                              .fillna("").astype(str)))

@@ -1,57 +1,29 @@
 """A failure search that keeps looking after it has found one failure mode.
 
-Why: a cross-entropy search adapts towards whichever failure region it meets
-first and then samples round it, so a scenario that can fail in three separate
-ways may show one of them (measured on the product's one-Gaussian search: 356
-of 357 failures in one region). :class:`ModeSearch` is built to show every
-failure mode: once a region is found its direction is made taboo and the
-descent heads for the next one, while a wide share keeps landing runs in
-regions no score warns of.
+Each batch, in standard-normal space ``z``, has four parts with fixed run counts
+(largest remainders), its rows shuffled:
 
-Each batch, in standard-normal space ``z``, has four parts:
+* **the descent** (50 % once a mode is found, 80 % before): a weighted Gaussian-kernel
+  mixture (:func:`~analysis.rare.rare_events.kernel_mixture_fit`) on the elites, the
+  lowest-scoring runs so far that did not fail and lie in no found mode's cone, as
+  many as it takes for their weights to be worth ``elites`` runs (Kish ESS), each
+  score divided by ``1 - k`` (``k``: its closeness to a found cone, clipped to [0, 1]);
+* **revisits** (``revisit_share``): kernels on each found mode's heaviest failures,
+  every mode the same share;
+* **wide runs** (``explore_share``) from ``N(0, explore_scale^2 I)``;
+* **nominal runs** (``nominal_share``), which keep every weight at most
+  ``1 / nominal_share``.
 
-* **The descent** (50 % of a batch once a mode is found, 80 % before). Its
-  *candidates* are the runs seen so far that did not fail and lie in no found
-  mode's cone. Ranked by penalised score (below), the lowest of them, as many
-  as it takes for their importance weights to be worth ``elites`` runs (Kish
-  ESS), are its elites; a weighted Gaussian-kernel mixture on them
-  (:func:`~analysis.rare.rare_events.kernel_mixture_fit`) draws its runs. This is
-  the cross-entropy step: near misses lead it to failures before any has been
-  seen, and the elites come from every run so far, so when a mode is found the
-  descent goes on from the best runs heading elsewhere, which earlier batches
-  have already drawn, instead of starting from the nominal.
-* **Revisits** (``revisit_share``): runs drawn round the failures of the modes
-  found, each mode with the same share (kernels on its heaviest failures), so
-  every mode collects failures of its own instead of the first taking them all.
-* **Wide runs** (``explore_share``) from ``N(0, explore_scale^2 I)``: a region
-  whose score gives no warning (the seed-modes family's barrel offsets: the gap
-  stays about 2 m until the run collides) draws no descent, and only runs that
-  land in it find it; the wide share puts a few percent of its runs beyond 3.7
-  standard deviations in each direction, where the nominal puts 1e-4.
-* **Nominal runs** (``nominal_share``): fresh runs in every direction; they also
-  keep every weight ``nominal / q`` at most ``1 / nominal_share``.
+A failure joins the mode whose cone it lies deepest in, or founds one. A mode's
+direction ``u`` is the normalised sum of its failures' ``z / |z|``; its cone is
+``cos(z, u) >= taboo_ratio * c``, ``c`` its failures' mean cosine to ``u``.
+:meth:`ModeSearch.log_weights` is exactly ``log(nominal / q)`` for the runs drawn. A
+search estimates nothing. The batches depend only on ``rng`` and the scores told, so
+a killed search resumes by replaying its stored scores through a fresh object.
 
-**Modes and cones.** A failure joins the mode whose cone it lies deepest in, or
-founds a new mode. A mode has a direction ``u``, the normalised sum of its
-failures' unit vectors ``z / |z|``, and a cone ``cos(z, u) >= taboo_ratio * c``,
-``c`` the mean cosine of its failures to ``u``: the more spread its failures
-are (in more dimensions), the wider the cone. Directions, because a descent
-from the nominal moves outwards along one. A run in a cone is no candidate,
-and a candidate's score is divided by ``1 - k``, ``k`` its largest closeness
-``cos(z, u) / (taboo_ratio * c)`` clipped to [0, 1]. Without this penalty the
-near misses just outside a found region's cone score lower than anything on
-the way to another region and hold the descent there (measured: the second of
-two modes missed in a third of the seeds on a 4-d problem, against none).
-
-Each batch's parts have fixed run counts (largest remainders) and its rows are
-shuffled; its density ``q`` is the mixture with the counts as shares, so
-:meth:`ModeSearch.log_weights` is exactly ``log(nominal / q)`` for the runs
-drawn, and the same weights weigh the elites. A search estimates nothing: the
-weights are stored per run, not summed.
-
-The batches depend only on ``rng`` and the scores told (stable sorts, no sets,
-no clock, no global random state), so a killed search resumes by replaying its
-stored scores through a fresh object, which draws the same batches.
+Why: an adaptive search settles round the first failure region it meets, so a
+scenario that fails three ways shows one. The measurements behind each part are in
+docs/rare_events_and_warm_up.md, reproduced by ``python benchmarks/failure_mode_counts.py``.
 """
 
 from __future__ import annotations
@@ -65,6 +37,7 @@ from analysis.rare.rare_events import (
     Proposal,
     check_budget,
     check_dims,
+    check_kernels,
     checked_batch,
     kernel_mixture_fit,
     nominal_proposal,
@@ -200,8 +173,7 @@ class ModeSearch:
         check_budget(batch_size, max_runs)
         if stop_after is not None and stop_after < 1:
             raise ValueError(f"stop_after must be at least 1, got {stop_after!r}")
-        if not 0 < elite_fraction < 1:
-            raise ValueError(f"elite_fraction must be in (0, 1), got {elite_fraction!r}")
+        check_kernels(elite_fraction, shrinkage, bandwidth_scale, explore_scale)
         if not 0 <= taboo_ratio <= 1:
             raise ValueError(f"taboo_ratio must be in [0, 1], got {taboo_ratio!r}")
         side_shares = (revisit_share, nominal_share, explore_share)
@@ -209,12 +181,6 @@ class ModeSearch:
             raise ValueError(f"revisit_share ({revisit_share!r}), nominal_share "
                              f"({nominal_share!r}) and explore_share ({explore_share!r}) "
                              "must be >= 0 and leave the descent a share")
-        if not explore_scale > 0:
-            raise ValueError(f"explore_scale must be > 0, got {explore_scale!r}")
-        if not 0 < shrinkage <= 1:  # 0 would give a lone elite a singular kernel
-            raise ValueError(f"shrinkage must be in (0, 1], got {shrinkage!r}")
-        if not bandwidth_scale > 0:
-            raise ValueError(f"bandwidth_scale must be > 0, got {bandwidth_scale!r}")
         if revisit_kernels < 1:
             raise ValueError(f"revisit_kernels must be at least 1, got {revisit_kernels!r}")
         self.dims, self.max_runs, self.rng = int(dims), int(max_runs), rng

@@ -1,59 +1,28 @@
 """Rare failure probabilities by multilevel, non-parametric importance sampling.
 
-A sweep maps each run to a point ``u`` of the unit cube, each parameter through
-its inverse CDF, so a run's nominal distribution is uniform on the cube. Here
-every run lives in standard-normal space ``z = Phi^-1(u)``, where the nominal
-density is ``N(0, I)``; :func:`unit_points` maps a batch back to the cube for
-the sweep.
+Runs live in standard-normal space ``z = Phi^-1(u)``, where the nominal density is
+``N(0, I)``; :func:`unit_points` maps a batch back to the sweep's unit cube. A run's
+score is continuous and it fails when ``score <= 0``. :class:`MultilevelIS` is
+ask/tell (a caller evaluates each batch anywhere); :func:`estimate` is the loop for a
+batch score function; :func:`estimate_from_rows` recomputes an estimate from the
+weights stored in the rows.
 
-A run's *score* is continuous and a run fails when ``score <= 0`` (a minimum
-gap, a time to collision): near misses guide the adaptation before any failure
-has been seen.
+* **Adaptation.** Per batch, ``gamma = max(elite quantile of the scores, 0)``; the
+  runs of all levels with ``score <= gamma``, each weighted nominal / (the mixture of
+  every proposal so far), fit the next proposal: a Gaussian kernel at each elite
+  (:func:`kernel_mixture_fit`), with a fifth of every batch from the wide
+  ``N(0, 4 I)``. It stops once ``gamma`` is 0, the failures are worth enough points
+  and none lies beyond the kernels, or after ``max_levels`` batches.
+* **Estimation.** Runs from a frozen mixture (the nominal, the wide Gaussian, the last
+  level's kernels and the level's before), ``w = nominal / proposal``, and
+  ``p = mean(w * 1{failed})`` over these runs only: adaptation runs are not pooled,
+  their proposals depended on earlier scores.
 
-The sampler is ask/tell (:class:`MultilevelIS`) so that a caller can evaluate
-each batch anywhere (the sweep executors); :func:`estimate` is the loop for
-when a batch score function is at hand. Each run's importance weight can be
-stored beside its result and the estimate recomputed from the rows with
-:func:`estimate_from_rows`.
-
-Two phases:
-
-* **adaptation** (levels, in the manner of non-parametric adaptive IS): per
-  batch, the threshold is ``gamma = max(elite quantile of the scores, 0)``; the
-  runs of all levels so far with ``score <= gamma`` are the elites, each
-  weighted by nominal / (the mixture of every proposal used so far), and the
-  next proposal is a Gaussian kernel at each elite (:func:`kernel_mixture_fit`).
-  Failures usually have several causes, which lie in separate regions of z:
-  a kernel mixture keeps every region its elites reached, each with the
-  weight its points carry, where one Gaussian would settle on one region and
-  the estimate would miss the others with a confident interval (measured on
-  the bank of :mod:`analysis.rare.rare_bank`: 6 % coverage on three regions).
-  A fifth of every batch comes from a wide Gaussian ``N(0, 4 I)``: a
-  region whose score gives no warning (a detection that misses, where the
-  margin jumps from metres to a collision) is found only by runs that land in
-  it, and the wide share puts a few percent of its runs into every tail at
-  about 3.7 standard deviations, where the nominal puts 1e-4 (measured: the
-  bank's blind three regions, covered by 17 % of seeds without it, 95 % with
-  a tenth). A fifth, because a region that no run of the adaptation met is
-  left out of the estimate's kernels: with 50 wide runs a level, a region
-  holding 3 % of the wide Gaussian goes unmet through two levels in 4 % of
-  seeds (seed-modes emulated with its slow side, 60 seeds: coverage 0.88 with
-  a tenth, 0.95 with a fifth, at the same median runs).
-  Adaptation stops once ``gamma`` is 0, the failures are worth enough
-  points and none lies beyond the kernels (see :class:`MultilevelIS`), or
-  after ``max_levels`` batches.
-* **estimation**: runs drawn from a frozen mixture of the nominal (the
-  defensive share), the wide Gaussian, the last level's kernels (fitted on failures) and the
-  level's before (fitted on near misses, so a region the last level thinned
-  out is still sampled), weighted by ``w = nominal / proposal``, and
-  ``p = mean(w * 1{failed})`` over these runs only. Adaptation runs are *not*
-  pooled: each proposal there was fitted on earlier scores, so their weighted
-  indicators are not independent draws from one fixed proposal.
-
-The defaults were chosen, and are checked (``benchmarks/bench_rare_bank.py``,
-``tests/test_rare_bank.py``), on the bank's problems with exact truths over
-hundreds of seeds: the 95 % interval covers the truth in 93-95 % of them on
-every problem, with the error it reports matching the error it makes.
+Why kernels and a wide share: failures have several causes in separate regions, some
+of which give no warning, and one Gaussian settles on one region with a confident
+interval. The evidence (95 % intervals cover the truth in 93-95 % of seeds on every
+bank problem) is in docs/rare_events_and_warm_up.md, reproduced by
+``python benchmarks/bench_rare_bank.py``.
 """
 
 from __future__ import annotations
@@ -352,6 +321,19 @@ def check_budget(batch_size: int, max_runs: int | None = None) -> None:
                          f"({2 * batch_size} runs)")
 
 
+def check_kernels(elite_fraction: float, shrinkage: float, bandwidth_scale: float,
+                  explore_scale: float) -> None:
+    """The options both samplers' kernel fits and wide Gaussians share."""
+    if not 0 < elite_fraction < 1:
+        raise ValueError(f"elite_fraction must be in (0, 1), got {elite_fraction!r}")
+    if not 0 < shrinkage <= 1:  # 0 would give a lone elite a singular kernel
+        raise ValueError(f"shrinkage must be in (0, 1], got {shrinkage!r}")
+    if not bandwidth_scale > 0:
+        raise ValueError(f"bandwidth_scale must be > 0, got {bandwidth_scale!r}")
+    if not explore_scale > 0:
+        raise ValueError(f"explore_scale must be > 0, got {explore_scale!r}")
+
+
 def checked_batch(z: np.ndarray, scores: np.ndarray, dims: int) -> tuple[np.ndarray, np.ndarray]:
     """A told batch as float arrays, or ValueError naming what is wrong with it."""
     z = np.asarray(z, dtype=float)
@@ -421,14 +403,11 @@ class MultilevelIS:
                  explore_scale: float = 2.0, estimation_explore_fraction: float = 0.1) -> None:
         check_dims(dims)
         check_budget(batch_size)
-        if not 0 < elite_fraction < 1:
-            raise ValueError(f"elite_fraction must be in (0, 1), got {elite_fraction!r}")
+        check_kernels(elite_fraction, shrinkage, bandwidth_scale, explore_scale)
         if max_levels < 1:
             raise ValueError(f"max_levels must be at least 1, got {max_levels!r}")
         if not 0 <= defensive_fraction < 1:
             raise ValueError(f"defensive_fraction must be in [0, 1), got {defensive_fraction!r}")
-        if not 0 <= shrinkage <= 1:
-            raise ValueError(f"shrinkage must be in [0, 1], got {shrinkage!r}")
         if not 0 <= previous_share < 1:
             raise ValueError(f"previous_share must be in [0, 1), got {previous_share!r}")
         self.shrinkage, self.previous_share = shrinkage, previous_share

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from analysis.run.run_outcome import COLLIDED, STUCK, UNFINISHED
+from analysis.run.run_outcome import COLLIDED, STUCK, UNFINISHED, collided
 from analysis.stats.verdicts import completed_runs
 
 #: the classes, in the order they are listed
@@ -30,11 +30,11 @@ THUMBNAILS_PER_CONTROLLER = 4
 def _rank_class(results: pd.DataFrame) -> pd.Series:
     """Each run's index in :data:`RANK_CLASSES`; NaN for a run not worth a look."""
     ok = results.status == "ok"
-    collided = ok & results.collision.fillna(False).astype(bool)
+    hit = ok & collided(results)
     stop = (results.stop_possible.fillna(False).astype(bool) if "stop_possible" in results
             else pd.Series(False, index=results.index))
     outcome = results.outcome if "outcome" in results else pd.Series(None, index=results.index)
-    conditions = [~ok, collided & stop, collided, ok & (outcome == STUCK),
+    conditions = [~ok, hit & stop, hit, ok & (outcome == STUCK),
                   ok & (outcome == UNFINISHED)]
     return pd.Series(np.select(conditions, range(len(conditions)), default=-1),
                      index=results.index).replace(-1, np.nan)

@@ -32,7 +32,7 @@ from analysis.report.settling_report import (
     settling_lines,
     settling_summary,
 )
-from analysis.run.run_outcome import COMPLETED, STUCK
+from analysis.run.run_outcome import COMPLETED, STUCK, collided, failed_or_collided
 from analysis.run.safety import REACTION_TIME_S
 from analysis.run.world_audit import ROLE_TEXT
 from analysis.stats.gate import gate, gate_bounds_line
@@ -58,9 +58,10 @@ from analysis.stats.verdicts import (
 )
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
-from scenarios.plain_json import json_plain
+from scenarios.plain_json import json_plain, json_scalar
+from scenarios.sweep_spec import PARAM_PREFIX
 
-SPEED = "p.ego.speed_mps"
+SPEED = f"{PARAM_PREFIX}ego.speed_mps"
 MAX_LISTED_FAILURES = 500
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
@@ -107,11 +108,8 @@ def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
 
 
 def varying_parameters(results: pd.DataFrame) -> list[str]:
-    return [c for c in results.columns if c.startswith("p.") and results[c].nunique() > 1]
-
-
-def _finite(value):
-    return None if isinstance(value, float) and not math.isfinite(value) else value
+    return [c for c in results.columns
+            if c.startswith(PARAM_PREFIX) and results[c].nunique() > 1]
 
 
 def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
@@ -138,7 +136,7 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
     for column in by:
         table = rates_by(counted, column, method)
         grouped[column] = [{**row, "group": group_label(row["group"]),
-                            "collision_rate": _finite(row["collision_rate"])}
+                            "collision_rate": json_scalar(row["collision_rate"])}
                            for row in table.to_dict(orient="records")]
     status = results.status.value_counts()
     return {
@@ -179,7 +177,7 @@ def world_summary(results: pd.DataFrame) -> dict:
         return {"recorded": False}
     ok = results[results.status == "ok"]
     overlaps = ok.world_overlaps.fillna(0)
-    hits = ok[ok.collision.fillna(False).astype(bool) & ok.collision_role.notna()]
+    hits = ok[collided(ok) & ok.collision_role.notna()]
     classes = (hits[hits.collision_vclass.notna()] if "collision_vclass" in hits.columns
                else hits.iloc[:0].assign(collision_vclass=None))
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
@@ -502,8 +500,7 @@ def failures(results: pd.DataFrame) -> pd.DataFrame:
     """Runs to look at in a search or estimate: failed runs (error, timeout), then
     collisions and stuck runs, by run."""
     stuck = results.outcome == STUCK if "outcome" in results else False
-    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)
-                  | stuck]
+    bad = results[failed_or_collided(results) | stuck]
     return bad.assign(_ok=bad.status == "ok").sort_values(["_ok", "run_index"]).drop(
         columns="_ok")
 
@@ -686,7 +683,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
         table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
                   "failed", *([DEFF_HEAD] if deff else [])]]
         table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
-                   percent(_finite(r["collision_rate"])),
+                   percent(json_scalar(r["collision_rate"])),
                    f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"]),
                    *([_deff(r["deff"])] if deff else [])]
                   for r in rows]
@@ -710,7 +707,7 @@ def junit_xml(results: pd.DataFrame, name: str) -> str:
     for row in results.to_dict("records"):
         case = ElementTree.SubElement(suite, "testcase", classname=f"{name}.{row['controller']}",
                                       name=row["run_id"],
-                                      time=f"{_finite(row['wall_time_s']) or 0:.3f}")
+                                      time=f"{json_scalar(row['wall_time_s']) or 0:.3f}")
         if row["status"] != "ok":
             n_errors += 1
             ElementTree.SubElement(case, "error", message=_row_outcome(row), type=row["status"])
@@ -725,10 +722,10 @@ def junit_xml(results: pd.DataFrame, name: str) -> str:
 def by_column(results: pd.DataFrame, name: str) -> str:
     """The column ``--by NAME`` means: a swept parameter's path with or without its
     ``p.`` prefix (``ego.speed_mps`` or ``p.ego.speed_mps``), or any other column."""
-    for column in (name, f"p.{name}"):
+    for column in (name, f"{PARAM_PREFIX}{name}"):
         if column in results.columns:
             return column
-    known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
+    known = ", ".join(c for c in results.columns if c.startswith(PARAM_PREFIX)) or "none"
     raise ReportError("--by", f"no column {name!r} (swept parameters: {known})")
 
 

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
+
+from scenarios.plain_json import json_scalar
 
 #: |lane offset| [m] under which the car counts as back in its lane
 RETURN_OFFSET_M = 0.5
@@ -16,10 +16,6 @@ AVOID_PREFIX = "avoid_"
 
 def _avoiding(phase: list[str]) -> np.ndarray:
     return np.fromiter((p.startswith(AVOID_PREFIX) for p in phase), bool, len(phase))
-
-
-def _nan_to_none(value: float) -> float | None:
-    return None if value is None or not math.isfinite(value) else float(value)
 
 
 def central_range_m(lidar: np.ndarray, beams: int) -> float:
@@ -79,13 +75,13 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
     gaps = floats["obstacle_gap_m"]
     return {
         "maneuver_started": started,
-        "detection_range_m": _nan_to_none(detection) if started else None,
+        "detection_range_m": json_scalar(detection) if started else None,
         "returned_to_lane": returned,
         "return_time_s": return_time,
-        "max_abs_lane_offset_m": _nan_to_none(np.max(offsets, initial=-np.inf,
+        "max_abs_lane_offset_m": json_scalar(np.max(offsets, initial=-np.inf,
                                                      where=np.isfinite(offsets))),
-        "min_gap_obstacle_m": _nan_to_none(np.min(gaps)) if gaps.size else None,
-        "min_ttc_s": _nan_to_none(np.min(floats["ttc_s"], initial=np.inf)),
+        "min_gap_obstacle_m": json_scalar(np.min(gaps)) if gaps.size else None,
+        "min_ttc_s": json_scalar(np.min(floats["ttc_s"], initial=np.inf)),
         "max_drac_mps2": float(np.max(floats["drac_mps2"], initial=0.0)),
-        "min_headway_s": _nan_to_none(np.min(floats["headway_s"], initial=np.inf)),
+        "min_headway_s": json_scalar(np.min(floats["headway_s"], initial=np.inf)),
     }

@@ -8,7 +8,8 @@
   least :data:`STUCK_HOLD_S` before the run ended.
 - ``unfinished``: neither, and still moving when the run ended.
 
-Error and timeout rows have no outcome.
+Error and timeout rows have no outcome. Over a result table, :func:`collided` and
+:func:`failed_or_collided` are the one home of "which runs failed".
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 
 COMPLETED, COLLIDED, STUCK, UNFINISHED = "completed", "collided", "stuck", "unfinished"
 OUTCOMES = (COMPLETED, COLLIDED, STUCK, UNFINISHED)
@@ -29,6 +31,17 @@ def outcomes_text(outcomes) -> str:
     """``3 completed, 1 collided, 0 stuck, 0 unfinished``: runs by outcome (a mapping
     from :data:`OUTCOMES`; a missing one is 0)."""
     return ", ".join(f"{outcomes.get(o, 0)} {o}" for o in OUTCOMES)
+
+
+def collided(rows: pd.DataFrame) -> pd.Series:
+    """Per result row: True when the run collided (an error or timeout row did not)."""
+    return rows.collision.fillna(False).astype(bool)
+
+
+def failed_or_collided(rows: pd.DataFrame) -> pd.Series:
+    """Per result row: True when the run did not run ok (error, timeout) or collided;
+    missing evidence is never safety."""
+    return (rows.status != "ok") | collided(rows)
 
 
 def rest_step(speed_mps: np.ndarray) -> int:

@@ -22,6 +22,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from analysis.run.run_outcome import failed_or_collided
+
 Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
 MAX_GROUPS = 12
@@ -203,11 +205,10 @@ def rate_summary(rows: pd.DataFrame) -> dict:
     }
 
 
-def failed_or_collided(rows: pd.DataFrame) -> pd.Series:
-    """Per run (of the rows with a known status): True when it did not run ok or ran
-    ok into a collision; missing evidence is never safety."""
-    counted = rows[rows.status.isin(STATUSES)]
-    return (counted.status != "ok") | counted.collision.fillna(False).astype(bool)
+def counted_failures(rows: pd.DataFrame) -> pd.Series:
+    """Per run of the rows with a known status: did it fail or collide
+    (:func:`analysis.run.run_outcome.failed_or_collided`)?"""
+    return failed_or_collided(rows[rows.status.isin(STATUSES)])
 
 
 def upper_bound_counting_failures(rows: pd.DataFrame,
@@ -215,7 +216,7 @@ def upper_bound_counting_failures(rows: pd.DataFrame,
     """The upper end of the 95% interval (by ``method``, clustered by warm state) of
     the collision rate with error and timeout runs counted as collisions, and the
     design effect it was taken with."""
-    flags = failed_or_collided(rows)
+    flags = counted_failures(rows)
     (_, high), counts = flag_interval(flags, rows.loc[flags.index], method)
     return high, counts.deff
 

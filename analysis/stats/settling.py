@@ -1,90 +1,26 @@
 """When has a town's background traffic settled? A warm-up length from the warm-up series.
 
-While the traffic warms up the simulator records, about once a simulated second,
-``t_s`` (simulation time [s]), ``vehicles`` (traffic vehicles in the network),
-``mean_speed_mps`` (their mean speed [m/s]) and ``halting`` (those slower than
-0.1 m/s). :func:`suggest_warm_up_s` reads the end of the start-up transient off
-that series with a standard warm-up truncation rule of simulation output analysis,
-the Marginal Standard Error Rule (MSER) on batch means, here on **batch means of one
-correlation length** (MSER-L):
+The series, sampled about once a simulated second: ``t_s`` [s], ``vehicles`` (traffic
+vehicles in the network), ``mean_speed_mps`` [m/s] and ``halting`` (those slower than
+0.1 m/s). :func:`suggest_warm_up_s` applies to each measure the Marginal Standard
+Error Rule on batch means of one correlation length (MSER-L; White 1997, MSER-5 of
+White, Cobb and Spratt 2000):
 
-* White, K. P. Jr. (1997), "An effective truncation heuristic for bias reduction
-  in simulation output", *Simulation* 69(6), 323-334 (the rule, as MCR/MSER);
-* White, K. P. Jr., Cobb, M. J. and Spratt, S. C. (2000), "A comparison of five
-  steady-state truncation heuristics for simulation", *Proc. Winter Simulation
-  Conference*, 755-760 (MSER-5: the rule on batch means of 5).
+* batch means of ``L`` samples starting every 5 samples (overlapping when ``L > 5``);
+  the cut ``d`` minimises ``MSER(d) = sum_{j > d} (Z_j - Zbar_d)^2 / (m - d)^2``,
+  searched in the first half of the series;
+* ``L`` (:func:`batch_length`) is one period when the measure's ACF has a peak above
+  :data:`PERIOD_PEAK` after its first negative lobe, else twice the first lag where
+  it falls below :data:`DECORRELATED`, never fewer than :data:`BATCH_SIZE` samples;
+* a minimum in the last :data:`EDGE_FRACTION` of the half, or fewer than
+  :data:`MIN_BATCHES` batches, means not settled: no suggestion, only a lower bound;
+* the suggestion is the latest measure's cut, rounded up.
 
-The rule, for one measure, with batches of ``L`` samples (below): take the means
-``Z_1..Z_m`` of the batches that start every 5 samples (at samples 0, 5, 10, ...) and
-lie wholly in the series. With ``L = 5`` they are the consecutive batches of MSER-5;
-with ``L > 5`` they overlap (overlapping batch means: Meketon, M. S. and Schmeiser,
-B. (1984), "Overlapping batch means: something for nothing?", *Proc. Winter
-Simulation Conference*, 227-230), which keeps the rule's resolution at 5 samples and
-estimates the same standard error with less noise than disjoint batches of ``L``.
-Truncating the first ``d`` batches cuts ``5 d`` samples and leaves ``Z_{d+1}..Z_m``,
-with mean ``Zbar_d``; the rule's statistic is
-
-    MSER(d) = sum_{j > d} (Z_j - Zbar_d)^2 / (m - d)^2,
-
-proportional to the squared standard error of the remaining mean, as long as ``L``
-spans the measure's correlation, so that batch means ``L`` apart are about
-independent. The truncation point is the ``d`` that minimises it: cutting more
-removes the bias of the transient, cutting too much leaves too little data and the
-error grows again. As is customary (e.g. Hoad, Robinson and Davies 2010), the cut is
-searched in the first half of the series only. A minimum on the edge of that half
-means the series had not settled within the observed time, and then no warm-up is
-suggested, only a lower bound. "On the edge" takes in the last tenth of the half
-(:data:`EDGE_FRACTION`): on a series still trending at its end the statistic falls
-all the way to the edge, and its noise alone moves the minimum a little inward. A
-series holding fewer than :data:`MIN_BATCHES` whole batches of ``L`` is too short
-to judge: not settled either, with half the series as the lower bound.
-
-**The batch length L: MSER on batch means of one correlation length (MSER-L).**
-MSER-5 fixes ``L = 5``, enough for output whose samples are nearly independent.
-Traffic in a signalised town is not: its mean speed and the number halting swing
-with the signal cycle (tens of seconds), and 5-s batch means of such a swing are
-strongly correlated. Their spread is then mostly the swing, against which the
-start-up transient does not stand out, and MSER-5 cuts far too early (on a 45-s
-sawtooth with a 60-s start-up: after 15-20 s). So ``L`` is read off each measure's
-own autocorrelation function (ACF), estimated on the second half of the series
-(closer to steady state than the first), mean removed, at lags up to half of that
-half (:func:`batch_length`):
-
-1. periodic: the period is the lag at which the measure repeats itself best: of the
-   positive lobes of the ACF after its first negative one, the peak (a true local
-   maximum, not the last lag looked at) that is highest, if it is above
-   :data:`PERIOD_PEAK`; ``L`` is one period, and a mean over a whole cycle averages
-   the cycle out, whatever its phase. Usually that is the first peak: the ACF
-   estimator shrinks a peak at lag ``k`` by ``1 - k/n``, so a multiple of the period
-   wins only where the series repeats itself clearly better there. It does in a town
-   whose signals switch between two phases: the halves of the cycle differ, and
-   batches of one half would alternate high and low, far from independent. The
-   threshold 0.5 is well above the noise of the ACF at such lags (on AR(1) noise,
-   phi = 0.9, over 600 s: a "period" in 47 of 1000 seeds at 0.3, in none at 0.5);
-2. otherwise: ``L`` is twice the first lag at which the ACF falls below
-   :data:`DECORRELATED` = 1/e; for an AR(1) process that is about its integrated
-   autocorrelation time ``(1 + phi) / (1 - phi)``, the spacing of effectively
-   independent samples. If the ACF never falls that low within the lags looked at,
-   ``L`` is twice the largest lag, and the series is too short to judge;
-3. never fewer than :data:`BATCH_SIZE` = 5 samples: on uncorrelated output the rule
-   is MSER-5.
-
-Limits. A cycle shows in the ACF only if the series spans at least four of them
-(the lags reach a quarter of the series), as many as :data:`MIN_BATCHES` one-cycle
-batches need anyway; on a shorter series of periodic traffic the rule falls back to
-case 2 and is no better than MSER-5: watch longer. MSER sees a transient only as a
-start that differs from the rest: a drift that begins late, in the second half,
-raises every MSER(d) alike and passes unnoticed (on a 10 x 10 grid of signals whose
-cycle means drifted from about 250 s to 550 s, 600 s of it gave 30 s, 900 s "not
-settled, at least 450 s"): watch well past where the measures look flat. And MSER's
-minimum scatters on stationary output by a few batches (it drops an early batch that
-happens to lie off the mean), in batches whatever their number: with one-cycle
-batches, by a cycle or more. On 900 s of a 45-s sawtooth with noise, the suggestion
-is within 50 s in 70 % of seeds without a start-up transient, and with a 60-s one it
-is 45-150 s in 75 % (exactly 60 s in 44 %); 4 % are not settled.
-
-:func:`analysis.report.settling_report.settling_figure` draws the series and the
-suggestion.
+Why one correlation length: signalised traffic swings with the signal cycle, and
+MSER-5's 5-s batch means of that swing hide the start-up transient (it cuts far too
+early). Limits: a drift that starts late in the watch goes unseen; the cut scatters
+by a cycle or more. Derivation and figures: docs/rare_events_and_warm_up.md, reproduced by
+``python -m pytest tests/test_settling.py``.
 """
 
 from __future__ import annotations

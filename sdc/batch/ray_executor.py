@@ -77,8 +77,10 @@ class _Batch:
 
 class RayExecutor:
     """Tasks on a Ray cluster: ``address`` joins a running one, else a local one is
-    started with ``workers`` CPUs and stopped at the end. ``batch_runs``: runs per
-    task (default: chosen from measured run times)."""
+    started with ``workers`` CPUs and stopped at the end; a Ray session this process
+    already holds (``ray.init`` called before, as in a notebook) is used as it is and
+    left running. ``batch_runs``: runs per task (default: chosen from measured run
+    times)."""
 
     name = "ray"
 
@@ -96,12 +98,12 @@ class RayExecutor:
             raise SdcError("--executor ray: ray is not installed "
                            "(pip install 'sdc[ray]')") from None
         self._ray = ray
-        options = {"address": self.address} if self.address else {"num_cpus": self.workers}
-        try:
-            ray.init(**options, include_dashboard=False, log_to_driver=False,
-                     logging_level="ERROR")
-        except ConnectionError as e:
-            raise SdcError(f"--ray-address: cannot join {self.address}: {e}") from None
+        self._owns_session = not ray.is_initialized()
+        if self._owns_session:
+            self._init_session(ray)
+        elif self.address:
+            raise SdcError(f"--ray-address: cannot join {self.address}: this process already "
+                           "holds a Ray session")
         self._remote = ray.remote(num_cpus=1, max_retries=0)(_run_batch)
         self.slots = max(1, int(ray.cluster_resources().get("CPU", 1)))
         warm_up = ray.remote(num_cpus=1)(_warm_up)
@@ -111,9 +113,18 @@ class RayExecutor:
         self.submitted_tasks = self.submitted_runs = 0
         return self
 
+    def _init_session(self, ray) -> None:
+        options = {"address": self.address} if self.address else {"num_cpus": self.workers}
+        try:
+            ray.init(**options, include_dashboard=False, log_to_driver=False,
+                     logging_level="ERROR")
+        except ConnectionError as e:
+            raise SdcError(f"--ray-address: cannot join {self.address}: {e}") from None
+
     def __exit__(self, *exc) -> None:
         self._refs = {}
-        self._ray.shutdown()
+        if self._owns_session:
+            self._ray.shutdown()
 
     def _submit(self, tasks: list[RunTask], alone: bool):
         shas = {f.sha256 for task in tasks for f in task.files}

@@ -22,7 +22,6 @@ missing or unknown key, so a column cannot vanish on its way to the results.
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -30,6 +29,7 @@ from typing import Any
 import pyarrow as pa
 
 from analysis.run.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
+from scenarios.plain_json import json_scalar
 from scenarios.sweep_spec import PARAM_PREFIX
 
 IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
@@ -188,20 +188,11 @@ def check_keys(row: Mapping[str, Any], expected: Iterable[str], what: str = "res
         raise RowKeyError(what, missing, unknown)
 
 
-def _plain(value: Any) -> Any:
-    """A Python scalar for a numpy one; None for NaN and infinity."""
-    if hasattr(value, "item"):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def _run_row(kind: str, status: str, given: Mapping[str, Any], names: tuple[str, ...]) -> dict:
     """A run's complete row: ``given`` must hold exactly ``names``; the rest is None."""
     check_keys(given, names, f"{kind} row")
     row = dict.fromkeys(RUN_COLUMNS)
-    row.update({k: _plain(v) for k, v in given.items()}, status=status)
+    row.update({k: json_scalar(v) for k, v in given.items()}, status=status)
     return row
 
 
@@ -251,7 +242,7 @@ class SweepColumns:
 def sweep_row(row: Mapping[str, Any], sweep: SweepColumns) -> dict:
     """A run's row with its sweep's columns, in the order of ``results.parquet``."""
     check_keys(row, RUN_COLUMNS, "run row")
-    values = {**row, **{k: _plain(v) for k, v in sweep.values().items()}}
+    values = {**row, **{k: json_scalar(v) for k, v in sweep.values().items()}}
     params = [k for k in values if k.startswith(PARAM_PREFIX)]
     return {name: values[name] for name in (*(c.name for c in COLUMNS), *params)}
 
@@ -267,7 +258,7 @@ def adaptive_row(row: Mapping[str, Any], *, batch: int, phase: str, weight: floa
                  score: float | None) -> dict:
     """A sweep row (:func:`sweep_row`) with the :data:`ADAPTIVE_COLUMNS` of its run."""
     values = {"batch": batch, "phase": phase, "weight": weight, "score": score}
-    return {**row, **{k: _plain(v) for k, v in values.items()}}
+    return {**row, **{k: json_scalar(v) for k, v in values.items()}}
 
 
 def result_schema(param_types: Mapping[str, type], adaptive: bool = False) -> pa.Schema:
