@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios import road_kernels
+from scenarios.polyline_frame import PolylineFrame
 from scenarios.scenario_spec import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
@@ -86,15 +86,11 @@ class RoadGeometry:
         self.curvature_1pm = curvature_1pm
         self.lanes = lanes
         self.lane_width_m = lane_width_m
-        delta = np.diff(self.center_xy, axis=0)
-        self._seg_len_m = np.hypot(delta[:, 0], delta[:, 1])
-        self._seg_dir = delta / self._seg_len_m[:, None]
-        self._seg_start_xy = np.ascontiguousarray(self.center_xy[:-1])
-        self._seg_start_s_m = np.concatenate([[0.0], np.cumsum(self._seg_len_m)[:-1]])
-        self.length_m = float(self._seg_len_m.sum())
-        self._seg_heading_rad = np.arctan2(self._seg_dir[:, 1], self._seg_dir[:, 0])
+        #: the centre line's frame: road coordinates (s along it, d to its left)
+        self.frame = PolylineFrame(self.center_xy)
+        self.length_m = float(self.frame.seg_len_m.sum())
+        self._seg_heading_rad = np.arctan2(self.frame.seg_dir[:, 1], self.frame.seg_dir[:, 0])
         self._seg_heading_list = self._seg_heading_rad.tolist()
-        self._seg_start_s_list = self._seg_start_s_m.tolist()
 
     @classmethod
     def from_spec(cls, road: RoadSpec) -> RoadGeometry:
@@ -114,15 +110,9 @@ class RoadGeometry:
         return math.floor((d_m + self.half_width_m) / self.lane_width_m)
 
     def _project(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Road coordinates and edge gaps of (K, 2) points (:mod:`scenarios.road_kernels`,
-        compiled where built): a step asks this of a few points, on polylines of up to
-        hundreds of segments."""
-        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
-        s_m, d_m, gaps_m = np.empty((3, len(xy)))
-        road_kernels.frenet(xy, self._seg_start_xy, self._seg_dir, self._seg_len_m,
-                            self._seg_start_s_m, s_m, d_m, self.half_width_m, self.length_m,
-                            gaps_m)
-        return s_m, d_m, gaps_m
+        """Road coordinates and edge gaps of (K, 2) points: a step asks this of a few
+        points, on polylines of up to hundreds of segments."""
+        return self.frame.project(xy, self.half_width_m, self.length_m)
 
     def to_frenet(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Road coordinates ``(s_m, d_m)`` of (K, 2) points.
@@ -137,51 +127,39 @@ class RoadGeometry:
 
     def locate(self, x_m: float, y_m: float) -> tuple[float, float]:
         """:meth:`to_frenet` of one point, in plain floats (a step's question)."""
-        return road_kernels.locate(x_m, y_m, self._seg_start_xy, self._seg_dir,
-                                   self._seg_len_m, self._seg_start_s_m)
+        return self.frame.locate(x_m, y_m)
 
     def locate_near(self, x_m: float, y_m: float, near_s_m: float,
                     reach_m: float = 30.0) -> tuple[float, float]:
         """:meth:`locate` among the segments within ``reach_m`` of ``near_s_m`` along
         the road: where a route passes close to itself (a grid's parallel streets,
         its own end), a point that moved on from ``near_s_m`` stays on its part."""
-        starts = self._seg_start_s_list
+        starts = self.frame.seg_start_s_list
         first = max(0, bisect.bisect_right(starts, near_s_m - reach_m) - 1)
         last = max(first + 1, bisect.bisect_right(starts, near_s_m + reach_m))
         if first == 0 and last == len(starts):
             return self.locate(x_m, y_m)
-        return road_kernels.locate(x_m, y_m, self._seg_start_xy[first:last],
-                                   self._seg_dir[first:last], self._seg_len_m[first:last],
-                                   self._seg_start_s_m[first:last])
-
-    def _segment_at(self, s_m: np.ndarray) -> np.ndarray:
-        return np.clip(np.searchsorted(self._seg_start_s_m, s_m, side="right") - 1,
-                       0, len(self._seg_len_m) - 1)
+        return self.frame.locate_among(x_m, y_m, first, last)
 
     @property
     def polyline(self) -> tuple[np.ndarray, ...]:
         """The centre line as the compiled kernels take it: segment starts (S, 2), unit
         directions (S, 2), lengths (S,), ``s`` at their starts (S,) and headings (S,)."""
-        return (self._seg_start_xy, self._seg_dir, self._seg_len_m, self._seg_start_s_m,
+        frame = self.frame
+        return (frame.seg_start_xy, frame.seg_dir, frame.seg_len_m, frame.seg_start_s_m,
                 self._seg_heading_rad)
 
     def heading_at(self, s_m) -> np.ndarray:
         """Heading of the centre line at ``s_m`` [rad, CCW from +x]."""
-        return self._seg_heading_rad[self._segment_at(np.asarray(s_m, dtype=float))]
+        return self._seg_heading_rad[self.frame.segments(np.asarray(s_m, dtype=float))]
 
     def heading_at_s(self, s_m: float) -> float:
         """:meth:`heading_at` of one position, in plain floats (a step's question)."""
-        seg = bisect.bisect_right(self._seg_start_s_list, s_m) - 1
-        return self._seg_heading_list[min(max(seg, 0), len(self._seg_heading_list) - 1)]
+        return self._seg_heading_list[self.frame.segment(s_m)]
 
     def xy_at(self, s_m, d_m) -> np.ndarray:
         """World points at road coordinates (broadcast), shape (..., 2) [m]."""
-        s_m, d_m = np.broadcast_arrays(np.asarray(s_m, float), np.asarray(d_m, float))
-        seg = self._segment_at(s_m)
-        direction = self._seg_dir[seg]
-        normal = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
-        along = (s_m - self._seg_start_s_m[seg])[..., None]
-        return self.center_xy[seg] + along * direction + d_m[..., None] * normal
+        return self.frame.points_off(s_m, d_m)
 
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` stands (anywhere here)."""
@@ -218,7 +196,7 @@ class RoadGeometry:
 
     def offset_polyline(self, d_m: float) -> np.ndarray:
         """The polyline at constant lateral offset ``d_m`` (vertices on the bisectors)."""
-        normals = np.stack([-self._seg_dir[:, 1], self._seg_dir[:, 0]], axis=-1)
+        normals = np.stack([-self.frame.seg_dir[:, 1], self.frame.seg_dir[:, 0]], axis=-1)
         vertex_normals = np.concatenate([normals[:1], normals[:-1] + normals[1:], normals[-1:]])
         vertex_normals[1:-1] /= np.sum(vertex_normals[1:-1] * normals[1:], axis=1)[:, None]
         return self.center_xy + d_m * vertex_normals

@@ -1,8 +1,5 @@
-"""The world backends behind one door: a spec's ``scenario.backend`` picks one.
-
-A world has ``backend``, ``road``, ``start(ego_box, ego_speed_mps)`` and
-``step(ego_box, ego_speed_mps)`` returning a :class:`~scenarios.snapshot.Snapshot`,
-and ``close()``; it is a context manager.
+"""The world backends behind one door: a spec's ``scenario.backend`` picks one, and
+every backend is a :class:`World`.
 """
 
 from __future__ import annotations
@@ -11,14 +8,37 @@ import contextlib
 import dataclasses
 from collections.abc import Callable
 from pathlib import Path
+from typing import Protocol
+
+import numpy as np
 
 from scenarios.errors import SdcError, SpecError
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.snapshot import Snapshot
 from scenarios.sumo_net.build import build_network, source_sha256, sumo_load_error
 from scenarios.warm_state import cached_path, uses_warm_state, warm_key
 
 BACKENDS = ("sumo", "highway")
+
+
+class World(Protocol):
+    """What a run asks of a world backend (``scenarios/sumo_world.py``,
+    ``scenarios/highway_world.py``). The ego is a box ``[cx, cy, yaw, length, width]``
+    [m, rad] pushed in every step at its speed [m/s]; the world answers with what the
+    car can see (a :class:`Snapshot`)."""
+
+    backend: str
+    road: RoadGeometry
+    #: the warm state the traffic started from (None: warmed up in the run, or none)
+    warm_state_key: str | None
+
+    def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...
+    def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...
+    def vehicle_count(self) -> int: ...  # traffic vehicles in the whole network
+    def close(self) -> None: ...
+    def __enter__(self) -> World: ...
+    def __exit__(self, *exc: object) -> None: ...
 
 
 def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
@@ -99,7 +119,7 @@ def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | Non
 
 
 def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
-               gui: bool = False, warm_state: Path | None = None):
+               gui: bool = False, warm_state: Path | None = None) -> World:
     """``warm_state``: the file of the spec's warm state, when the caller has it (the
     sumo backend; without it a run finds or computes its own)."""
     if spec.scenario.backend == "highway":

@@ -28,15 +28,24 @@ def temporary_cache(tmp_path_factory):
         os.environ["SDC_CACHE_DIR"] = before
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture
 def ray_session(temporary_cache):
-    """One local Ray session (2 CPUs) for this process's tests that compare Ray with local
-    processes: a RayExecutor uses a session its process holds and leaves it running, so
-    those tests start Ray once, not once each."""
+    """A local Ray session (2 CPUs) this process holds, shared by its tests that compare
+    Ray with local processes: a RayExecutor uses a session its process holds and leaves
+    it running, so those tests start Ray once, not once each (Ray stops it at exit)."""
     import ray
 
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level="ERROR")
-    yield
+    if not ray.is_initialized():
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
+                 logging_level="ERROR")
+
+
+@pytest.fixture
+def fresh_ray():
+    """No Ray session held: a test whose Ray workers must start in its own environment
+    (variables it sets) gets a session of its own from its RayExecutor."""
+    import ray
+
     ray.shutdown()
 
 

@@ -53,7 +53,7 @@ def _sleeps(task: RunTask) -> dict:
 
 
 @pytest.fixture
-def ray_finds_this_module(tmp_path, monkeypatch):
+def ray_finds_this_module(tmp_path, monkeypatch, fresh_ray):
     """Ray's workers unpickle this module's task functions by importing it."""
     monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(

@@ -120,7 +120,8 @@ def test_a_local_worker_that_lost_its_copy_gives_an_error_row_naming_the_file(
 
 
 @pytest.mark.slow
-def test_a_ray_worker_mends_a_lost_copy_from_the_job_bytes(tmp_path, monkeypatch):
+def test_a_ray_worker_mends_a_lost_copy_from_the_job_bytes(tmp_path, monkeypatch,
+                                                          fresh_ray):
     monkeypatch.setenv("SDC_CACHE_DIR", str(tmp_path / "cache"))  # Ray's workers inherit it
     copy = tmp_path / "cache" / "job-files" / sha256(PLUGIN) / "cautious.py"
     with RayExecutor(1) as executor:

@@ -42,7 +42,7 @@ def test_curve_frenet_round_trip(radius_m):
 
 def polyline(road: RoadGeometry) -> tuple[np.ndarray, ...]:
     """The road's segments as the kernels take them: starts, directions, lengths, s."""
-    return road._seg_start_xy, road._seg_dir, road._seg_len_m, road._seg_start_s_m
+    return road.polyline[:4]
 
 
 def frenet_by(frenet, road: RoadGeometry, points: np.ndarray) -> np.ndarray:
@@ -191,7 +191,7 @@ def test_sumo_lanes_match_our_geometry(tmp_path, spec):
 @needs_compiled
 def test_the_compiled_projection_refuses_wrong_arrays_by_name():
     road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=2))
-    line = (road._seg_start_xy, road._seg_dir, road._seg_len_m, road._seg_start_s_m)
+    line = road.polyline[:4]
     points, out = np.zeros((3, 2)), np.empty(3)
     with pytest.raises(TypeError, match="xy"):
         compiled.frenet(np.zeros(3), *line, out, out, 3.5, 100.0, out)

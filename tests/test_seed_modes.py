@@ -48,24 +48,6 @@ def test_the_truth_file_describes_this_family():
     assert (base.controller.name, seed.detect_beams, seed.detect_range_m) == ("seed", 11, 5.0)
 
 
-def test_the_recorded_truth_is_rare_tight_and_the_sum_of_its_modes():
-    p = TRUTH["p_true"]
-    assert 1e-4 <= p <= 1e-3
-    assert TRUTH["p_low"] <= p <= TRUTH["p_high"]
-    assert TRUTH["bound"] == pytest.approx(max(p - TRUTH["p_low"], TRUTH["p_high"] - p))
-    assert TRUTH["bound"] < 0.01 * p
-    modes = TRUTH["modes"]
-    assert [(m["name"], m["outcome"]) for m in modes] == [
-        ("speed", "road_edge"), ("left", "obstacle"), ("right", "obstacle"),
-        ("low_speed", "obstacle")]
-    for mode_key, total_key in (("p", "p_true"), ("p_low", "p_low"), ("p_high", "p_high")):
-        assert sum(m[mode_key] for m in modes) == pytest.approx(TRUTH[total_key])
-    for m in modes:
-        assert m["p_low"] <= m["p"] <= m["p_high"]
-    # three modes of about a third each; the fourth negligible
-    assert all(0.25 * p < m["p"] < 0.45 * p for m in modes[:3])
-    assert modes[3]["p_high"] < 1e-3 * p
-
 
 def test_the_truth_recomputes_from_the_recorded_boundaries():
     """truths/seed_modes_truth.py's integral over the recorded brackets and the
@@ -93,36 +75,7 @@ def test_the_truth_recomputes_from_the_recorded_boundaries():
     assert sum(p for p, _, _ in again) == pytest.approx(TRUTH["p_true"], rel=1e-9)
 
 
-def test_the_boundaries_are_where_the_geometry_puts_them():
-    b = TRUTH["boundaries"]
-    for side in ("left_offset_m", "right_offset_m"):
-        assert b[side][0] <= b["detection_offset_geometry_m"] <= b[side][1]
-    assert b["speed_mps"][1] - b["speed_mps"][0] < 1e-4
-    assert b["speed_mps"][0] <= b["speed_interpolated_mps"] <= b["speed_mps"][1]
 
-
-def test_the_scans_and_the_check_grid_agreed_run_by_run():
-    scans = TRUTH["scans"]
-    assert scans["speed"]["gap_spread_across_offsets_m"] <= 1e-6
-    assert len(scans["speed"]["offsets_m"]) >= 3
-    assert len(scans["left"]["speeds_mps"]) >= 3 and len(scans["right"]["speeds_mps"]) >= 3
-    check = TRUTH["check"]
-    assert check["outcome_mismatches"] == 0 and check["maneuver_mismatches"] == 0
-    assert check["road_edge_gap_spread_in_detected_band_m"] <= 1e-6
-    assert check["collision_with"] == ["obstacle", "road_edge"]
-    grid = check["grid_estimate"]
-    assert grid["low"] <= TRUTH["p_true"] <= grid["high"]
-    assert grid["outside_mass"] < 1e-6 * TRUTH["p_true"]
-
-
-def test_the_gap_score_leads_to_the_speed_boundary_only():
-    """What the family tests in an estimator: the default score falls to 0 toward the
-    road_edge region, but stays flat up to the offset regions' boundaries."""
-    score = TRUTH["score"]
-    toward_speed = [point["score"] for point in score["speed_at_offset_0"]]
-    assert toward_speed == sorted(toward_speed, reverse=True) and toward_speed[-1] < 0.01
-    for side in ("left_at_3.6_mps", "right_at_3.6_mps"):
-        assert min(point["score"] for point in score[side]) > 2.0
 
 
 @pytest.mark.slow

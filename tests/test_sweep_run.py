@@ -200,7 +200,7 @@ def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path, monkey
     assert _gone(int((tmp_path / f"{HUNG_RUN}.pid").read_text()))  # its worker
 
 
-def test_ray_stops_a_hung_run(tmp_path, monkeypatch):
+def test_ray_stops_a_hung_run(tmp_path, monkeypatch, fresh_ray):
     # Ray's workers find _hangs by importing this module
     monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(

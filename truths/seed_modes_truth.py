@@ -443,6 +443,60 @@ def truth(speed_dir: Path, left_dir: Path, right_dir: Path, check_dir: Path) -> 
     }
 
 
+def failed_checks(result: dict) -> list[str]:
+    """What must hold of the truth before it is written: the scans and the check grid
+    agree with the structure, the boundaries lie where the geometry puts them, the gap
+    score warns of the speed region only, and P is rare, tight and the sum of three modes
+    of about a third each and a negligible fourth."""
+    p, modes, check = result["p_true"], result["modes"], result["check"]
+    b, scans, score = result["boundaries"], result["scans"], result["score"]
+    toward_speed = [point["score"] for point in score["speed_at_offset_0"]]
+    claims = {
+        "the check grid contradicts the structure (an outcome)": check["outcome_mismatches"] == 0,
+        "the check grid contradicts the structure (a maneuver)": check["maneuver_mismatches"] == 0,
+        "the road-edge gap varies in the detected band":
+            check["road_edge_gap_spread_in_detected_band_m"] <= GAP_TOLERANCE_M,
+        "the speed scan's gap varies across offsets":
+            scans["speed"]["gap_spread_across_offsets_m"] <= GAP_TOLERANCE_M,
+        "too few scan lines": (len(scans["speed"]["offsets_m"]) >= 3
+                               and len(scans["left"]["speeds_mps"]) >= 3
+                               and len(scans["right"]["speeds_mps"]) >= 3),
+        "something other than the obstacle or the road edge was hit":
+            check["collision_with"] == ["obstacle", "road_edge"],
+        "the check grid's own bounds do not hold P":
+            check["grid_estimate"]["low"] <= p <= check["grid_estimate"]["high"],
+        "the check grid leaves out too much mass":
+            check["grid_estimate"]["outside_mass"] < 1e-6 * p,
+        "an offset boundary is not where the detection's geometry puts it": all(
+            b[side][0] <= b["detection_offset_geometry_m"] <= b[side][1]
+            for side in ("left_offset_m", "right_offset_m")),
+        "the speed boundary is not bracketed to 1e-4 m/s": (
+            b["speed_mps"][1] - b["speed_mps"][0] < 1e-4
+            and b["speed_mps"][0] <= b["speed_interpolated_mps"] <= b["speed_mps"][1]),
+        "the gap score does not fall to 0 toward the speed boundary":
+            toward_speed == sorted(toward_speed, reverse=True) and toward_speed[-1] < 0.01,
+        "the gap score warns of an offset boundary": all(
+            min(point["score"] for point in score[side]) > 2.0
+            for side in ("left_at_3.6_mps", "right_at_3.6_mps")),
+        "P is not rare (1e-4 to 1e-3)": 1e-4 <= p <= 1e-3,
+        "P lies outside its bounds": result["p_low"] <= p <= result["p_high"],
+        "the bounds are not within 1 % of P": result["bound"] < 0.01 * p,
+        "the modes are not speed, left, right and low_speed":
+            [(m["name"], m["outcome"]) for m in modes] == [
+                ("speed", "road_edge"), ("left", "obstacle"), ("right", "obstacle"),
+                ("low_speed", "obstacle")],
+        "the modes do not add up to P": all(
+            math.isclose(sum(m[key] for m in modes), result[total], rel_tol=1e-6)
+            for key, total in (("p", "p_true"), ("p_low", "p_low"), ("p_high", "p_high"))),
+        "a mode lies outside its bounds": all(m["p_low"] <= m["p"] <= m["p_high"]
+                                              for m in modes),
+        "the three modes are not about a third each":
+            all(0.25 * p < m["p"] < 0.45 * p for m in modes[:3]),
+        "the low-speed mode is not negligible": modes[3]["p_high"] < 1e-3 * p,
+    }
+    return [claim for claim, holds in claims.items() if not holds]
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("speed_dir", type=Path, help="output of seed-modes-truth-speed.toml")
@@ -452,10 +506,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write", action="store_true", help=f"store as {TRUTH_FILE.name}")
     args = parser.parse_args(argv)
     result = truth(args.speed_dir, args.left_dir, args.right_dir, args.check_dir)
-    check = result["check"]
-    contradicted = (check["outcome_mismatches"] or check["maneuver_mismatches"]
-                    or check["road_edge_gap_spread_in_detected_band_m"] > GAP_TOLERANCE_M)
-    return publish(result, "the structure" if contradicted else None, TRUTH_FILE, args.write)
+    return publish(result, failed_checks(result), TRUTH_FILE, args.write)
 
 
 if __name__ == "__main__":

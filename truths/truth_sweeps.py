@@ -52,14 +52,14 @@ def sweep_record(out_dir: Path, rows: pd.DataFrame, manifest: dict) -> dict:
     }
 
 
-def publish(result: dict, contradicted: str | None, truth_file: Path, write: bool) -> int:
-    """Print the truth as JSON; refuse it (exit status 1, ``contradicted`` says why) when the
-    check grid contradicts what it assumed, else store it as ``truth_file`` if ``write``."""
+def publish(result: dict, failed_checks: list[str], truth_file: Path, write: bool) -> int:
+    """Print the truth as JSON; refuse it (exit status 1, each failed check on stderr) when
+    any of its checks failed, else store it as ``truth_file`` if ``write``."""
     text = json.dumps(result, indent=1) + "\n"
     print(text, end="")
-    if contradicted:
-        print(f"the check grid contradicts {contradicted}: the truth does not hold",
-              file=sys.stderr)
+    for failed in failed_checks:
+        print(f"the truth does not hold: {failed}", file=sys.stderr)
+    if failed_checks:
         return 1
     if write:
         truth_file.write_text(text)

@@ -7,6 +7,7 @@ grouped into modes (:mod:`analysis.rare.failure_modes`). Plain data for the repo
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -126,13 +127,67 @@ def saved_summary(sweep_dir: Path, mode: str) -> dict:
     return read_json(path, f"the {mode} summary") if path.exists() else {}
 
 
+@dataclasses.dataclass(frozen=True)
+class RareSummary:
+    """What a search or estimate directory says of itself (the report's summary;
+    :meth:`to_plain` is its ``summary.json``). Failure and stuck modes are plain
+    (:meth:`analysis.rare.failure_modes.FailureMode.to_plain`)."""
+
+    mode: str  # "search" or "estimate"
+    sweep: str
+    controller: str
+    runs: int
+    counts: dict[str, int]  # runs by status: ok, error, timeout
+    state: str | None  # finished, interrupted, ...
+    score: str
+    batches: int
+    failures: int  # runs with score <= 0
+    first_failure_run: int | None  # counted from 1
+    first_failure_run_id: str | None
+    outcomes: dict[str, int]  # completed, collided, stuck, unfinished, failed
+    failure_modes: list[dict]
+    stuck_modes: list[dict]
+    adaptation_levels: list[float] | None
+    # an estimate's alone
+    target_rhw: float | None = None
+    stopped: str | None = None
+    level_ess: list[float] | None = None
+    level_uncovered: list[int] | None = None
+    estimate: Estimate | None = None
+
+    @property
+    def estimate_plain(self) -> dict | None:
+        """The estimate as the report states it, with its acceleration over plain Monte
+        Carlo (None before the estimation phase)."""
+        e = self.estimate
+        return None if e is None else {
+            "p_collision": e.p_collision, "ci_low": e.ci_low, "ci_high": e.ci_high,
+            "rhw": e.rhw, "runs": e.runs, "estimation_runs": e.estimation_runs,
+            "failures": e.failures, "ess": e.ess, "max_term_share": e.max_term_share,
+            "mc_equivalent_runs": e.mc_equivalent_runs,
+            "acceleration": e.mc_equivalent_runs / e.runs}
+
+    def to_plain(self) -> dict:
+        plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)
+                 if field.name not in _ESTIMATE_FIELDS}
+        if self.mode == "estimate":
+            plain.update({name: getattr(self, name) for name in _ESTIMATE_FIELDS},
+                         estimate=self.estimate_plain)
+        return plain
+
+
+_ESTIMATE_FIELDS = ("target_rhw", "stopped", "level_ess", "level_uncovered", "estimate")
+
+
 def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
-                     sweep_dir: Path) -> dict:
+                     sweep_dir: Path) -> RareSummary:
     """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
     settings = manifest["adaptive"]
     mode = settings["mode"]
     failed = results[_failed(results)]
-    summary = {
+    max_weight = saved.get("max_weight") or math.inf
+    first = failed.run_index.idxmin() if len(failed) else None
+    common = {
         "mode": mode,
         "sweep": manifest["sweep"]["sweep"]["name"],
         "controller": saved.get("controller", results.controller.iloc[0]),
@@ -142,27 +197,17 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
         "score": settings["score"],
         "batches": int(results.batch.max()) + 1,
         "failures": len(failed),
-        "first_failure_run": (int(failed.run_index.min()) + 1) if len(failed) else None,
-        "first_failure_run_id": (failed.loc[failed.run_index.idxmin(), "run_id"]
-                                 if len(failed) else None),
+        "first_failure_run": None if first is None else int(failed.run_index.min()) + 1,
+        "first_failure_run_id": None if first is None else failed.loc[first, "run_id"],
         "outcomes": outcome_counts(results),
         "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
-                                         saved.get("max_weight") or math.inf),
+                                         max_weight),
         "stuck_modes": stuck_modes(results, sweep_params(manifest), sweep_dir),
         "adaptation_levels": saved.get("adaptation_levels"),
     }
-    if mode == "estimate":
-        max_weight = saved.get("max_weight") or math.inf
-        estimate = estimate_of(results, max_weight=max_weight)
-        summary["target_rhw"] = settings["target_rhw"]
-        summary["stopped"] = saved.get("stopped")
-        summary["level_ess"] = saved.get("level_ess")
-        summary["level_uncovered"] = saved.get("level_uncovered")
-        summary["estimate"] = None if estimate is None else {
-            "p_collision": estimate.p_collision, "ci_low": estimate.ci_low,
-            "ci_high": estimate.ci_high, "rhw": estimate.rhw, "runs": estimate.runs,
-            "estimation_runs": estimate.estimation_runs, "failures": estimate.failures,
-            "ess": estimate.ess, "max_term_share": estimate.max_term_share,
-            "mc_equivalent_runs": estimate.mc_equivalent_runs,
-            "acceleration": estimate.mc_equivalent_runs / estimate.runs}
-    return summary
+    if mode != "estimate":
+        return RareSummary(**common)
+    return RareSummary(**common, target_rhw=settings["target_rhw"], stopped=saved.get("stopped"),
+                       level_ess=saved.get("level_ess"),
+                       level_uncovered=saved.get("level_uncovered"),
+                       estimate=estimate_of(results, max_weight=max_weight))

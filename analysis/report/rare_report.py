@@ -14,28 +14,28 @@ import math
 
 import pandas as pd
 
-from analysis.rare.adaptive_summary import convergence
+from analysis.rare.adaptive_summary import RareSummary, convergence
 from analysis.rare.failure_modes import OTHER, region_words
 from analysis.report import plots
 from analysis.run.run_outcome import outcomes_text
+from scenarios.sweep_spec import PARAM_PREFIX
 
 
-def first_failure_words(summary: dict) -> str:
+def first_failure_words(first_run: int | None, first_run_id: str | None) -> str:
     """", the first: run ID, after N runs" (ids count from 0, N from 1), or nothing."""
-    first = summary.get("first_failure_run")
-    if not first:
+    if not first_run:
         return ""
-    return f", the first: run {summary['first_failure_run_id']}, after {first} runs"
+    return f", the first: run {first_run_id}, after {first_run} runs"
 
 
-def headline(summary: dict) -> list[str]:
+def headline(summary: RareSummary) -> list[str]:
     """The lines that say what the directory found."""
-    counts = summary["counts"]
-    lines = [f"{summary['mode']} of {summary['sweep']} for {summary['controller']}: "
-             f"{summary['runs']} runs in {summary['batches']} batches ({counts['ok']} ok, "
-             f"{counts['error']} error, {counts['timeout']} timeout); {summary['state']}"]
-    if summary["mode"] == "estimate":
-        e = summary["estimate"]
+    counts = summary.counts
+    lines = [f"{summary.mode} of {summary.sweep} for {summary.controller}: "
+             f"{summary.runs} runs in {summary.batches} batches ({counts['ok']} ok, "
+             f"{counts['error']} error, {counts['timeout']} timeout); {summary.state}"]
+    if summary.mode == "estimate":
+        e = summary.estimate_plain
         if e is None:
             lines.append("no estimate yet: the adaptation has not ended")
         elif e["failures"] == 0:
@@ -44,20 +44,21 @@ def headline(summary: dict) -> list[str]:
         else:
             stopped = {"target_rhw": "target RHW reached",
                        "budget": "budget spent before the target RHW"}.get(
-                summary["stopped"], "not finished")
+                summary.stopped, "not finished")
             lines.append(f"P(collision) = {e['p_collision']:.3g}, 95% interval "
                          f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
-                         f"(target {summary['target_rhw']:g}; {stopped})")
+                         f"(target {summary.target_rhw:g}; {stopped})")
             lines.append(f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
                          f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
                          f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
             lines.append(_diagnostics(summary))
-    lines.append(f"{summary['failures']} failed runs" + first_failure_words(summary)
+    lines.append(f"{summary.failures} failed runs"
+                 + first_failure_words(summary.first_failure_run, summary.first_failure_run_id)
                  + ("; the drawn runs are aimed at failure, so their share is no probability"))
-    lines.append(f"outcomes: {outcomes_text(summary['outcomes'])}, "
-                 f"{summary['outcomes']['failed']} failed (no outcome); "
-                 f"{_modes_count(summary['failure_modes'], 'failure')}, "
-                 f"{_modes_count(summary['stuck_modes'], 'stuck')} (tables below)")
+    lines.append(f"outcomes: {outcomes_text(summary.outcomes)}, "
+                 f"{summary.outcomes['failed']} failed (no outcome); "
+                 f"{_modes_count(summary.failure_modes, 'failure')}, "
+                 f"{_modes_count(summary.stuck_modes, 'stuck')} (tables below)")
     return lines
 
 
@@ -80,12 +81,12 @@ ESTIMATE_TERMS = (
     "it found beyond its kernels.")
 
 
-def _diagnostics(summary: dict) -> str:
+def _diagnostics(summary: RareSummary) -> str:
     """The sampler's own diagnostics, one line."""
-    e, levels = summary["estimate"], summary.get("adaptation_levels") or []
-    ess = list(summary.get("level_ess") or [])
+    e, levels = summary.estimate_plain, summary.adaptation_levels or []
+    ess = list(summary.level_ess or [])
     ess += [None] * (len(levels) - len(ess))
-    uncovered = list(summary.get("level_uncovered") or [])
+    uncovered = list(summary.level_uncovered or [])
     uncovered += [0] * (len(levels) - len(uncovered))
     steps = ", ".join(f"{g:.3g}" + (f" (ESS {n:.0f})" if n is not None else "")
                       + (f" ({u} beyond its kernels)" if u else "")
@@ -127,24 +128,24 @@ def mode_columns(modes: list[dict]) -> str:
             "box they fill, not the region's true edges).")
 
 
-def adaptive_figures(results: pd.DataFrame, summary: dict,
+def adaptive_figures(results: pd.DataFrame, summary: RareSummary,
                      max_weight: float = math.inf) -> list[tuple[str, bytes]]:
     out = []
-    if summary["mode"] == "estimate":
+    if summary.mode == "estimate":
         history = convergence(results, max_weight)
         if len(history):
             out.append(("Convergence: the estimate and its relative half-width against runs",
-                        plots.convergence(history, summary["target_rhw"])))
-        split = [m for m in summary["failure_modes"] if "p_collision" in m]
-        if split and summary["estimate"] and summary["estimate"]["failures"]:
+                        plots.convergence(history, summary.target_rhw)))
+        split = [m for m in summary.failure_modes if "p_collision" in m]
+        if split and summary.estimate and summary.estimate.failures:
             out.append(("Where P(collision) comes from: each failure mode's part",
-                        plots.mode_probabilities(split, summary["estimate"])))
-    varying = [c for c in results.columns if c.startswith("p.")
+                        plots.mode_probabilities(split, summary.estimate_plain)))
+    varying = [c for c in results.columns if c.startswith(PARAM_PREFIX)
                and pd.api.types.is_numeric_dtype(results[c]) and results[c].nunique() > 1]
     if len(varying) >= 2:
-        stuck = frozenset(r for m in summary["stuck_modes"] for r in m["run_ids"])
+        stuck = frozenset(r for m in summary.stuck_modes for r in m["run_ids"])
         out.append((f"Runs drawn over {varying[0]} and {varying[1]}, failures ringed by mode",
                     plots.sampling_path(results, varying[0], varying[1],
-                                        summary["failure_modes"], stuck)))
+                                        summary.failure_modes, stuck)))
     out.append(("What was hit", plots.collision_breakdown(results)))
     return out

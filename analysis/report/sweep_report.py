@@ -787,16 +787,16 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     saved = summaries.saved_summary(sweep_dir, manifest["adaptive"]["mode"])
     summary = summaries.adaptive_summary(results, manifest, saved, sweep_dir)
     lines = rare_report.headline(summary)
-    modes = rare_report.mode_rows(summary["failure_modes"])
-    stuck = rare_report.mode_rows(summary["stuck_modes"])
+    modes = rare_report.mode_rows(summary.failure_modes)
+    stuck = rare_report.mode_rows(summary.stuck_modes)
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
-    title = f"{summary['mode'].capitalize()} report: {summary['sweep']}"
+    title = f"{summary.mode.capitalize()} report: {summary.sweep}"
     bad = failures(results)
     listed = bad.head(MAX_LISTED_FAILURES).to_dict("records")
-    terms = [rare_report.ESTIMATE_TERMS] if summary.get("estimate") else []
+    terms = [rare_report.ESTIMATE_TERMS] if summary.estimate else []
     md = [f"# {title}", "", *lines, "", *terms, "", "## Failure modes", "",
           *_markdown_table(modes), "",
-          rare_report.mode_columns(summary["failure_modes"]), "", "## Stuck runs", "",
+          rare_report.mode_columns(summary.failure_modes), "", "## Stuck runs", "",
           STUCK_WORDS, "",
           *(_markdown_table(stuck) if len(stuck) > 1 else ["No run was stuck."]), "",
           "## Runs to look at", ""]
@@ -805,7 +805,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     parts = [f"<h1>{html.escape(title)}</h1>",
              "".join(f"<p>{html.escape(line)}</p>" for line in [*lines, *terms]),
              "<h2>Failure modes</h2>", _table_html(modes),
-             f"<p>{html.escape(rare_report.mode_columns(summary['failure_modes']))}</p>",
+             f"<p>{html.escape(rare_report.mode_columns(summary.failure_modes))}</p>",
              "<h2>Stuck runs</h2>", f"<p>{STUCK_WORDS}</p>",
              _table_html(stuck) if len(stuck) > 1 else "<p>No run was stuck.</p>"]
     parts += [_figure_html(t, png) for t, png in images]
@@ -818,15 +818,16 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
                          f"<title>sdc {html.escape(title)}</title><style>{_CSS}</style></head>"
                          f"<body>{''.join(parts)}</body></html>\n")
     summary_path = sweep_dir / "summary.json"
-    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
+    plain = summary.to_plain()
+    summary_path.write_text(json.dumps(json_plain(plain), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text("\n".join(md) + "\n")
     if junit_path is not None:
-        Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
-    terminal = [*lines, "failure modes:", *(mode_lines(summary["failure_modes"],
+        Path(junit_path).write_text(junit_xml(results, summary.sweep))
+    terminal = [*lines, "failure modes:", *(mode_lines(summary.failure_modes,
                                                        MAX_TERMINAL_MODES, str(markdown_path))
                                             or ["  none"])]
-    if summary["stuck_modes"]:
-        terminal += ["stuck runs:", *mode_lines(summary["stuck_modes"], MAX_TERMINAL_MODES,
+    if summary.stuck_modes:
+        terminal += ["stuck runs:", *mode_lines(summary.stuck_modes, MAX_TERMINAL_MODES,
                                                 str(markdown_path))]
-    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal)
+    return Report(plain, html_path, summary_path, markdown_path, junit_path, terminal)

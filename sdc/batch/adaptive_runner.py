@@ -44,10 +44,10 @@ from scenarios.errors import SdcError, SpecError
 from scenarios.plain_json import json_plain
 from scenarios.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
 from scenarios.sweep_spec import PlannedRun, SweepSpec, plan_samples
+from sdc.batch.executors import Executor
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
 from sdc.batch.sweep_runner import (
-    Executor,
     Reporter,
     build_networks,
     end_session,

@@ -15,8 +15,24 @@ batches of runs (:mod:`sdc.batch.ray_executor`).
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
+from typing import Protocol, Self
+
 from sdc.batch.local_executor import LocalExecutor
 from sdc.batch.ray_executor import RayExecutor
+from sdc.batch.run_task import RunTask
 from sdc.batch.worker_run import TaskFn
 
-__all__ = ["LocalExecutor", "RayExecutor", "TaskFn"]
+__all__ = ["Executor", "LocalExecutor", "RayExecutor", "TaskFn"]
+
+
+class Executor(Protocol):
+    """The executors' contract (above); :class:`LocalExecutor` and :class:`RayExecutor`
+    keep it."""
+
+    name: str
+    workers: int
+
+    def __enter__(self) -> Self: ...
+    def __exit__(self, *exc: object) -> None: ...
+    def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]: ...

@@ -30,6 +30,7 @@ from scenarios.sumo_net.sumo_config import config_manifest
 from scenarios.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.warm_state import SETTLING_FILE
 from scenarios.world_backends import prepare_network
+from sdc.batch.executors import Executor
 from sdc.batch.job_files import FileCatalog
 from sdc.batch.manifest import (
     controller_changes,
@@ -55,15 +56,6 @@ class Reporter(Protocol):
     def set_total(self, total: int) -> None: ...  # the runs now planned (an estimate's change)
     def warm_states(self, done: int, total: int) -> None: ...  # warm states computed so far
     def stop(self) -> None: ...
-
-
-class Executor(Protocol):
-    name: str
-    workers: int
-
-    def __enter__(self): ...
-    def __exit__(self, *exc): ...
-    def map(self, tasks): ...
 
 
 @dataclasses.dataclass(frozen=True)

@@ -21,6 +21,7 @@ from scenarios.controller_ref import ENTRY_POINT_GROUP, controller_kind
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import ControllerSpec
 from sdc.car.avoid import AvoidController
+from sdc.car.controller_api import Controller
 from sdc.car.controllers import LaneKeepController, SeedController
 
 #: the built-in controllers by name (their parameters: scenario_spec.CONTROLLER_PARAMS)
@@ -102,7 +103,7 @@ def controller_class(name: str, field: str = "controller.name") -> type:
     return _attribute(_import(target, field), cls_name, target, field)
 
 
-def make_controller(spec: ControllerSpec, field: str = "controller.name") -> Any:
+def make_controller(spec: ControllerSpec, field: str = "controller.name") -> Controller:
     """A new controller for one run: its class built with the table's parameters.
     A constructor that raises is a :class:`SpecError` with its message."""
     cls = controller_class(spec.name, field)

@@ -13,12 +13,11 @@ offset instead.
 
 from __future__ import annotations
 
-import bisect
 import math
 
 import numpy as np
 
-from scenarios import road_kernels
+from scenarios.polyline_frame import PolylineFrame
 
 #: the arc a reading without a path stands for: this many points ...
 ARC_POINTS = 41
@@ -55,17 +54,11 @@ def arc_path(lane, look_ahead_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 class LanePath:
-    """The lane around the car, from a lane reading (see the module)."""
+    """The lane around the car, from a lane reading (see the module): a frame of its
+    centre line (:class:`scenarios.polyline_frame.PolylineFrame`), in the car's frame."""
 
     def __init__(self, xy: np.ndarray, s_m: np.ndarray):
-        delta = np.diff(xy, axis=0)
-        lengths = np.hypot(delta[:, 0], delta[:, 1])
-        keep = lengths > 1e-9
-        self._starts = np.ascontiguousarray(xy[:-1][keep])
-        self._lengths = np.ascontiguousarray(lengths[keep])
-        self._dirs = np.ascontiguousarray(delta[keep] / self._lengths[:, None])
-        self._start_s = np.ascontiguousarray(s_m[:-1][keep], dtype=np.float64)
-        self._start_s_list = self._start_s.tolist()
+        self.frame = PolylineFrame(xy, s_m, min_segment_m=1e-9)
         #: the body centre's station along the lane and its offset from the centre
         self.car_s_m, self.offset_m = self.locate(0.0, 0.0)
 
@@ -77,17 +70,12 @@ class LanePath:
 
     def locate(self, x_m: float, y_m: float) -> tuple[float, float]:
         """Lane coordinates ``(s, d)`` of one point in the car's frame."""
-        return road_kernels.locate(x_m, y_m, self._starts, self._dirs, self._lengths,
-                                   self._start_s)
+        return self.frame.locate(x_m, y_m)
 
     def to_lane(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lane coordinates ``(s, d)`` of (K, 2) points in the car's frame (each on its
         nearest segment; the path's first and last segments extended)."""
-        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
-        s_m, d_m, gaps = np.empty((3, len(xy)))
-        road_kernels.frenet(xy, self._starts, self._dirs, self._lengths, self._start_s,
-                            s_m, d_m, 0.0, 0.0, gaps)
-        return s_m, d_m
+        return self.frame.project(xy)[:2]
 
     def turn_speed_mps(self, lateral_accel_mps2: float, decel_mps2: float,
                        window_m: float = TURN_WINDOW_M,
@@ -101,17 +89,18 @@ class LanePath:
         that passes ``corner_m`` inside the corner, if tighter. Bends from
         ``behind_m`` behind the body centre on count (the rear axle's: the car is
         still turning through them)."""
-        ahead = self._start_s > self.car_s_m - behind_m
+        ahead = self.frame.seg_start_s_m > self.car_s_m - behind_m
         if not ahead.any():
             return math.inf
-        heading = np.unwrap(np.arctan2(self._dirs[:, 1], self._dirs[:, 0]))
-        stations = self._start_s[ahead]
-        last = len(self._start_s) - 1
-        before = np.clip(np.searchsorted(self._start_s, stations - window_m / 2, "right") - 1,
+        starts_s, directions = self.frame.seg_start_s_m, self.frame.seg_dir
+        heading = np.unwrap(np.arctan2(directions[:, 1], directions[:, 0]))
+        stations = starts_s[ahead]
+        last = len(starts_s) - 1
+        before = np.clip(np.searchsorted(starts_s, stations - window_m / 2, "right") - 1,
                          0, last)
-        after = np.clip(np.searchsorted(self._start_s, stations + window_m / 2, "right") - 1,
+        after = np.clip(np.searchsorted(starts_s, stations + window_m / 2, "right") - 1,
                         0, last)
-        middle = self._start_s + self._lengths / 2
+        middle = starts_s + self.frame.seg_len_m / 2
         turn = np.minimum(np.abs(heading[after] - heading[before]), 0.99 * math.pi)
         curvature = np.maximum(turn / np.maximum(window_m, middle[after] - middle[before]),
                                (1 / np.cos(turn / 2) - 1) / corner_m)
@@ -125,7 +114,7 @@ class LanePath:
     def heading_rad(self, s_m: float) -> float:
         """The lane's direction at ``s_m`` in the car's frame (0: where the car
         points; minus the car's heading error there)."""
-        dx, dy = self._dirs[self._segment(s_m)]
+        dx, dy = self.frame.seg_dir[self.frame.segment(s_m)]
         return math.atan2(dy, dx)
 
     def curvature_1pm(self, from_s_m: float, to_s_m: float) -> float:
@@ -135,19 +124,10 @@ class LanePath:
         turn = (turn + math.pi) % (2 * math.pi) - math.pi
         return turn / (to_s_m - from_s_m)
 
-    def _segment(self, s_m: float) -> int:
-        index = bisect.bisect_right(self._start_s_list, s_m) - 1
-        return min(max(index, 0), len(self._start_s_list) - 1)
-
     def points_at(self, s_m: np.ndarray) -> np.ndarray:
         """The lane centre's points at stations ``s_m`` (K,) in the car's frame (K, 2)."""
-        seg = np.clip(np.searchsorted(self._start_s, s_m, "right") - 1, 0, len(self._start_s) - 1)
-        along = s_m - self._start_s[seg]
-        return self._starts[seg] + along[:, None] * self._dirs[seg]
+        return self.frame.points(s_m)
 
     def point_at(self, s_m: float, d_m: float) -> tuple[float, float]:
         """The point of lane coordinates ``(s_m, d_m)`` in the car's frame."""
-        seg = self._segment(s_m)
-        along = s_m - self._start_s[seg]
-        (x0, y0), (dx, dy) = self._starts[seg], self._dirs[seg]
-        return float(x0 + along * dx - d_m * dy), float(y0 + along * dy + d_m * dx)
+        return self.frame.point(s_m, d_m)

@@ -44,10 +44,11 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     from analysis.report.rare_report import first_failure_words
 
     outcome = adaptive_outcome("search", sweep_file, options, budget, batch_size,
-                        stop_after=stop_after)
+                               stop_after=stop_after)
     summary = outcome.summary
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
-               + first_failure_words(summary))
+               + first_failure_words(summary.get("first_failure_run"),
+                                     summary.get("first_failure_run_id")))
     rest = f"sdc report {options['out_dir']}"
     for line in mode_lines(summary.get("failure_modes") or [], SHOWN_MODES, rest):
         click.echo(line)

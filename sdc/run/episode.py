@@ -26,13 +26,15 @@ from analysis.run.world_audit import world_overlaps
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
+from scenarios.snapshot import Snapshot
 from scenarios.warm_state import warm_state_id
-from scenarios.world_backends import make_road, make_world
+from scenarios.world_backends import World, make_road, make_world
 from sdc.car.collision import Collision, collision_with, describe
-from sdc.car.controller_api import Observation
+from sdc.car.controller_api import LanesBeside, Observation, StopLine
 from sdc.car.controller_plugins import make_controller
+from sdc.car.geometry_kernels import Conflicts, Contacts
 from sdc.car.road_frame import RoadFrame
-from sdc.car.sensors import LaneSensor, Lidar
+from sdc.car.sensors import LaneReading, LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
 from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
@@ -80,7 +82,7 @@ class Simulation:
     gives the :class:`Episode`.
     """
 
-    def __init__(self, spec: ScenarioSpec, world, look_ahead_m: float | None = None):
+    def __init__(self, spec: ScenarioSpec, world: World, look_ahead_m: float | None = None):
         self.spec, self.world = spec, world
         self.look_ahead_m = (spec.controller.look_ahead_m if look_ahead_m is None
                              else look_ahead_m)
@@ -101,6 +103,18 @@ class Simulation:
         self.hit: str | None = None
         self.collision: Collision | None = None
         self.wall_start = time.perf_counter()
+        # the current step: set by start(), then by each advance()
+        self.k = 0
+        self.state: VehicleState | None = None
+        self.box: np.ndarray | None = None  # the ego's body box
+        self.snapshot: Snapshot | None = None
+        self.network_vehicles = 0
+        self.ranges: np.ndarray | None = None  # the lidar's range image [m]
+        self.lane: LaneReading | None = None  # None off the road's ends
+        self.stop_line: StopLine | None = None
+        self.lanes_beside: LanesBeside | None = None
+        self.contacts: Contacts | None = None
+        self.conflicts: Conflicts | None = None
 
     def start(self) -> None:
         self.k = 0
