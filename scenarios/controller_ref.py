@@ -21,7 +21,13 @@ from typing import Literal
 from scenarios.errors import SpecError
 
 ENTRY_POINT_GROUP = "sdc.controllers"
-BUILTIN_CONTROLLERS = ("seed", "lane-keep", "avoid")
+#: the built-in controllers, the one registry: name -> where its class lives (its
+#: parameters: ``scenario_spec.CONTROLLER_PARAMS``, checked against these names there)
+BUILTIN_CONTROLLERS: dict[str, str] = {
+    "seed": "sdc.car.controllers:SeedController",
+    "lane-keep": "sdc.car.controllers:LaneKeepController",
+    "avoid": "sdc.car.avoid:AvoidController",
+}
 
 Kind = Literal["builtin", "file", "module", "entry_point"]
 _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"

@@ -391,7 +391,7 @@ CONTROLLER_PARAMS: dict[str, type[Spec]] = {
     "lane-keep": LaneKeepParams,
     "avoid": AvoidParams,
 }
-assert tuple(CONTROLLER_PARAMS) == BUILTIN_CONTROLLERS
+assert tuple(CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)
 #: the preview distance of the lane reading for a controller that names none
 DEFAULT_LOOK_AHEAD_M = LaneKeepParams().look_ahead_m
 

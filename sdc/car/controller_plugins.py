@@ -17,19 +17,10 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from scenarios.controller_ref import ENTRY_POINT_GROUP, controller_kind
+from scenarios.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP, controller_kind
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import ControllerSpec
-from sdc.car.avoid import AvoidController
 from sdc.car.controller_api import Controller
-from sdc.car.controllers import LaneKeepController, SeedController
-
-#: the built-in controllers by name (their parameters: scenario_spec.CONTROLLER_PARAMS)
-BUILTIN_CLASSES: dict[str, type] = {
-    "seed": SeedController,
-    "lane-keep": LaneKeepController,
-    "avoid": AvoidController,
-}
 
 
 def _reason(e: BaseException) -> str:
@@ -82,14 +73,15 @@ def installed_controllers() -> dict[str, metadata.EntryPoint]:
 def controller_class(name: str, field: str = "controller.name") -> type:
     """The class ``name`` refers to."""
     kind = controller_kind(name)
-    if kind == "builtin":
-        return BUILTIN_CLASSES[name]
+    if kind == "builtin":  # where the registry says its class lives
+        module_name, _, cls_name = BUILTIN_CONTROLLERS[name].partition(":")
+        return _attribute(_import(module_name, field), cls_name, module_name, field)
     if kind == "entry_point":
         entry = installed_controllers().get(name)
         if entry is None:
             installed = ", ".join(sorted(installed_controllers())) or "none"
             raise SpecError(field, f"unknown controller {name!r}: not a built-in "
-                            f"({', '.join(BUILTIN_CLASSES)}) nor an installed plug-in "
+                            f"({', '.join(BUILTIN_CONTROLLERS)}) nor an installed plug-in "
                             f"(entry points {ENTRY_POINT_GROUP}: {installed})")
         module_name, _, cls_name = entry.value.partition(":")
         where = f"entry point {name} ({entry.value})"
