@@ -10,6 +10,11 @@ The truths are exact (normal tails) except the four-branch series system,
 whose values are the literature's (Waarts 2000; Au and Beck 1999), checked
 here by 10^8 plain Monte Carlo draws (``tests/test_rare_bank.py`` redoes a
 smaller check).
+
+:data:`EMULATED` holds emulators of the catalog's rare families (seed-rare,
+seed-modes), built from their truth files, each with its own exact P: the families'
+statistics are tested on these in seconds, and one real SUMO seed of each tests the
+wiring.
 """
 
 from __future__ import annotations
