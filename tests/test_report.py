@@ -427,7 +427,8 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
     table = table.set_column(table.schema.get_field_index("world_overlaps"), "world_overlaps",
                              pyarrow.array(overlaps, pyarrow.int64()))
     pq.write_table(table, bad / "results.parquet")
-    lines = world_lines(write_report(bad).summary)
+    plain = write_report(bad).summary
+    lines = world_lines(plain["world"], plain["traffic_model"], plain["sumo_config"])
     assert lines[1].startswith("WARNING: in 1 run two bodies other than the ego overlapped "
                                "(7 steps in all")
     old = tmp_path / "old"
@@ -437,7 +438,8 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
     manifest = json.loads((old / "manifest.json").read_text())
     manifest.pop("traffic_model")
     (old / "manifest.json").write_text(json.dumps(manifest))
-    lines = world_lines(write_report(old).summary)
+    plain = write_report(old).summary
+    lines = world_lines(plain["world"], plain["traffic_model"], plain["sumo_config"])
     assert lines == ["Traffic model: not recorded.",
                      "World audit: not recorded (the sweep predates it)."]
 
@@ -451,7 +453,7 @@ def test_collisions_with_vehicles_are_counted_by_the_class_of_what_was_hit():
         "collision_vclass": ["truck", "passenger", "truck", None, None]})
     summary = world_summary(rows)
     assert summary["vehicle_classes"] == {"avoid": {"truck": 2, "passenger": 1}}
-    lines = world_lines({"world": summary})
+    lines = world_lines(summary)
     assert "avoid's collisions with vehicles by vehicle class: passenger 1, truck 2." in lines
     older = world_summary(rows.drop(columns="collision_vclass"))
     assert older["vehicle_classes"] == {}

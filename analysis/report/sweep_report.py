@@ -124,9 +124,39 @@ def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
             "samples_compared": len(shared), "runs_left_out": int((~compared).sum())}
 
 
+@dataclasses.dataclass(frozen=True)
+class SweepSummary:
+    """Everything a sweep's report says; :meth:`to_plain` is its ``summary.json``. The
+    parts are plain data from :mod:`analysis.stats` (rates, verdicts, paired tests)."""
+
+    sweep: str
+    runs_planned: int | None
+    runs: int
+    counts: dict[str, int]  # runs by status: ok, error, timeout
+    sweep_status: str | None
+    coverage: dict  # what ran of the plan, the samples compared
+    interval: Method
+    warm_states: dict  # runs sharing a warm state: clustered intervals
+    verdicts: dict  # how each controller's runs ended
+    by_controller: dict[str, dict]  # collision rates
+    by_backend: dict[str, dict[str, dict]]  # side by side, when more than one backend ran
+    paired: list[dict]  # McNemar on collisions
+    stop_possible: dict  # the same where braking alone could have stopped
+    by: dict[str, list[dict]]  # rates by parameter
+    envelope: list[dict]  # the speed envelope
+    gate: dict | None
+    traffic_model: str | None
+    sumo_config: list | None
+    world: dict  # the world audit and who hit whom
+    settling: dict | None = None  # the warm-up's word
+
+    def to_plain(self) -> dict:
+        return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
+
+
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,
                   shared: pd.Index, fail_above: float | None = None,
-                  min_completed: float | None = None) -> dict:
+                  min_completed: float | None = None) -> SweepSummary:
     """Everything the report says. Controllers are compared on the ``shared`` samples,
     those every one of them ran (:func:`analysis.stats.verdicts.shared_samples`: all of them,
     unless the sweep is partial or lost runs)."""
@@ -139,34 +169,34 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
                             "collision_rate": json_scalar(row["collision_rate"])}
                            for row in table.to_dict(orient="records")]
     status = results.status.value_counts()
-    return {
-        "sweep": manifest["sweep"]["sweep"]["name"],
-        "runs_planned": manifest.get("runs"),
-        "runs": len(results),
-        "counts": {s: int(status.get(s, 0)) for s in ("ok", "error", "timeout")},
-        "sweep_status": manifest.get("status"),
-        "coverage": coverage(results, manifest, shared),
-        "interval": method,
+    return SweepSummary(
+        sweep=manifest["sweep"]["sweep"]["name"],
+        runs_planned=manifest.get("runs"),
+        runs=len(results),
+        counts={s: int(status.get(s, 0)) for s in ("ok", "error", "timeout")},
+        sweep_status=manifest.get("status"),
+        coverage=coverage(results, manifest, shared),
+        interval=method,
         # runs that started from one warm state share their traffic: wider intervals
-        "warm_states": warm_state_summary(counted),
-        "verdicts": verdict_summary(counted, method),
-        "by_controller": by_controller(counted),
+        warm_states=warm_state_summary(counted),
+        verdicts=verdict_summary(counted, method),
+        by_controller=by_controller(counted),
         # side by side when a sweep ran on more than one world backend
-        "by_backend": ({str(b): by_controller(rows) for b, rows in
+        by_backend=({str(b): by_controller(rows) for b, rows in
                         counted.groupby("backend", sort=False)}
                        if counted.backend.nunique() > 1 else {}),
-        "paired": [mcnemar(counted, a, b) for a, b in itertools.combinations(controllers, 2)],
+        paired=[mcnemar(counted, a, b) for a, b in itertools.combinations(controllers, 2)],
         # the same where braking alone could have stopped the car before the obstacle
-        "stop_possible": stop_possible_summary(counted, controllers),
-        "by": grouped,
-        "envelope": ([safe_envelope(counted, SPEED, c) for c in controllers]
+        stop_possible=stop_possible_summary(counted, controllers),
+        by=grouped,
+        envelope=([safe_envelope(counted, SPEED, c) for c in controllers]
                      if SPEED in counted.columns else []),
-        "gate": (None if fail_above is None and min_completed is None
+        gate=(None if fail_above is None and min_completed is None
                  else gate(counted, controllers, fail_above, method, min_completed)),
-        "traffic_model": manifest.get("traffic_model"),
-        "sumo_config": manifest.get("sumo_config"),
-        "world": world_summary(counted),
-    }
+        traffic_model=manifest.get("traffic_model"),
+        sumo_config=manifest.get("sumo_config"),
+        world=world_summary(counted),
+    )
 
 
 def world_summary(results: pd.DataFrame) -> dict:
@@ -208,23 +238,28 @@ def _red_lights(ok: pd.DataFrame) -> dict | None:
 WORLD_TITLE = "## World"
 
 
-def world_warnings(summary: dict) -> list[str]:
+def _world_lines(summary: SweepSummary) -> list[str]:
+    return world_lines(summary.world, summary.traffic_model, summary.sumo_config)
+
+
+def world_warnings(summary: SweepSummary) -> list[str]:
     """The world audit's WARNING, if any, for the top of the report."""
-    return [line for line in world_lines(summary) if line.startswith("WARNING")]
+    return [line for line in _world_lines(summary) if line.startswith("WARNING")]
 
 
-def world_lines(summary: dict) -> list[str]:
-    """The traffic model, the world audit (a WARNING when bodies other than the ego
-    overlapped: a world that made something up), and each controller's collisions
-    split into those it ran into and those in which it was hit."""
-    lines = [f"Traffic model: {summary.get('traffic_model') or 'not recorded'}."]
-    for config in summary.get("sumo_config") or []:
+def world_lines(world: dict, traffic_model: str | None = None,
+                sumo_config: list | None = None) -> list[str]:
+    """The traffic model, the world audit (``world``: a :func:`world_summary`; a WARNING
+    when bodies other than the ego overlapped: a world that made something up), and
+    each controller's collisions split into those it ran into and those in which it
+    was hit."""
+    lines = [f"Traffic model: {traffic_model or 'not recorded'}."]
+    for config in sumo_config or []:
         overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
         lines.append(f"SUMO configuration {config['file']}: its own demand from "
                      f"{config['begin_s']:g} s; overridden by the run: "
                      f"{overridden or 'nothing'}; not applied: "
                      f"{', '.join(config['not_applied']) or 'nothing'}.")
-    world = summary.get("world", {"recorded": False})
     if not world["recorded"]:
         return lines + ["World audit: not recorded (the sweep predates it)."]
     if world["runs_with_overlaps"]:
@@ -252,9 +287,9 @@ def world_lines(summary: dict) -> list[str]:
     return lines
 
 
-def shares_traffic(summary: dict) -> bool:
+def shares_traffic(summary: SweepSummary) -> bool:
     """Did any two of the counted runs start from the same warm state?"""
-    return bool(summary["warm_states"].get("shared"))
+    return bool(summary.warm_states.get("shared"))
 
 
 DEFF_HEAD = "design effect"
@@ -276,18 +311,18 @@ def _plural(count: int, noun: str) -> str:
     return f"{count} {noun}" + ("" if count == 1 else "s")
 
 
-def warm_state_lines(summary: dict) -> list[str]:
+def warm_state_lines(summary: SweepSummary) -> list[str]:
     """Whether the traffic had settled by the end of its warm-up (when the sweep kept
     its warm-ups); when runs shared their traffic: how many warm states they drew
     from, that the intervals are widened (each controller's design effect on its
     collision rate), and a WARNING when the warm states are fewer than
     :data:`FEW_WARM_STATES`."""
-    lines = settling_lines(summary.get("settling"))
+    lines = settling_lines(summary.settling)
     if not shares_traffic(summary):
         return lines
-    warm = summary["warm_states"]
+    warm = summary.warm_states
     effects = ", ".join(f"{c} {_deff(numbers['deff'])}"
-                        for c, numbers in summary["by_controller"].items())
+                        for c, numbers in summary.by_controller.items())
     lines.append(
         f"Shared traffic: the {warm['runs']} runs drew their background traffic from "
         f"{_plural(warm['distinct'], 'distinct warm state')} ({warm['runs_sharing']} of them "
@@ -303,9 +338,9 @@ def warm_state_lines(summary: dict) -> list[str]:
     return lines
 
 
-def coverage_lines(summary: dict) -> list[str]:
+def coverage_lines(summary: SweepSummary) -> list[str]:
     """Whether the sweep is partial, and which samples the comparisons use."""
-    cov, lines = summary["coverage"], []
+    cov, lines = summary.coverage, []
     if cov["partial"]:
         planned = "?" if cov["runs_planned"] is None else cov["runs_planned"]
         missing = "" if cov["runs_missing"] is None else f", {cov['runs_missing']} missing"
@@ -318,10 +353,10 @@ def coverage_lines(summary: dict) -> list[str]:
     return lines
 
 
-def verdict_rows(summary: dict) -> list[list[str]]:
+def verdict_rows(summary: SweepSummary) -> list[list[str]]:
     """How each controller's runs ended, highest completed rate first; [] when the
     results do not record it."""
-    verdicts = summary["verdicts"]
+    verdicts = summary.verdicts
     if not verdicts["recorded"]:
         return []
     deff = shares_traffic(summary)
@@ -353,7 +388,7 @@ NOT_RECORDED = ("How the runs ended: not recorded (results from before the outco
                 "only collisions can be judged, and a controller that never passes the "
                 "obstacle cannot be told from a safe one.")
 COLLISION_TITLE = "Collisions (of the ok runs; errors and timeouts counted apart):"
-def collision_notes(summary: dict) -> str:
+def collision_notes(summary: SweepSummary) -> str:
     """What the collision table's columns mean (the design effect where it has one)."""
     return ("Rate: the collisions of the ok runs, with its 95% interval; errors and "
             "timeouts: runs without an outcome, never counted as safe (the gate counts them "
@@ -363,26 +398,26 @@ def collision_notes(summary: dict) -> str:
             + "The tables by parameter add failed: the group's errors and timeouts.")
 
 
-def headline_rows(summary: dict) -> list[list[str]]:
+def headline_rows(summary: SweepSummary) -> list[list[str]]:
     """The collision table: per controller, or per controller and backend side by side
     when the sweep ran on several backends."""
-    by_backend = summary["by_backend"]
+    by_backend = summary.by_backend
     if by_backend:
-        controllers = list(summary["by_controller"])
+        controllers = list(summary.by_controller)
         groups = [([c, b], by_backend[b][c]) for c in controllers for b in by_backend
                   if c in by_backend[b]]
     else:
-        groups = [([c], numbers) for c, numbers in summary["by_controller"].items()]
+        groups = [([c], numbers) for c, numbers in summary.by_controller.items()]
     deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
              "rate", "95% interval", "errors", "timeouts", *([DEFF_HEAD] if deff else [])]]
-    return rows + [_rate_row(keys, numbers, summary["interval"], deff)
+    return rows + [_rate_row(keys, numbers, summary.interval, deff)
                    for keys, numbers in groups]
 
 
-def stop_title(summary: dict) -> str:
+def stop_title(summary: SweepSummary) -> str:
     """What the stop-possible table holds, with its count of samples."""
-    stop = summary["stop_possible"]
+    stop = summary.stop_possible
     if not stop["recorded"]:
         return ("where braking alone could stop in time: not recorded "
                 "(results from before the stop_possible column)")
@@ -391,12 +426,12 @@ def stop_title(summary: dict) -> str:
             f"{stop['samples_stop_possible']} of {stop['samples']} samples run:")
 
 
-def stop_rows(summary: dict) -> list[list[str]]:
+def stop_rows(summary: SweepSummary) -> list[list[str]]:
     """Per controller, the rate among the samples where a stop was possible; the
     headline's columns (backend: all), no rows when it was not recorded."""
-    stop = summary["stop_possible"]
-    backend = ["all"] if summary["by_backend"] else []
-    return [_rate_row([c, *backend], numbers, summary["interval"], shares_traffic(summary))
+    stop = summary.stop_possible
+    backend = ["all"] if summary.by_backend else []
+    return [_rate_row([c, *backend], numbers, summary.interval, shares_traffic(summary))
             for c, numbers in stop.get("by_controller", {}).items()]
 
 
@@ -404,21 +439,21 @@ COMPARISONS_TITLE = ("Pair by pair, on the scenarios both controllers ran (McNem
                      "test; pairs without a shared scenario left out):")
 
 
-def comparison_groups(summary: dict) -> list[tuple[str, list[str]]]:
+def comparison_groups(summary: SweepSummary) -> list[tuple[str, list[str]]]:
     """The paired comparisons, grouped: completing, colliding, and colliding where a
     stop was possible; each a title and its sentences (empty groups left out)."""
     groups = [
         ("Completed without collision",
-         [_paired_completed(p) for p in summary["verdicts"].get("paired", []) if p["pairs"]]),
-        ("Collisions", [_paired(p) for p in summary["paired"] if p["pairs"]]),
+         [_paired_completed(p) for p in summary.verdicts.get("paired", []) if p["pairs"]]),
+        ("Collisions", [_paired(p) for p in summary.paired if p["pairs"]]),
         ("Collisions where a stop was possible",
          [_paired(p, ", where a stop was possible,")
-          for p in summary["stop_possible"].get("paired", []) if p["pairs"]]),
+          for p in summary.stop_possible.get("paired", []) if p["pairs"]]),
     ]
     return [(title, lines) for title, lines in groups if lines]
 
 
-def comparison_lines(summary: dict) -> list[str]:
+def comparison_lines(summary: SweepSummary) -> list[str]:
     """:func:`comparison_groups` as terminal lines."""
     groups = comparison_groups(summary)
     lines = [COMPARISONS_TITLE] if groups else []
@@ -462,17 +497,17 @@ def _envelope(envelope: dict, completes_rarely: bool) -> str:
     return line
 
 
-def findings(summary: dict) -> list[str]:
+def findings(summary: SweepSummary) -> list[str]:
     """Sentences: each controller's verdict, the paired comparisons (completing; on
     collisions over all samples and where a stop was possible) and the envelope."""
-    verdicts = summary["verdicts"]
+    verdicts = summary.verdicts
     lines = [verdict_sentence(c, numbers)
              for c, numbers in verdicts.get("by_controller", {}).items()]
     rare = {c for c, numbers in verdicts.get("by_controller", {}).items()
             if completes_rarely(numbers)}
-    lines += [_envelope(e, e["controller"] in rare) for e in summary["envelope"]]
-    if summary["gate"] is not None:
-        lines.append(gate_bounds_line(summary["gate"]))  # its verdict: the command's last line
+    lines += [_envelope(e, e["controller"] in rare) for e in summary.envelope]
+    if summary.gate is not None:
+        lines.append(gate_bounds_line(summary.gate))  # its verdict: the command's last line
     return lines
 
 
@@ -482,7 +517,7 @@ def _aligned(rows: list[list[str]]) -> list[str]:
             for row in rows]
 
 
-def terminal_table(summary: dict) -> list[str]:
+def terminal_table(summary: SweepSummary) -> list[str]:
     """Partial-sweep lines, the traffic model and world audit, the verdicts, the
     collision table, then the collision rates where a stop was possible in the same
     columns."""
@@ -493,7 +528,7 @@ def terminal_table(summary: dict) -> list[str]:
     table = _aligned(rows + stop)
     return [*lines, COLLISION_TITLE, *table[:len(rows)], collision_notes(summary),
             stop_title(summary),
-            *table[len(rows):], *world_lines(summary)]
+            *table[len(rows):], *_world_lines(summary)]
 
 
 def failures(results: pd.DataFrame) -> pd.DataFrame:
@@ -553,15 +588,15 @@ def _markdown_table(rows: list[list[str]]) -> list[str]:
             *("| " + " | ".join(r) + " |" for r in rows[1:])]
 
 
-def _count_line(summary: dict) -> str:
-    counts = summary["counts"]
-    return (f"{summary['runs']} runs ({counts['ok']} ok, {counts['error']} error, "
-            f"{counts['timeout']} timeout); intervals: {summary['interval']} 95%.")
+def _count_line(summary: SweepSummary) -> str:
+    counts = summary.counts
+    return (f"{summary.runs} runs ({counts['ok']} ok, {counts['error']} error, "
+            f"{counts['timeout']} timeout); intervals: {summary.interval} 95%.")
 
 
-def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
+def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> str:
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
-    lines = [f"# Collision report: {summary['sweep']}", "", _count_line(summary), "",
+    lines = [f"# Collision report: {summary.sweep}", "", _count_line(summary), "",
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
     for line in [*warm_state_lines(summary), *world_warnings(summary)]:  # paragraphs
         lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
@@ -569,9 +604,9 @@ def markdown(summary: dict, results: pd.DataFrame, sweep_dir: Path) -> str:
               else [NOT_RECORDED, ""])
     lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", collision_notes(summary), "",
               f"Collision rates {stop_title(summary)}", ""]
-    if summary["stop_possible"]["recorded"]:
+    if summary.stop_possible["recorded"]:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
-    lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in world_lines(summary)]
+    lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in _world_lines(summary)]
     lines += [f"- {line}" for line in findings(summary)]
     groups = comparison_groups(summary)
     if groups:
@@ -646,12 +681,12 @@ def _figure_html(title: str, png: bytes) -> str:
             f"<figcaption>{html.escape(title)}</figcaption></figure>")
 
 
-def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
+def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
               images: list[tuple[str, bytes]],
               warm_up_images: list[tuple[str, bytes]] = ()) -> str:
     """The report page; ``warm_up_images`` beside the warm-state lines they show."""
     verdicts = verdict_rows(summary)
-    parts = [f"<h1>Collision report: {html.escape(summary['sweep'])}</h1>",
+    parts = [f"<h1>Collision report: {html.escape(summary.sweep)}</h1>",
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
              "as safe.</p>",
              *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
@@ -667,9 +702,9 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
              f"<p>{html.escape(collision_notes(summary))}</p>",
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
-              if summary["stop_possible"]["recorded"] else ""),
+              if summary.stop_possible["recorded"] else ""),
              "<h2>World</h2>",
-             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in world_lines(summary)),
+             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in _world_lines(summary)),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
     groups = comparison_groups(summary)
     if groups:
@@ -679,7 +714,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
                   for title, sentences in groups]
     parts += [_figure_html(title, png) for title, png in images]
     deff = shares_traffic(summary)
-    for column, rows in summary["by"].items():
+    for column, rows in summary.by.items():
         table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
                   "failed", *([DEFF_HEAD] if deff else [])]]
         table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
@@ -696,7 +731,7 @@ def html_page(summary: dict, results: pd.DataFrame, sweep_dir: Path,
               "in orange).</p>",
               _look_at_tables(bad, sweep_dir, varying_parameters(results))]
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>sdc report: {html.escape(summary['sweep'])}</title>"
+            f"<title>sdc report: {html.escape(summary.sweep)}</title>"
             f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>\n")
 
 
@@ -754,21 +789,22 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     shared = shared_samples(results)
     summary = build_summary(results, manifest, by, method, shared, fail_above, min_completed)
     warm_ups = read_settling(sweep_dir)
-    summary["settling"] = settling_summary(warm_ups)
+    summary = dataclasses.replace(summary, settling=settling_summary(warm_ups))
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     images = figures(counted, by, method)
     html_path.write_text(html_page(summary, results, sweep_dir, images,
-                                   settling_image(warm_ups, summary["settling"])))
+                                   settling_image(warm_ups, summary.settling)))
     summary_path = sweep_dir / "summary.json"
-    summary_path.write_text(json.dumps(json_plain(summary), indent=2) + "\n")
+    plain = summary.to_plain()
+    summary_path.write_text(json.dumps(json_plain(plain), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
     markdown_path.write_text(markdown(summary, results, sweep_dir))
     if junit_path is not None:
-        Path(junit_path).write_text(junit_xml(results, summary["sweep"]))
+        Path(junit_path).write_text(junit_xml(results, summary.sweep))
     terminal = terminal_table(summary) + findings(summary) + comparison_lines(summary)
-    gate_failed = summary["gate"]["failed"] if summary["gate"] else []
-    return Report(summary, html_path, summary_path, markdown_path, junit_path, terminal,
+    gate_failed = summary.gate["failed"] if summary.gate else []
+    return Report(plain, html_path, summary_path, markdown_path, junit_path, terminal,
                   gate_failed)
 
 
