@@ -318,7 +318,7 @@ def sampled_runs(case: Problem, mode: str, seed: int, max_runs: int) -> pd.DataF
                                       for k, p in enumerate(normal_params(case.dims))}}))
     runs = pd.concat(parts, ignore_index=True)
     failed = runs.score <= 0
-    kinds = (case.kinds(_normal_scores(runs, case.dims)) if case.kinds is not None
+    kinds = (case.kinds(normal_scores(runs, case.dims)) if case.kinds is not None
              else np.full(len(runs), "failure"))
     return runs.assign(run_id=[f"r{i}" for i in range(len(runs))], run_index=runs.index,
                        status="ok", collision=failed,
@@ -330,7 +330,7 @@ def normal_params(dims: int) -> list[Param]:
     return [Param(f"z{k}", "normal", (0.0, 1.0)) for k in range(dims)]
 
 
-def _normal_scores(runs: pd.DataFrame, dims: int) -> np.ndarray:
+def normal_scores(runs: pd.DataFrame, dims: int) -> np.ndarray:
     """The runs' z (n, dims), from their :func:`normal_params` columns."""
     return runs[[PARAM_PREFIX + p.path for p in normal_params(dims)]].to_numpy()
 
@@ -343,4 +343,4 @@ def mode_count(case: Problem, mode: str, seed: int, max_runs: int) -> tuple[int,
     runs = sampled_runs(case, mode, seed, max_runs)
     modes = failure_modes(runs, normal_params(case.dims), runs.score <= 0, weighed_rows(runs))
     return (sum(m.outcome != OTHER for m in modes),
-            case.regions_hit(_normal_scores(runs, case.dims)))
+            case.regions_hit(normal_scores(runs, case.dims)))
