@@ -25,8 +25,6 @@ def _has_display() -> bool:
 
 
 def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -> None:
-    from rich.console import Console
-
     from analysis.report.render import (
         animate,
         decisive_step,
