@@ -17,6 +17,7 @@ import pandas as pd
 from analysis.rare.failure_modes import failure_modes, weighed_rows
 from analysis.rare.rare_events import Estimate, estimate_from_rows
 from analysis.run.run_outcome import OUTCOMES, STUCK
+from analysis.run.trace_file import replay_command
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import Param, parse_param
 
@@ -73,7 +74,7 @@ def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
     """The modes of the ``failed`` rows among the runs (a sample that made no valid
     scenario, score None, is no run: no evidence either way)."""
     runs = results[results.score.notna()] if "score" in results else results
-    return [{**m.to_plain(), "replay": f"sdc replay {sweep_dir} --run {m.example_run}"}
+    return [{**m.to_plain(), "replay": replay_command(sweep_dir, m.example_run)}
             for m in failure_modes(runs, params, failed[runs.index], weighed_rows(runs))]
 
 

@@ -34,6 +34,7 @@ from analysis.report.settling_report import (
 )
 from analysis.run.run_outcome import COMPLETED, STUCK, collided, failed_or_collided
 from analysis.run.safety import REACTION_TIME_S
+from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
 from analysis.stats.gate import gate, gate_bounds_line
 from analysis.stats.rates import (
@@ -538,10 +539,6 @@ def failures(results: pd.DataFrame) -> pd.DataFrame:
     bad = results[failed_or_collided(results) | stuck]
     return bad.assign(_ok=bad.status == "ok").sort_values(["_ok", "run_index"]).drop(
         columns="_ok")
-
-
-def replay_command(sweep_dir: Path, run_id: str) -> str:
-    return f"sdc replay {sweep_dir} --run {run_id}"
 
 
 def _row_outcome(row: dict) -> str:

@@ -137,3 +137,9 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
         classes = [["passenger"] * (len(row) // 5) for row in lists["traffic"]]
     return Trace(floats, table.column("phase").to_pylist(), **lists,
                  traffic_class=classes), metadata
+
+
+def replay_command(sweep_dir: Path, run_id: str) -> str:
+    """The command that re-simulates run ``run_id`` of a sweep directory and compares its
+    trace with the recorded one (``sdc replay``)."""
+    return f"sdc replay {sweep_dir} --run {run_id}"
