@@ -30,6 +30,6 @@ def warm_rng(seed: int) -> np.random.Generator:
     return np.random.default_rng([seed, WARM_STREAM])
 
 
-def draw_seeds(rng: np.random.Generator, count: int) -> np.ndarray:
+def draw_seeds(rng: np.random.Generator, count: int) -> list[int]:
     """``count`` scenario seeds (below ``SEED_LIMIT - 1``: how they were always drawn)."""
-    return rng.integers(0, SEED_LIMIT - 1, size=count)
+    return [int(seed) for seed in rng.integers(0, SEED_LIMIT - 1, size=count)]

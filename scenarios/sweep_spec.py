@@ -382,7 +382,7 @@ def warm_seeds(sweep: SweepSpec) -> list[int] | None:
     each sample warms up from its own seed)."""
     if sweep.warm_states is None:
         return None
-    return [int(s) for s in draw_seeds(warm_rng(sweep.seed), sweep.warm_states)]
+    return draw_seeds(warm_rng(sweep.seed), sweep.warm_states)
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -443,8 +443,8 @@ def expand(sweep: SweepSpec) -> list[PlannedRun]:
     comparison), unless ``scenario.seed`` is itself a swept parameter.
     """
     samples = sample_values(sweep)
-    seeds = draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples))
-    return plan_samples(sweep, samples, [int(s) for s in seeds])
+    return plan_samples(sweep, samples,
+                        draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples)))
 
 
 def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[int], *,

@@ -98,7 +98,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         self.close()
-        scenario_seed = seed if seed is not None else int(draw_seeds(self.np_random, 1)[0])
+        scenario_seed = seed if seed is not None else draw_seeds(self.np_random, 1)[0]
         spec = self.scenario.with_seed(scenario_seed)
         self.road = make_road(spec, self.cache_dir)  # a network route depends on the seed
         self._world = make_world(spec, self.road, self.cache_dir)

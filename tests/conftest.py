@@ -35,9 +35,10 @@ def ray_session(temporary_cache):
     it running, so those tests start Ray once, not once each (Ray stops it at exit)."""
     import ray
 
+    from sdc.batch.ray_executor import start_session
+
     if not ray.is_initialized():
-        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-                 logging_level="ERROR")
+        start_session(workers=2)
 
 
 @pytest.fixture

@@ -7,6 +7,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -199,11 +200,28 @@ def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path)
 
     report = sdc("report", whole)
     assert report.returncode == 0, report.stderr
-    assert f"P(collision) = {saved['p_collision']:.3g}" in report.stdout
+    # the estimate's own printout and its report say P(collision) in the same words
+    said = [line for line in done.stdout.splitlines() if line.startswith("P(collision) = ")]
+    assert len(said) == 1 and f"P(collision) = {saved['p_collision']:.3g}, 95%" in said[0]
+    assert said[0] in report.stdout.splitlines()
     # the modes are listed once, in their own table, and the terms are defined
     assert report.stdout.count("failure modes:") == 1
     first = saved["failure_modes"][0]
     assert report.stdout.count(f"e.g. {first['example_run']}") == 1
+    # the runs to look at: the estimation's failures first, the most of P first, at most 50
+    markdown = (whole / "report.md").read_text().split("## Runs to look at")[1]
+    listed = re.findall(r"^- `([^`]+)`", markdown, flags=re.MULTILINE)
+    bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)
+                  | (results.outcome == "stuck")]
+    assert len(listed) == min(len(bad), 50) > 0
+    assert (f"... {len(bad) - 50} more in results.parquet" in markdown) == (len(bad) > 50)
+    order = results.set_index("run_id").loc[listed]
+    counted = ((order.phase == "estimate") & (order.score <= 0)
+               & (order.status == "ok")).to_numpy()
+    first = int(counted.argmax())
+    assert counted.any() and counted[first:first + counted.sum()].all()
+    assert (order.status != "ok").to_numpy()[:first].all()
+    assert order.weight[counted].is_monotonic_decreasing
     page = (whole / "report.html").read_text()
     assert "Convergence" in page and "RHW: the 95% interval&#x27;s half-width" in page
     assert "P (95% interval): its part of P(collision)" in page

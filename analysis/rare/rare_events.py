@@ -28,6 +28,7 @@ bank problem) is in docs/rare_events_and_warm_up.md, reproduced by
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from typing import Literal
@@ -42,8 +43,9 @@ RULE_OF_THREE = -math.log(0.05)
 MIN_ESTIMATION_RUNS = 1500
 _LOG_2PI = math.log(2.0 * math.pi)
 _BELOW_ONE = float(np.nextafter(1.0, 0.0))
-#: float64 elements per chunk of kernel distances (about 32 MB)
-_CHUNK_ELEMENTS = 4_000_000
+#: float64 elements per chunk of kernel distances: 2 MB stay in the cache (a third faster
+#: than 32 MB on the bank); the result does not depend on it, each row is its own
+_CHUNK_ELEMENTS = 262_144
 #: kernels whose weight is below this share of the largest are dropped from a fit
 _NEGLIGIBLE_MIX = 1e-6
 
@@ -94,15 +96,21 @@ class KernelMixture:
         return self.centres.shape[1]
 
     def sample(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        chol = np.linalg.cholesky(self.cov)
         which = rng.choice(self.mix.size, size=count, p=self.mix)
-        return self.centres[which] + rng.standard_normal((count, self.dims)) @ chol.T
+        return self.centres[which] + rng.standard_normal((count, self.dims)) @ self._chol.T
+
+    @functools.cached_property
+    def _chol(self) -> np.ndarray:
+        return np.linalg.cholesky(self.cov)
+
+    @functools.cached_property
+    def _white_centres(self) -> np.ndarray:
+        return np.linalg.solve(self._chol, self.centres.T).T
 
     def log_density(self, z: np.ndarray) -> np.ndarray:
         z = np.atleast_2d(z)
-        chol = np.linalg.cholesky(self.cov)
+        chol, white_c = self._chol, self._white_centres
         white_z = np.linalg.solve(chol, z.T).T
-        white_c = np.linalg.solve(chol, self.centres.T).T
         log_norm = np.sum(np.log(np.diag(chol))) + 0.5 * self.dims * _LOG_2PI
         log_mix = np.log(self.mix)
         out = np.empty(z.shape[0])

@@ -35,22 +35,8 @@ def headline(summary: RareSummary) -> list[str]:
              f"{summary.runs} runs in {summary.batches} batches ({counts['ok']} ok, "
              f"{counts['error']} error, {counts['timeout']} timeout); {summary.state}"]
     if summary.mode == "estimate":
-        e = summary.estimate_plain
-        if e is None:
-            lines.append("no estimate yet: the adaptation has not ended")
-        elif e["failures"] == 0:
-            lines.append(f"P(collision) <= {e['ci_high']:.3g} (95%): no collision in "
-                         f"{e['estimation_runs']} weighted runs")
-        else:
-            stopped = {"target_rhw": "target RHW reached",
-                       "budget": "budget spent before the target RHW"}.get(
-                summary.stopped, "not finished")
-            lines.append(f"P(collision) = {e['p_collision']:.3g}, 95% interval "
-                         f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
-                         f"(target {summary.target_rhw:g}; {stopped})")
-            lines.append(f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
-                         f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
-                         f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})")
+        lines += estimate_lines(summary.estimate_plain, summary.stopped, summary.target_rhw)
+        if summary.estimate_plain is not None and summary.estimate_plain["failures"]:
             lines.append(_diagnostics(summary))
     lines.append(f"{summary.failures} failed runs"
                  + first_failure_words(summary.first_failure_run, summary.first_failure_run_id)
@@ -60,6 +46,26 @@ def headline(summary: RareSummary) -> list[str]:
                  f"{_modes_count(summary.failure_modes, 'failure')}, "
                  f"{_modes_count(summary.stuck_modes, 'stuck')} (tables below)")
     return lines
+
+
+def estimate_lines(e: dict | None, stopped: str | None, target_rhw: float | None) -> list[str]:
+    """What an estimate says: P(collision) with its interval, or its bound when no run
+    failed, and what plain Monte Carlo would have cost. ``e``: the estimate's fields
+    (``estimate.json``'s, or :attr:`RareSummary.estimate_plain`), None before the
+    estimation phase; ``stopped``: its ``stopped`` field."""
+    if e is None:
+        return ["no estimate: the adaptation had not ended when the runs stopped"]
+    why = {"target_rhw": "target RHW reached",
+           "budget": "budget spent before the target RHW"}.get(stopped, "not finished")
+    if e["failures"] == 0:
+        return [f"P(collision) <= {e['ci_high']:.3g} (95%): no collision in "
+                f"{e['estimation_runs']} weighted runs ({why})"]
+    return [f"P(collision) = {e['p_collision']:.3g}, 95% interval "
+            f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
+            f"(target {target_rhw:g}; {why})",
+            f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
+            f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
+            f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})"]
 
 
 def _modes_count(modes: list[dict], what: str) -> str:

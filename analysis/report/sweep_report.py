@@ -64,6 +64,10 @@ from scenarios.sweep_spec import PARAM_PREFIX
 
 SPEED = f"{PARAM_PREFIX}ego.speed_mps"
 MAX_LISTED_FAILURES = 500
+MAX_LISTED_RARE = 50  # runs listed by a search's or estimate's report; all are in results.parquet
+LOOK_AT_RARE = ("Runs with no outcome (error, timeout) first, then collisions and stuck runs: "
+                "in an estimate, its estimation runs by weight (the most of P first), then "
+                "the adaptation's by run; in a search, by run.")
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
@@ -532,13 +536,17 @@ def terminal_table(summary: SweepSummary) -> list[str]:
             *table[len(rows):], *_world_lines(summary)]
 
 
-def failures(results: pd.DataFrame) -> pd.DataFrame:
-    """Runs to look at in a search or estimate: failed runs (error, timeout), then
-    collisions and stuck runs, by run."""
+def failures(results: pd.DataFrame, estimate: bool = False) -> pd.DataFrame:
+    """Runs to look at in a search or estimate: failed runs (error, timeout) first, then
+    collisions and stuck runs; in an estimate, the estimation runs that count in P (score
+    <= 0) by weight, the largest share of P first, before the rest; otherwise by run."""
     stuck = results.outcome == STUCK if "outcome" in results else False
     bad = results[failed_or_collided(results) | stuck]
-    return bad.assign(_ok=bad.status == "ok").sort_values(["_ok", "run_index"]).drop(
-        columns="_ok")
+    weighted = (bad.phase == "estimate") & (bad.score <= 0) if estimate else False
+    return bad.assign(_ok=bad.status == "ok", _weighted=weighted,
+                      _weight=bad.weight.where(weighted, 0.0) if estimate else 0.0).sort_values(
+        ["_ok", "_weighted", "_weight", "run_index"], ascending=[True, False, False, True],
+        kind="stable").drop(columns=["_ok", "_weighted", "_weight"])
 
 
 def _row_outcome(row: dict) -> str:
@@ -824,17 +832,20 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     stuck = rare_report.mode_rows(summary.stuck_modes)
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
     title = f"{summary.mode.capitalize()} report: {summary.sweep}"
-    bad = failures(results)
-    listed = bad.head(MAX_LISTED_FAILURES).to_dict("records")
+    bad = failures(results, estimate=summary.estimate is not None)
+    listed = bad.head(MAX_LISTED_RARE).to_dict("records")
+    more = (f"... {len(bad) - len(listed)} more in results.parquet"
+            if len(bad) > len(listed) else None)
     terms = [rare_report.ESTIMATE_TERMS] if summary.estimate else []
     md = [f"# {title}", "", *lines, "", *terms, "", "## Failure modes", "",
           *_markdown_table(modes), "",
           rare_report.mode_columns(summary.failure_modes), "", "## Stuck runs", "",
           STUCK_WORDS, "",
           *(_markdown_table(stuck) if len(stuck) > 1 else ["No run was stuck."]), "",
-          "## Runs to look at", ""]
+          "## Runs to look at", "", LOOK_AT_RARE, ""]
     md += [f"- `{row['run_id']}` (batch {row['batch']}): {_row_outcome(row)} — "
            f"`{replay_command(sweep_dir, row['run_id'])}`" for row in listed]
+    md += [f"- {more}"] if more else []
     parts = [f"<h1>{html.escape(title)}</h1>",
              "".join(f"<p>{html.escape(line)}</p>" for line in [*lines, *terms]),
              "<h2>Failure modes</h2>", _table_html(modes),
@@ -845,7 +856,8 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     table = [["run", "batch", "outcome", "replay"]]
     table += [[row["run_id"], str(row["batch"]), _row_outcome(row),
                replay_command(sweep_dir, row["run_id"])] for row in listed]
-    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", _table_html(table)]
+    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", f"<p>{html.escape(LOOK_AT_RARE)}</p>",
+              _table_html(table), f"<p>{html.escape(more)}</p>" if more else ""]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                          f"<title>sdc {html.escape(title)}</title><style>{_CSS}</style></head>"

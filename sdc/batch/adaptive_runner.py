@@ -132,12 +132,12 @@ def _loop(sweep: SweepSpec, settings: AdaptiveSettings) -> EstimationLoop | Mode
                           settings.batch_size, elite_fraction=settings.elite_fraction)
 
 
-def _batch_plan(sweep: SweepSpec, z: np.ndarray, seeds: np.ndarray, first_sample: int,
+def _batch_plan(sweep: SweepSpec, z: np.ndarray, seeds: list[int], first_sample: int,
                 width: int) -> list[PlannedRun]:
     u = unit_points(z)
     values = [{p.path: p.at(float(x)) for p, x in zip(sweep.params, row, strict=True)}
               for row in u]
-    return plan_samples(sweep, values, [int(s) for s in seeds], first_sample=first_sample,
+    return plan_samples(sweep, values, seeds, first_sample=first_sample,
                         index_width=width)
 
 

@@ -100,7 +100,7 @@ class RayExecutor:
         self._ray = ray
         self._owns_session = not ray.is_initialized()
         if self._owns_session:
-            self._init_session(ray)
+            start_session(self.workers, self.address)
         elif self.address:
             raise SdcError(f"--ray-address: cannot join {self.address}: this process already "
                            "holds a Ray session")
@@ -112,14 +112,6 @@ class RayExecutor:
         self.sizer = BatchSizer(self.batch_runs)
         self.submitted_tasks = self.submitted_runs = 0
         return self
-
-    def _init_session(self, ray) -> None:
-        options = {"address": self.address} if self.address else {"num_cpus": self.workers}
-        try:
-            ray.init(**options, include_dashboard=False, log_to_driver=False,
-                     logging_level="ERROR")
-        except ConnectionError as e:
-            raise SdcError(f"--ray-address: cannot join {self.address}: {e}") from None
 
     def __exit__(self, *exc) -> None:
         self._refs = {}
@@ -218,3 +210,15 @@ class RayExecutor:
                 pending.extendleft((task, batch.alone)
                                    for task in reversed(batch.tasks[batch.done + 1:]))
                 yield timeout_row(batch.current, elapsed, self.run_timeout_s)
+
+
+def start_session(workers: int, address: str | None = None) -> None:
+    """Start a local Ray session of ``workers`` CPUs for this process, or join the cluster
+    at ``address`` (quiet: no dashboard, workers' output not forwarded)."""
+    import ray
+
+    options = {"address": address} if address else {"num_cpus": workers}
+    try:
+        ray.init(**options, include_dashboard=False, log_to_driver=False, logging_level="ERROR")
+    except ConnectionError as e:
+        raise SdcError(f"--ray-address: cannot join {address}: {e}") from None

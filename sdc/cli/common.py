@@ -3,9 +3,11 @@ executor options and the exit-code rule of a batch of runs."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import sys
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NoReturn
 
@@ -20,6 +22,22 @@ EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 def bad_input(message: str) -> NoReturn:
     click.echo(f"error: {message}", err=True)
     sys.exit(EXIT_BAD_INPUT)
+
+
+@contextlib.contextmanager
+def progress_bar(description: str, total: float | None = None
+                 ) -> Iterator[Callable[[float, float | None], None]]:
+    """A transient progress bar on stderr; yields ``update(completed, total=None)``."""
+    from rich.console import Console
+    from rich.progress import Progress
+
+    with Progress(console=Console(stderr=True), transient=True) as bar:
+        task = bar.add_task(description, total=total)
+
+        def update(completed: float, total: float | None = None) -> None:
+            bar.update(task, completed=completed, total=total)
+
+        yield update
 
 
 def a_number(ctx, param, value: float | None) -> float | None:

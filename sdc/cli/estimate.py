@@ -37,19 +37,12 @@ def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int
     """
     if not target_rhw > 0:
         bad_input(f"--target-rhw: must be > 0, got {target_rhw:g}")
+    from analysis.report.rare_report import estimate_lines
+
     outcome = adaptive_outcome("estimate", sweep_file, options, max_runs, batch_size, target_rhw)
-    click.echo(_estimate_line(outcome.summary))
+    summary = outcome.summary
+    estimate = summary if "p_collision" in summary else None
+    for line in estimate_lines(estimate, summary["stopped"], target_rhw):
+        click.echo(line)
     adaptive_exit(outcome, "estimate", options["out_dir"])
 
-
-def _estimate_line(summary: dict) -> str:
-    if summary.get("p_collision") is None:
-        return "no estimate: the budget ended before the estimation phase"
-    stopped = {"target_rhw": "target RHW reached", "budget": "budget spent, target RHW not "
-               "reached"}.get(summary.get("stopped"), "interrupted")
-    if not summary["failures"]:
-        return (f"P(collision) <= {summary['ci_high']:.3g} (95%): no collision in "
-                f"{summary['estimation_runs']} weighted runs; {stopped}")
-    return (f"P(collision) = {summary['p_collision']:.3g}  95% [{summary['ci_low']:.3g}, "
-            f"{summary['ci_high']:.3g}]  rhw {summary['rhw']:.2f}  ({summary['runs']} runs; "
-            f"plain Monte Carlo: {summary['mc_equivalent_runs']:,.0f}); {stopped}")

@@ -15,6 +15,7 @@ from sdc.cli.common import (
     bad_input,
     check_at,
     exit_interrupted,
+    progress_bar,
     say_warm_up,
 )
 from sdc.cli.run import summary_lines
@@ -44,14 +45,8 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
     if out.suffix == ".html":
         frames = write_html(scene, out, every)
     else:  # about 0.2 s a frame: show the progress
-        from rich.console import Console
-        from rich.progress import Progress
-
-        with Progress(console=Console(stderr=True), transient=True) as progress:
-            task = progress.add_task(f"drawing {out.name}", total=None)
-            frames = animate(scene, out, every,
-                             on_frame=lambda i, n: progress.update(task, completed=i + 1,
-                                                                   total=n))
+        with progress_bar(f"drawing {out.name}") as update:
+            frames = animate(scene, out, every, on_frame=lambda i, n: update(i + 1, n))
     click.echo(f"{frames} frames written to {out}")
 
 

@@ -11,7 +11,7 @@ import click
 from scenarios.errors import SdcError, SpecError
 from scenarios.seeding import SEED_LIMIT
 from scenarios.toml_io import load_spec
-from sdc.cli.common import a_number, bad_input, exit_interrupted
+from sdc.cli.common import a_number, bad_input, exit_interrupted, progress_bar
 
 
 @click.command()
@@ -43,8 +43,6 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
     least twice the warm-up you expect.
     """
     import pandas as pd
-    from rich.console import Console
-    from rich.progress import Progress
 
     from analysis.report.settling_report import settling_figure
     from analysis.stats.settling import suggest_warm_up_s
@@ -68,10 +66,8 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
             spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
                                                                          warm_seed=seed))
         check_inputs(spec)
-        with Progress(console=Console(stderr=True), transient=True) as bar:
-            task = bar.add_task("warming up", total=watch_s)
-            series = settling_series(spec, watch_s,
-                                     on_sample=lambda t_s: bar.update(task, completed=t_s))
+        with progress_bar("warming up", total=watch_s) as update:
+            series = settling_series(spec, watch_s, on_sample=update)
     except SdcError as e:
         bad_input(str(e))
     except KeyboardInterrupt:
