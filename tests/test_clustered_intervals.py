@@ -281,17 +281,17 @@ def test_one_run_a_warm_state_needs_no_warning(tmp_path):
 def test_every_rate_of_the_report_is_clustered():
     results, plain = _results(True), _results(False)
     seed = results[results.controller == "seed"]
-    width = {name: rate_summary(rows)["wilson_high"] - rate_summary(rows)["wilson_low"]
+    width = {name: rate_summary(rows).wilson_high - rate_summary(rows).wilson_low
              for name, rows in (("warm", seed), ("plain", seed.drop(columns="warm_state")))}
     assert width["warm"] > width["plain"]
     by = rates_by(results, "p.ego.speed_mps")
     by_plain = rates_by(plain, "p.ego.speed_mps")
     assert ((by.high - by.low) >= (by_plain.high - by_plain.low)).all()
     assert (by.deff > 1).any() and (by.warm_states == 3).all()
-    outcomes = outcome_summary(seed)["outcomes"]["collided"]
-    assert outcomes["deff"] > 1
-    assert outcome_summary(plain[plain.controller == "seed"])["outcomes"]["collided"]["high"] \
-        == wilson_interval(17, 60)[1] < outcomes["high"]
+    outcomes = outcome_summary(seed).outcomes["collided"]
+    assert outcomes.deff > 1
+    assert outcome_summary(plain[plain.controller == "seed"]).outcomes["collided"].high \
+        == wilson_interval(17, 60)[1] < outcomes.high
     bound = gate(results, ["seed", "lane-keep"], 0.5, "wilson")
     bound_plain = gate(plain, ["seed", "lane-keep"], 0.5, "wilson")
     assert bound_plain["upper_bounds"]["lane-keep"] == wilson_interval(19, 60)[1]

@@ -54,10 +54,10 @@ def test_error_and_timeout_rows_are_counted_apart_never_as_safe():
     results = rows("seed", [True, False, None, None],
                    statuses=["ok", "ok", "error", "timeout"])
     summary = by_controller(results)["seed"]
-    assert (summary["n_ok"], summary["n_error"], summary["n_timeout"]) == (2, 1, 1)
-    assert summary["collisions"] == 1 and summary["collision_rate"] == 0.5
-    assert summary["wilson_low"] == pytest.approx(wilson_interval(1, 2)[0])
-    assert summary["collision_with"] == {"obstacle": 1}
+    assert (summary.n_ok, summary.n_error, summary.n_timeout) == (2, 1, 1)
+    assert summary.collisions == 1 and summary.collision_rate == 0.5
+    assert summary.wilson_low == pytest.approx(wilson_interval(1, 2)[0])
+    assert summary.collision_with == {"obstacle": 1}
 
 
 def test_continuous_parameters_are_binned_and_discrete_ones_kept():
@@ -112,10 +112,10 @@ def test_mcnemar_counts_discordant_pairs_and_matches_the_exact_binomial():
     a = rows("seed", [False] * 9 + [True] * 11)
     b = rows("lane-keep", [True] * 20)
     result = mcnemar(pd.concat([a, b]), "seed", "lane-keep")
-    assert (result["pairs"], result["only_a"], result["only_b"], result["both"]) == (20, 0, 9, 11)
-    assert result["p_value"] == pytest.approx(2 * 0.5**9)  # exact two-sided, b = 0, c = 9
+    assert (result.pairs, result.only_a, result.only_b, result.both) == (20, 0, 9, 11)
+    assert result.p_value == pytest.approx(2 * 0.5**9)  # exact two-sided, b = 0, c = 9
     same = mcnemar(pd.concat([a, a.assign(controller="lane-keep")]), "seed", "lane-keep")
-    assert same["p_value"] == 1.0 and not math.isnan(same["p_value"])
+    assert same.p_value == 1.0 and not math.isnan(same.p_value)
 
 
 def test_the_rates_where_a_stop_was_possible_are_per_sample():
@@ -130,30 +130,30 @@ def test_the_rates_where_a_stop_was_possible_are_per_sample():
     flags = sample_stop_possible(results)
     assert flags.to_dict() == {0: True, 1: True, 2: True, 3: False, 4: False}
     stop = stop_possible_summary(results, ["seed", "lane-keep"])
-    assert (stop["samples"], stop["samples_obstacle_in_path"], stop["samples_stop_possible"]) \
+    assert (stop.samples, stop.samples_obstacle_in_path, stop.samples_stop_possible) \
         == (6, 5, 3)
-    seed, lane_keep = stop["by_controller"]["seed"], stop["by_controller"]["lane-keep"]
-    assert (seed["n_ok"], seed["collisions"]) == (3, 1)
-    assert (lane_keep["n_ok"], lane_keep["n_error"], lane_keep["collisions"]) == (2, 1, 2)
-    [pair] = stop["paired"]
-    assert (pair["pairs"], pair["only_a"], pair["only_b"], pair["both"]) == (2, 0, 2, 0)
-    assert by_controller(results)["seed"]["collisions"] == 3  # overall: every sample
+    seed, lane_keep = stop.by_controller["seed"], stop.by_controller["lane-keep"]
+    assert (seed.n_ok, seed.collisions) == (3, 1)
+    assert (lane_keep.n_ok, lane_keep.n_error, lane_keep.collisions) == (2, 1, 2)
+    [pair] = stop.paired
+    assert (pair.pairs, pair.only_a, pair.only_b, pair.both) == (2, 0, 2, 0)
+    assert by_controller(results)["seed"].collisions == 3  # overall: every sample
 
 
 def test_results_without_the_column_do_not_record_it():
     results = pd.concat([rows("seed", [True, False]), rows("lane-keep", [True, True])])
     assert sample_stop_possible(results) is None
-    assert stop_possible_summary(results, ["seed", "lane-keep"]) == {"recorded": False}
+    assert stop_possible_summary(results, ["seed", "lane-keep"]) is None
 
 
 def test_mcnemar_without_an_ok_run_of_one_controller_has_no_pairs():
     results = pd.concat([rows("seed", [True, False]),
                          rows("lane-keep", [None, None], statuses=["error", "error"])])
-    assert mcnemar(results, "seed", "lane-keep")["pairs"] == 0
-    assert mcnemar(results.iloc[:0], "seed", "lane-keep")["p_value"] == 1.0
+    assert mcnemar(results, "seed", "lane-keep").pairs == 0
+    assert mcnemar(results.iloc[:0], "seed", "lane-keep").p_value == 1.0
 
 
 def test_results_without_warm_states_have_no_design_effect():
     summary = by_controller(rows("seed", [True, False, False]))["seed"]
-    assert (summary["deff"], summary["n_eff"], summary["warm_states"]) == (1.0, 3.0, None)
-    assert (summary["wilson_low"], summary["wilson_high"]) == wilson_interval(1, 3)
+    assert (summary.deff, summary.n_eff, summary.warm_states) == (1.0, 3.0, None)
+    assert (summary.wilson_low, summary.wilson_high) == wilson_interval(1, 3)

@@ -32,16 +32,18 @@ from analysis.report.settling_report import (
     settling_lines,
     settling_summary,
 )
-from analysis.run.run_outcome import COMPLETED, STUCK, collided, failed_or_collided
+from analysis.run.run_outcome import STUCK, collided, failed_or_collided
 from analysis.run.safety import REACTION_TIME_S
 from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
 from analysis.stats.gate import gate, gate_bounds_line
 from analysis.stats.rates import (
+    CollisionRate,
     Method,
+    PairedTest,
+    StopPossible,
     by_controller,
     group_label,
-    interval,
     mcnemar,
     rates_by,
     safe_envelope,
@@ -50,6 +52,7 @@ from analysis.stats.rates import (
 )
 from analysis.stats.verdicts import (
     NO_OUTCOME,
+    Verdicts,
     completes_rarely,
     outcomes_recorded,
     percent,
@@ -142,11 +145,11 @@ class SweepSummary:
     coverage: dict  # what ran of the plan, the samples compared
     interval: Method
     warm_states: dict  # runs sharing a warm state: clustered intervals
-    verdicts: dict  # how each controller's runs ended
-    by_controller: dict[str, dict]  # collision rates
-    by_backend: dict[str, dict[str, dict]]  # side by side, when more than one backend ran
-    paired: list[dict]  # McNemar on collisions
-    stop_possible: dict  # the same where braking alone could have stopped
+    verdicts: Verdicts | None  # how each controller's runs ended (None: not recorded)
+    by_controller: dict[str, CollisionRate]
+    by_backend: dict[str, dict[str, CollisionRate]]  # side by side, when several ran
+    paired: list[PairedTest]  # McNemar on collisions
+    stop_possible: StopPossible | None  # the same where braking alone could have stopped
     by: dict[str, list[dict]]  # rates by parameter
     envelope: list[dict]  # the speed envelope
     gate: dict | None
@@ -156,7 +159,19 @@ class SweepSummary:
     settling: dict | None = None  # the warm-up's word
 
     def to_plain(self) -> dict:
-        return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
+        plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
+        not_recorded = {"recorded": False}
+        return {**plain,
+                "verdicts": self.verdicts.to_plain() if self.verdicts else not_recorded,
+                "by_controller": _plain_rates(self.by_controller),
+                "by_backend": {b: _plain_rates(rates) for b, rates in self.by_backend.items()},
+                "paired": [dataclasses.asdict(p) for p in self.paired],
+                "stop_possible": (self.stop_possible.to_plain() if self.stop_possible
+                                  else not_recorded)}
+
+
+def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
+    return {controller: rate.to_plain() for controller, rate in rates.items()}
 
 
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,
@@ -304,12 +319,11 @@ def _deff(value: float) -> str:
     return f"{value:.2f}"
 
 
-def _rate_row(keys: list[str], numbers: dict, method: Method, deff: bool) -> list[str]:
-    low, high = interval(numbers, method)
-    return [*keys, str(numbers["n_ok"]), str(numbers["collisions"]),
-            percent(numbers["collision_rate"]), f"{percent(low)} - {percent(high)}",
-            str(numbers["n_error"]), str(numbers["n_timeout"]),
-            *([_deff(numbers["deff"])] if deff else [])]
+def _rate_row(keys: list[str], rate: CollisionRate, method: Method, deff: bool) -> list[str]:
+    low, high = rate.interval(method)
+    return [*keys, str(rate.n_ok), str(rate.collisions),
+            percent(rate.collision_rate), f"{percent(low)} - {percent(high)}",
+            str(rate.n_error), str(rate.n_timeout), *([_deff(rate.deff)] if deff else [])]
 
 
 def _plural(count: int, noun: str) -> str:
@@ -326,8 +340,7 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     if not shares_traffic(summary):
         return lines
     warm = summary.warm_states
-    effects = ", ".join(f"{c} {_deff(numbers['deff'])}"
-                        for c, numbers in summary.by_controller.items())
+    effects = ", ".join(f"{c} {_deff(rate.deff)}" for c, rate in summary.by_controller.items())
     lines.append(
         f"Shared traffic: the {warm['runs']} runs drew their background traffic from "
         f"{_plural(warm['distinct'], 'distinct warm state')} ({warm['runs_sharing']} of them "
@@ -362,24 +375,23 @@ def verdict_rows(summary: SweepSummary) -> list[list[str]]:
     """How each controller's runs ended, highest completed rate first; [] when the
     results do not record it."""
     verdicts = summary.verdicts
-    if not verdicts["recorded"]:
+    if verdicts is None:
         return []
     deff = shares_traffic(summary)
     rows = [["controller", "runs", "completed without collision", "95% interval", "collided",
              "stuck", "unfinished", "no outcome", "median time lost (completed)",
              "median progress", *([DEFF_HEAD] if deff else [])]]
-    for controller, numbers in verdicts["by_controller"].items():
-        outcomes = numbers["outcomes"]
-        done = outcomes[COMPLETED]
-        lost, made = numbers["median_time_lost_s"], numbers.get("median_progress_m")
-        rows.append([controller, str(numbers["runs"]),
-                     f"{done['runs']} ({percent(done['rate'])})",
-                     f"{percent(done['low'])} - {percent(done['high'])}",
-                     *(f"{outcomes[o]['runs']} ({percent(outcomes[o]['rate'])})"
+    for controller, numbers in verdicts.by_controller.items():
+        outcomes, done = numbers.outcomes, numbers.completed
+        lost, made = numbers.median_time_lost_s, numbers.median_progress_m
+        rows.append([controller, str(numbers.runs),
+                     f"{done.runs} ({percent(done.rate)})",
+                     f"{percent(done.low)} - {percent(done.high)}",
+                     *(f"{outcomes[o].runs} ({percent(outcomes[o].rate)})"
                        for o in ("collided", "stuck", "unfinished", NO_OUTCOME)),
                      "-" if lost is None else f"{lost:.1f} s",
                      "-" if made is None else f"{made:.0f} m",
-                     *([_deff(done["deff"])] if deff else [])])
+                     *([_deff(done.deff)] if deff else [])])
     return rows
 
 
@@ -412,23 +424,22 @@ def headline_rows(summary: SweepSummary) -> list[list[str]]:
         groups = [([c, b], by_backend[b][c]) for c in controllers for b in by_backend
                   if c in by_backend[b]]
     else:
-        groups = [([c], numbers) for c, numbers in summary.by_controller.items()]
+        groups = [([c], rate) for c, rate in summary.by_controller.items()]
     deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
              "rate", "95% interval", "errors", "timeouts", *([DEFF_HEAD] if deff else [])]]
-    return rows + [_rate_row(keys, numbers, summary.interval, deff)
-                   for keys, numbers in groups]
+    return rows + [_rate_row(keys, rate, summary.interval, deff) for keys, rate in groups]
 
 
 def stop_title(summary: SweepSummary) -> str:
     """What the stop-possible table holds, with its count of samples."""
     stop = summary.stop_possible
-    if not stop["recorded"]:
+    if stop is None:
         return ("where braking alone could stop in time: not recorded "
                 "(results from before the stop_possible column)")
     return (f"where braking alone could stop in time (v^2 / 2a <= gap, a = min(max "
             f"decel, mu g), braking after {REACTION_TIME_S:g} s), "
-            f"{stop['samples_stop_possible']} of {stop['samples']} samples run:")
+            f"{stop.samples_stop_possible} of {stop.samples} samples run:")
 
 
 def stop_rows(summary: SweepSummary) -> list[list[str]]:
@@ -436,8 +447,8 @@ def stop_rows(summary: SweepSummary) -> list[list[str]]:
     headline's columns (backend: all), no rows when it was not recorded."""
     stop = summary.stop_possible
     backend = ["all"] if summary.by_backend else []
-    return [_rate_row([c, *backend], numbers, summary.interval, shares_traffic(summary))
-            for c, numbers in stop.get("by_controller", {}).items()]
+    return [_rate_row([c, *backend], rate, summary.interval, shares_traffic(summary))
+            for c, rate in (stop.by_controller if stop else {}).items()]
 
 
 COMPARISONS_TITLE = ("Pair by pair, on the scenarios both controllers ran (McNemar's exact "
@@ -449,11 +460,12 @@ def comparison_groups(summary: SweepSummary) -> list[tuple[str, list[str]]]:
     stop was possible; each a title and its sentences (empty groups left out)."""
     groups = [
         ("Completed without collision",
-         [_paired_completed(p) for p in summary.verdicts.get("paired", []) if p["pairs"]]),
-        ("Collisions", [_paired(p) for p in summary.paired if p["pairs"]]),
+         [_paired_completed(p) for p in (summary.verdicts.paired if summary.verdicts else [])
+          if p.pairs]),
+        ("Collisions", [_paired(p) for p in summary.paired if p.pairs]),
         ("Collisions where a stop was possible",
          [_paired(p, ", where a stop was possible,")
-          for p in summary.stop_possible.get("paired", []) if p["pairs"]]),
+          for p in (summary.stop_possible.paired if summary.stop_possible else []) if p.pairs]),
     ]
     return [(title, lines) for title, lines in groups if lines]
 
@@ -467,17 +479,17 @@ def comparison_lines(summary: SweepSummary) -> list[str]:
     return lines
 
 
-def _paired(pair: dict, where: str = "") -> str:
-    return (f"{pair['a']} vs {pair['b']}{where} on {pair['pairs']} shared scenarios: only "
-            f"{pair['a']} collided in {pair['only_a']}, only {pair['b']} in {pair['only_b']}, "
-            f"both in {pair['both']}; McNemar exact p = {pair['p_value']:.3g}")
+def _paired(pair: PairedTest, where: str = "") -> str:
+    return (f"{pair.a} vs {pair.b}{where} on {pair.pairs} shared scenarios: only "
+            f"{pair.a} collided in {pair.only_a}, only {pair.b} in {pair.only_b}, "
+            f"both in {pair.both}; McNemar exact p = {pair.p_value:.3g}")
 
 
-def _paired_completed(pair: dict) -> str:
-    return (f"{pair['a']} vs {pair['b']}, completed without collision, on {pair['pairs']} "
-            f"shared scenarios: only {pair['a']} completed in {pair['only_a']}, only "
-            f"{pair['b']} in {pair['only_b']}, both in {pair['both']}; McNemar exact "
-            f"p = {pair['p_value']:.3g}")
+def _paired_completed(pair: PairedTest) -> str:
+    return (f"{pair.a} vs {pair.b}, completed without collision, on {pair.pairs} "
+            f"shared scenarios: only {pair.a} completed in {pair.only_a}, only "
+            f"{pair.b} in {pair.only_b}, both in {pair.both}; McNemar exact "
+            f"p = {pair.p_value:.3g}")
 
 
 def _envelope(envelope: dict, completes_rarely: bool) -> str:
@@ -505,11 +517,9 @@ def _envelope(envelope: dict, completes_rarely: bool) -> str:
 def findings(summary: SweepSummary) -> list[str]:
     """Sentences: each controller's verdict, the paired comparisons (completing; on
     collisions over all samples and where a stop was possible) and the envelope."""
-    verdicts = summary.verdicts
-    lines = [verdict_sentence(c, numbers)
-             for c, numbers in verdicts.get("by_controller", {}).items()]
-    rare = {c for c, numbers in verdicts.get("by_controller", {}).items()
-            if completes_rarely(numbers)}
+    verdicts = summary.verdicts.by_controller if summary.verdicts else {}
+    lines = [verdict_sentence(c, numbers) for c, numbers in verdicts.items()]
+    rare = {c for c, numbers in verdicts.items() if completes_rarely(numbers)}
     lines += [_envelope(e, e["controller"] in rare) for e in summary.envelope]
     if summary.gate is not None:
         lines.append(gate_bounds_line(summary.gate))  # its verdict: the command's last line
@@ -609,7 +619,7 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> s
               else [NOT_RECORDED, ""])
     lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", collision_notes(summary), "",
               f"Collision rates {stop_title(summary)}", ""]
-    if summary.stop_possible["recorded"]:
+    if summary.stop_possible is not None:
         lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
     lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in _world_lines(summary)]
     lines += [f"- {line}" for line in findings(summary)]
@@ -707,7 +717,7 @@ def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
              f"<p>{html.escape(collision_notes(summary))}</p>",
              f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
              (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
-              if summary.stop_possible["recorded"] else ""),
+              if summary.stop_possible is not None else ""),
              "<h2>World</h2>",
              *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in _world_lines(summary)),
              "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]

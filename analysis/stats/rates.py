@@ -13,6 +13,7 @@ each have their own warm state, get the plain binomial interval unchanged.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from statistics import NormalDist
@@ -179,30 +180,63 @@ def flag_interval(flags, rows: pd.DataFrame, method: Method) -> tuple[tuple[floa
     return interval_of(counts.k_eff, counts.n_eff, method), counts
 
 
-def rate_summary(rows: pd.DataFrame) -> dict:
+@dataclasses.dataclass(frozen=True)
+class CollisionRate:
     """Counts by status, collisions among the ok rows, their rate and 95% intervals
     (Wilson, and Clopper-Pearson as ``cp_low``/``cp_high``), clustered by warm state:
     ``deff`` is the design effect, ``n_eff`` the effective number of ok runs the
     intervals were taken on, ``warm_states`` the distinct warm states of the ok runs
-    (None for results without the column)."""
+    (None for results without the column), ``collision_with`` the collisions by what
+    was hit."""
+
+    n_ok: int
+    n_error: int
+    n_timeout: int
+    collisions: int
+    collision_rate: float | None  # None without an ok run
+    wilson_low: float
+    wilson_high: float
+    cp_low: float
+    cp_high: float
+    deff: float
+    n_eff: float
+    warm_states: int | None
+    collision_with: dict[str, int]
+
+    @property
+    def n_failed(self) -> int:
+        """The runs without an outcome (error, timeout)."""
+        return self.n_error + self.n_timeout
+
+    def interval(self, method: Method) -> tuple[float, float]:
+        """The 95% interval by ``method``."""
+        return ((self.wilson_low, self.wilson_high) if method == "wilson"
+                else (self.cp_low, self.cp_high))
+
+    def to_plain(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+def rate_summary(rows: pd.DataFrame) -> CollisionRate:
+    """The :class:`CollisionRate` of ``rows``."""
     ok = rows[rows.status == "ok"]
     k, n = int(ok.collision.sum()), len(ok)
     counts = clustered_counts(ok.collision, warm_states_of(ok))
     wilson = wilson_interval(counts.k_eff, counts.n_eff)
     exact = clopper_pearson_interval(counts.k_eff, counts.n_eff)
-    return {
-        "n_ok": n,
-        "n_error": int((rows.status == "error").sum()),
-        "n_timeout": int((rows.status == "timeout").sum()),
-        "collisions": k,
-        "collision_rate": k / n if n else None,
-        "wilson_low": wilson[0], "wilson_high": wilson[1],
-        "cp_low": exact[0], "cp_high": exact[1],
-        "deff": counts.deff, "n_eff": float(counts.n_eff),
-        "warm_states": count_warm_states(ok),
-        "collision_with": {str(kind): int(count) for kind, count in
-                           ok.collision_with[ok.collision].value_counts().sort_index().items()},
-    }
+    return CollisionRate(
+        n_ok=n,
+        n_error=int((rows.status == "error").sum()),
+        n_timeout=int((rows.status == "timeout").sum()),
+        collisions=k,
+        collision_rate=k / n if n else None,
+        wilson_low=wilson[0], wilson_high=wilson[1],
+        cp_low=exact[0], cp_high=exact[1],
+        deff=counts.deff, n_eff=float(counts.n_eff),
+        warm_states=count_warm_states(ok),
+        collision_with={str(kind): int(count) for kind, count in
+                        ok.collision_with[ok.collision].value_counts().sort_index().items()},
+    )
 
 
 def counted_failures(rows: pd.DataFrame) -> pd.Series:
@@ -221,13 +255,7 @@ def upper_bound_counting_failures(rows: pd.DataFrame,
     return high, counts.deff
 
 
-def interval(summary: dict, method: Method) -> tuple[float, float]:
-    """The 95% interval of a :func:`rate_summary` by ``method``."""
-    prefix = "wilson" if method == "wilson" else "cp"
-    return summary[f"{prefix}_low"], summary[f"{prefix}_high"]
-
-
-def by_controller(results: pd.DataFrame) -> dict[str, dict]:
+def by_controller(results: pd.DataFrame) -> dict[str, CollisionRate]:
     return {str(c): rate_summary(rows)
             for c, rows in results.groupby("controller", sort=False)}
 
@@ -273,35 +301,47 @@ def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> p
     by warm state, with its design effect ``deff`` and the group's ``warm_states``)."""
     out = []
     for group, controller, rows in _grouped(results, column):
-        summary = rate_summary(rows)
-        low, high = interval(summary, method)
-        out.append({"group": group, "controller": controller, "n_ok": summary["n_ok"],
-                    "n_failed": summary["n_error"] + summary["n_timeout"],
-                    "collisions": summary["collisions"],
-                    "collision_rate": summary["collision_rate"], "low": low, "high": high,
-                    "deff": summary["deff"], "warm_states": summary["warm_states"]})
+        rate = rate_summary(rows)
+        low, high = rate.interval(method)
+        out.append({"group": group, "controller": controller, "n_ok": rate.n_ok,
+                    "n_failed": rate.n_failed, "collisions": rate.collisions,
+                    "collision_rate": rate.collision_rate, "low": low, "high": high,
+                    "deff": rate.deff, "warm_states": rate.warm_states})
     return pd.DataFrame(out)
 
 
-def paired_test(flags: pd.DataFrame, a: str, b: str) -> dict:
+@dataclasses.dataclass(frozen=True)
+class PairedTest:
+    """McNemar's exact test of controllers ``a`` and ``b`` on the samples both ran:
+    ``only_a`` samples where the flag held for ``a`` alone, ``only_b`` for ``b`` alone."""
+
+    a: str
+    b: str
+    pairs: int
+    both: int
+    neither: int
+    only_a: int
+    only_b: int
+    p_value: float  # two-sided
+
+
+def paired_test(flags: pd.DataFrame, a: str, b: str) -> PairedTest:
     """McNemar's exact test of controllers ``a`` and ``b`` on ``flags``: one row per
     sample, one bool column per controller (NaN where it has no run to count).
 
-    ``only_a`` counts samples where the flag holds for ``a`` alone, ``only_b`` for
-    ``b`` alone; the two-sided p-value is a binomial test of ``only_a`` among the
-    discordant pairs at 1/2. Samples missing either controller are left out.
+    The two-sided p-value is a binomial test of ``only_a`` among the discordant pairs
+    at 1/2. Samples missing either controller are left out.
     """
     pairs = flags.reindex(columns=[a, b]).dropna()
     ca, cb = pairs[a].astype(bool), pairs[b].astype(bool)
     only_a, only_b = int((ca & ~cb).sum()), int((~ca & cb).sum())
     discordant = only_a + only_b
     p = 1.0 if discordant == 0 else float(stats.binomtest(only_a, discordant, 0.5).pvalue)
-    return {"a": a, "b": b, "pairs": len(pairs), "both": int((ca & cb).sum()),
-            "neither": int((~ca & ~cb).sum()), "only_a": only_a, "only_b": only_b,
-            "p_value": p}
+    return PairedTest(a, b, len(pairs), int((ca & cb).sum()), int((~ca & ~cb).sum()),
+                      only_a, only_b, p)
 
 
-def mcnemar(results: pd.DataFrame, a: str, b: str) -> dict:
+def mcnemar(results: pd.DataFrame, a: str, b: str) -> PairedTest:
     """:func:`paired_test` of collisions on the samples both controllers ran ok
     (``only_a``: samples where only ``a`` collided)."""
     ok = results[results.status == "ok"]
@@ -321,21 +361,35 @@ def sample_stop_possible(results: pd.DataFrame) -> pd.Series | None:
     return known.groupby("sample").stop_possible.first().astype(bool)
 
 
-def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> dict:
-    """The collision rates and the paired comparisons restricted to the samples where
-    a brake-only stop was possible; ``{"recorded": False}`` without the column."""
+@dataclasses.dataclass(frozen=True)
+class StopPossible:
+    """The collision rates and paired comparisons on the samples where braking alone
+    could stop the car before the obstacle."""
+
+    samples: int  # with an ok run
+    samples_obstacle_in_path: int
+    samples_stop_possible: int
+    by_controller: dict[str, CollisionRate]
+    paired: list[PairedTest]
+
+    def to_plain(self) -> dict:
+        return {"recorded": True, **dataclasses.asdict(self)}
+
+
+def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> StopPossible | None:
+    """The :class:`StopPossible` of the results; None for results without the
+    ``stop_possible`` column."""
     flags = sample_stop_possible(results)
     if flags is None:
-        return {"recorded": False}
+        return None
     possible = results[results["sample"].isin(flags.index[flags])]
-    return {"recorded": True,
-            "samples": int(results["sample"][results.status == "ok"].nunique()),  # with a run
-            "samples_obstacle_in_path": len(flags),
-            "samples_stop_possible": int(flags.sum()),
-            "by_controller": {c: rate_summary(possible[possible.controller == c])
-                              for c in controllers},
-            "paired": [mcnemar(possible, a, b)
-                       for a, b in itertools.combinations(controllers, 2)]}
+    return StopPossible(
+        samples=int(results["sample"][results.status == "ok"].nunique()),
+        samples_obstacle_in_path=len(flags),
+        samples_stop_possible=int(flags.sum()),
+        by_controller={c: rate_summary(possible[possible.controller == c])
+                       for c in controllers},
+        paired=[mcnemar(possible, a, b) for a, b in itertools.combinations(controllers, 2)])
 
 
 def safe_envelope(results: pd.DataFrame, column: str, controller: str,
@@ -359,10 +413,10 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
     safe_up_to, stopped = None, None
     for group in groups:
         rows = mine.get(str(group))
-        summary = rate_summary(rows) if rows is not None else None
-        n_ok = 0 if summary is None else summary["n_ok"]
-        k = 0 if summary is None else summary["collisions"]
-        failed = 0 if summary is None else summary["n_error"] + summary["n_timeout"]
+        rate = rate_summary(rows) if rows is not None else None
+        n_ok = 0 if rate is None else rate.n_ok
+        k = 0 if rate is None else rate.collisions
+        failed = 0 if rate is None else rate.n_failed
         high = 1.0 if rows is None else upper_bound_counting_failures(rows)[0]
         if n_ok == 0:
             why = "no_runs"

@@ -12,12 +12,19 @@ all ran (:func:`shared_samples`), pair by pair with McNemar's exact test.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import pandas as pd
 
 from analysis.run.run_outcome import COMPLETED, OUTCOMES
-from analysis.stats.rates import Method, count_warm_states, flag_interval, paired_test
+from analysis.stats.rates import (
+    Method,
+    PairedTest,
+    count_warm_states,
+    flag_interval,
+    paired_test,
+)
 
 NO_OUTCOME = "no outcome"  # error and timeout runs
 #: a controller completing fewer of its runs than this is never presented as safe
@@ -38,13 +45,23 @@ def shared_samples(results: pd.DataFrame) -> pd.Index:
     return present.index[present == results.controller.nunique()]
 
 
-def _rate(flags: pd.Series, rows: pd.DataFrame, method: Method = "wilson") -> dict:
-    """How many of ``rows`` hold ``flags``, their rate over all the rows and its 95%
-    interval by ``method``, clustered by warm state (``deff``: its design effect)."""
+@dataclasses.dataclass(frozen=True)
+class OutcomeRate:
+    """How many runs ended one way, their rate over all the runs and its 95% interval,
+    clustered by warm state (``deff``: its design effect)."""
+
+    runs: int
+    rate: float | None  # None without a run
+    low: float
+    high: float
+    deff: float
+
+
+def _rate(flags: pd.Series, rows: pd.DataFrame, method: Method = "wilson") -> OutcomeRate:
+    """The :class:`OutcomeRate` of ``flags`` over ``rows`` (interval by ``method``)."""
     (low, high), counts = flag_interval(flags, rows, method)
     k, n = int(flags.sum()), len(rows)
-    return {"runs": k, "rate": k / n if n else None, "low": low, "high": high,
-            "deff": counts.deff}
+    return OutcomeRate(k, k / n if n else None, low, high, counts.deff)
 
 
 def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
@@ -55,23 +72,37 @@ def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
     return flags
 
 
-def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> dict:
-    """One controller's runs: each outcome's count and rate over all its runs (95%
-    intervals by ``method``), with the runs without an outcome as
-    :data:`NO_OUTCOME`; the median time lost of its completed runs (what passing
-    the obstacles cost against driving on at the start speed: a run that collided or
-    got stuck lost no time, it failed) and the median progress of its ok runs; the
-    distinct warm states of its runs (``warm_states``, None for results without the
+@dataclasses.dataclass(frozen=True)
+class OutcomeSummary:
+    """One controller's runs: each outcome's :class:`OutcomeRate` over all its runs, the
+    runs without an outcome as :data:`NO_OUTCOME`; the median time lost of its completed
+    runs (what passing the obstacles cost against driving on at the start speed: a run
+    that collided or got stuck lost no time, it failed) and the median progress of its
+    ok runs; the distinct warm states of its runs (None for results without the
     column)."""
+
+    runs: int
+    outcomes: dict[str, OutcomeRate]
+    warm_states: int | None
+    median_time_lost_s: float | None
+    median_progress_m: float | None
+
+    @property
+    def completed(self) -> OutcomeRate:
+        return self.outcomes[COMPLETED]
+
+
+def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> OutcomeSummary:
+    """The :class:`OutcomeSummary` of one controller's ``rows`` (intervals by ``method``)."""
     ok = rows[rows.status == "ok"]
     time_lost = rows.time_lost_s[completed_runs(rows)].dropna()
-    return {
-        "runs": len(rows),
-        "outcomes": {o: _rate(flags, rows, method) for o, flags in outcome_flags(rows).items()},
-        "warm_states": count_warm_states(rows),
-        "median_time_lost_s": float(time_lost.median()) if len(time_lost) else None,
-        "median_progress_m": float(ok.progress_m.median()) if len(ok) else None,
-    }
+    return OutcomeSummary(
+        runs=len(rows),
+        outcomes={o: _rate(flags, rows, method) for o, flags in outcome_flags(rows).items()},
+        warm_states=count_warm_states(rows),
+        median_time_lost_s=float(time_lost.median()) if len(time_lost) else None,
+        median_progress_m=float(ok.progress_m.median()) if len(ok) else None,
+    )
 
 
 def completed_runs(results: pd.DataFrame) -> pd.Series:
@@ -89,37 +120,46 @@ def completed_flags(results: pd.DataFrame) -> pd.DataFrame:
         index="sample", columns="controller", values="_done", aggfunc="first")
 
 
-def verdict_summary(results: pd.DataFrame, method: Method = "wilson") -> dict:
-    """Per controller :func:`outcome_summary` (intervals by ``method``), ranked by the
-    completed rate (highest first), and the paired comparisons of completing;
-    ``{"recorded": False}`` for results without the ``outcome`` column."""
+@dataclasses.dataclass(frozen=True)
+class Verdicts:
+    """Per controller its :class:`OutcomeSummary`, ranked by the completed rate (highest
+    first), and the paired comparisons of completing."""
+
+    by_controller: dict[str, OutcomeSummary]
+    paired: list[PairedTest]
+
+    def to_plain(self) -> dict:
+        return {"recorded": True, **dataclasses.asdict(self)}
+
+
+def verdict_summary(results: pd.DataFrame, method: Method = "wilson") -> Verdicts | None:
+    """The :class:`Verdicts` of the results (intervals by ``method``); None for results
+    without the ``outcome`` column."""
     if not outcomes_recorded(results):
-        return {"recorded": False}
+        return None
     controllers = list(dict.fromkeys(results.controller))
     summaries = {c: outcome_summary(results[results.controller == c], method)
                  for c in controllers}
-    ranked = sorted(controllers, key=lambda c: -(summaries[c]["outcomes"][COMPLETED]["rate"]
-                                                or 0.0))
+    ranked = sorted(controllers, key=lambda c: -(summaries[c].completed.rate or 0.0))
     flags = completed_flags(results)
-    return {"recorded": True,
-            "by_controller": {c: summaries[c] for c in ranked},
-            "paired": [paired_test(flags, a, b) for a, b in itertools.combinations(ranked, 2)]}
+    return Verdicts({c: summaries[c] for c in ranked},
+                    [paired_test(flags, a, b) for a, b in itertools.combinations(ranked, 2)])
 
 
-def completes_rarely(summary: dict) -> bool:
-    """Did the controller of an :func:`outcome_summary` complete fewer than
-    :data:`RARELY_COMPLETES` of its runs (or have none)?"""
-    return (summary["outcomes"][COMPLETED]["rate"] or 0.0) < RARELY_COMPLETES
+def completes_rarely(summary: OutcomeSummary) -> bool:
+    """Did the controller complete fewer than :data:`RARELY_COMPLETES` of its runs (or
+    have none)?"""
+    return (summary.completed.rate or 0.0) < RARELY_COMPLETES
 
 
-def verdict_sentence(controller: str, summary: dict) -> str:
+def verdict_sentence(controller: str, summary: OutcomeSummary) -> str:
     """What a controller's runs say, led by how many completed without collision."""
-    outcomes, n = summary["outcomes"], summary["runs"]
-    done = outcomes[COMPLETED]
-    rest = ", ".join(f"{name} {outcomes[name]['runs']}"
-                     for name in (*OUTCOMES[1:], NO_OUTCOME) if outcomes[name]["runs"])
-    text = (f"{controller}: completed without collision in {done['runs']} of {n} runs "
-            f"({percent(done['rate'])}, 95% {percent(done['low'])} - {percent(done['high'])})")
+    outcomes, n = summary.outcomes, summary.runs
+    done = summary.completed
+    rest = ", ".join(f"{name} {outcomes[name].runs}"
+                     for name in (*OUTCOMES[1:], NO_OUTCOME) if outcomes[name].runs)
+    text = (f"{controller}: completed without collision in {done.runs} of {n} runs "
+            f"({percent(done.rate)}, 95% {percent(done.low)} - {percent(done.high)})")
     text += f"; {rest}" if rest else ""
     if completes_rarely(summary):
         text += (f". It completes fewer than {RARELY_COMPLETES:.0%} of its runs: not a safe "
