@@ -294,14 +294,14 @@ def test_every_rate_of_the_report_is_clustered():
         == wilson_interval(17, 60)[1] < outcomes.high
     bound = gate(results, ["seed", "lane-keep"], 0.5, "wilson")
     bound_plain = gate(plain, ["seed", "lane-keep"], 0.5, "wilson")
-    assert bound_plain["upper_bounds"]["lane-keep"] == wilson_interval(19, 60)[1]
-    assert bound["upper_bounds"]["lane-keep"] > bound_plain["upper_bounds"]["lane-keep"]
-    assert bound["design_effects"]["lane-keep"] > 1 == bound_plain["design_effects"]["seed"]
+    assert bound_plain.upper_bounds["lane-keep"] == wilson_interval(19, 60)[1]
+    assert bound.upper_bounds["lane-keep"] > bound_plain.upper_bounds["lane-keep"]
+    assert bound.design_effects["lane-keep"] > 1 == bound_plain.design_effects["seed"]
     envelope = safe_envelope(results, "p.ego.speed_mps", "seed", threshold=0.6)
     envelope_plain = safe_envelope(plain, "p.ego.speed_mps", "seed", threshold=0.6)
     # plain: 15 runs a speed show the rate at or below 60% up to 7 m/s; clustered, not one
-    assert envelope_plain["safe_up_to"] == 7.0 and envelope["safe_up_to"] is None
-    assert envelope["stopped_at"]["why"] == "too_few"
+    assert envelope_plain.safe_up_to == 7.0 and envelope.safe_up_to is None
+    assert envelope.stopped_at.why == "too_few"
 
 
 def test_many_warm_states_are_named_without_a_warning(tmp_path):
@@ -318,6 +318,6 @@ def test_a_sample_whose_controllers_share_its_warm_state_is_no_cluster():
     rows = pd.DataFrame({"controller": ["seed", "avoid"] * 6,
                          "warm_state": [f"s{i // 2}" for i in range(12)]})
     summary = warm_state_summary(rows)
-    assert summary["distinct"] == 6 and not summary["shared"]
+    assert summary.distinct == 6 and not summary.shared
     rows.loc[rows.index[-2:], "warm_state"] = "s0"  # sample 5 drew sample 0's state
-    assert warm_state_summary(rows)["runs_sharing"] == 4
+    assert warm_state_summary(rows).runs_sharing == 4

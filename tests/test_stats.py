@@ -77,15 +77,15 @@ def test_rates_by_a_parameter_and_the_safe_envelope():
     assert table.collision_rate.is_monotonic_increasing
     # 10 runs a bin: 0 of 10 is not enough to show a rate under 5% (Wilson: up to 27.8%)
     envelope = safe_envelope(results, "p.ego.speed_mps", "seed")
-    assert envelope["safe_up_to"] is None
-    assert envelope["stopped_at"]["why"] == "too_few"
-    assert envelope["stopped_at"]["high"] == pytest.approx(wilson_interval(0, 10)[1])
+    assert envelope.safe_up_to is None
+    assert envelope.stopped_at.why == "too_few"
+    assert envelope.stopped_at.high == pytest.approx(wilson_interval(0, 10)[1])
     # 100 runs a bin: 0 of 100 is shown (up to 3.7%) until the first bin with collisions
     many = np.repeat(speeds, 10)
     results = rows("seed", list(many > 10.0), **{"p.ego.speed_mps": many})
     envelope = safe_envelope(results, "p.ego.speed_mps", "seed")
-    assert 7.0 <= envelope["safe_up_to"] <= 10.0 + 1e-9
-    assert envelope["stopped_at"]["why"] == "above"
+    assert 7.0 <= envelope.safe_up_to <= 10.0 + 1e-9
+    assert envelope.stopped_at.why == "above"
 
 
 def test_the_envelope_counts_errors_against_safety_and_stops_at_empty_bins():
@@ -94,16 +94,16 @@ def test_the_envelope_counts_errors_against_safety_and_stops_at_empty_bins():
     results = rows("avoid", [False] * len(speeds), statuses=list(statuses),
                    **{"p.ego.speed_mps": speeds})
     envelope = safe_envelope(results, "p.ego.speed_mps", "avoid")
-    assert envelope["safe_up_to"] <= 20.0 + 1e-9  # never over the errored bins
-    assert envelope["stopped_at"]["why"] == "no_runs"
+    assert envelope.safe_up_to <= 20.0 + 1e-9  # never over the errored bins
+    assert envelope.stopped_at.why == "no_runs"
     # every run errored: nothing is shown safe
     every = safe_envelope(results.assign(status="error"), "p.ego.speed_mps", "avoid")
-    assert every["safe_up_to"] is None and every["stopped_at"]["why"] == "no_runs"
+    assert every.safe_up_to is None and every.stopped_at.why == "no_runs"
     # 4 errors among 100 runs of a bin: counted as collisions, 95% up to 9.8% > 5%
     statuses = np.where((speeds < 3) & (np.arange(len(speeds)) % 25 == 0), "error", "ok")
     some = safe_envelope(results.assign(status=statuses), "p.ego.speed_mps", "avoid")
-    assert some["safe_up_to"] is None and some["stopped_at"]["why"] == "too_few"
-    assert some["stopped_at"]["n_failed"] == 4
+    assert some.safe_up_to is None and some.stopped_at.why == "too_few"
+    assert some.stopped_at.n_failed == 4
     with pytest.raises(KeyError, match="p.ego.speed_mps"):
         rates_by(results, "p.nothing")
 

@@ -36,12 +36,14 @@ from analysis.run.run_outcome import STUCK, collided, failed_or_collided
 from analysis.run.safety import REACTION_TIME_S
 from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
-from analysis.stats.gate import gate, gate_bounds_line
+from analysis.stats.gate import Gate, gate, gate_bounds_line
 from analysis.stats.rates import (
     CollisionRate,
     Method,
     PairedTest,
+    SafeEnvelope,
     StopPossible,
+    WarmStates,
     by_controller,
     group_label,
     mcnemar,
@@ -94,7 +96,12 @@ class Report:
     markdown_path: Path
     junit_path: Path | None
     terminal: list[str]
-    gate_failed: list[str] = dataclasses.field(default_factory=list)  # failing the gate
+    gate: Gate | None = None  # with --fail-above or --min-completed
+
+    @property
+    def gate_failed(self) -> list[str]:
+        """The controllers that fail the gate."""
+        return self.gate.failed if self.gate else []
 
 
 def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, dict]:
@@ -120,39 +127,53 @@ def varying_parameters(results: pd.DataFrame) -> list[str]:
             if c.startswith(PARAM_PREFIX) and results[c].nunique() > 1]
 
 
-def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> dict:
+@dataclasses.dataclass(frozen=True)
+class Coverage:
     """What the sweep ran of its plan, and which samples the controllers are compared on."""
+
+    runs_planned: int | None  # None: the manifest does not say
+    runs: int
+    runs_missing: int | None
+    partial: bool
+    sweep_status: str | None
+    samples: int  # with a run
+    samples_compared: int  # that every controller ran
+    runs_left_out: int  # of every table: runs of the samples not compared
+
+
+def coverage(results: pd.DataFrame, manifest: dict, shared: pd.Index) -> Coverage:
+    """The :class:`Coverage` of the results (``shared``: the samples compared)."""
     planned = manifest.get("runs")
     missing = max(0, planned - len(results)) if planned is not None else None
-    samples = int(results["sample"].nunique())
     compared = results["sample"].isin(shared)
-    return {"runs_planned": planned, "runs": len(results), "runs_missing": missing,
-            "partial": bool(missing) or manifest.get("status") not in (None, "complete"),
-            "sweep_status": manifest.get("status"), "samples": samples,
-            "samples_compared": len(shared), "runs_left_out": int((~compared).sum())}
+    return Coverage(planned, len(results), missing,
+                    bool(missing) or manifest.get("status") not in (None, "complete"),
+                    manifest.get("status"), int(results["sample"].nunique()), len(shared),
+                    int((~compared).sum()))
 
 
 @dataclasses.dataclass(frozen=True)
 class SweepSummary:
-    """Everything a sweep's report says; :meth:`to_plain` is its ``summary.json``. The
-    parts are plain data from :mod:`analysis.stats` (rates, verdicts, paired tests)."""
+    """Everything a sweep's report says; :meth:`to_plain` is its ``summary.json``. Its
+    parts are typed (:mod:`analysis.stats`); the tables by parameter, the world audit and
+    the warm-up's word stay plain records."""
 
     sweep: str
     runs_planned: int | None
     runs: int
     counts: dict[str, int]  # runs by status: ok, error, timeout
     sweep_status: str | None
-    coverage: dict  # what ran of the plan, the samples compared
+    coverage: Coverage
     interval: Method
-    warm_states: dict  # runs sharing a warm state: clustered intervals
+    warm_states: WarmStates | None  # runs sharing a warm state: clustered intervals
     verdicts: Verdicts | None  # how each controller's runs ended (None: not recorded)
     by_controller: dict[str, CollisionRate]
     by_backend: dict[str, dict[str, CollisionRate]]  # side by side, when several ran
     paired: list[PairedTest]  # McNemar on collisions
     stop_possible: StopPossible | None  # the same where braking alone could have stopped
     by: dict[str, list[dict]]  # rates by parameter
-    envelope: list[dict]  # the speed envelope
-    gate: dict | None
+    envelope: list[SafeEnvelope]  # the speed envelope
+    gate: Gate | None
     traffic_model: str | None
     sumo_config: list | None
     world: dict  # the world audit and who hit whom
@@ -161,13 +182,16 @@ class SweepSummary:
     def to_plain(self) -> dict:
         plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
         not_recorded = {"recorded": False}
-        return {**plain,
+        return {**plain, "coverage": dataclasses.asdict(self.coverage),
+                "warm_states": self.warm_states.to_plain() if self.warm_states else not_recorded,
                 "verdicts": self.verdicts.to_plain() if self.verdicts else not_recorded,
                 "by_controller": _plain_rates(self.by_controller),
                 "by_backend": {b: _plain_rates(rates) for b, rates in self.by_backend.items()},
                 "paired": [dataclasses.asdict(p) for p in self.paired],
                 "stop_possible": (self.stop_possible.to_plain() if self.stop_possible
-                                  else not_recorded)}
+                                  else not_recorded),
+                "envelope": [dataclasses.asdict(e) for e in self.envelope],
+                "gate": self.gate.to_plain() if self.gate else None}
 
 
 def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
@@ -309,7 +333,7 @@ def world_lines(world: dict, traffic_model: str | None = None,
 
 def shares_traffic(summary: SweepSummary) -> bool:
     """Did any two of the counted runs start from the same warm state?"""
-    return bool(summary.warm_states.get("shared"))
+    return summary.warm_states is not None and summary.warm_states.shared
 
 
 DEFF_HEAD = "design effect"
@@ -342,16 +366,16 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     warm = summary.warm_states
     effects = ", ".join(f"{c} {_deff(rate.deff)}" for c, rate in summary.by_controller.items())
     lines.append(
-        f"Shared traffic: the {warm['runs']} runs drew their background traffic from "
-        f"{_plural(warm['distinct'], 'distinct warm state')} ({warm['runs_sharing']} of them "
+        f"Shared traffic: the {warm.runs} runs drew their background traffic from "
+        f"{_plural(warm.distinct, 'distinct warm state')} ({warm.runs_sharing} of them "
         "started from a warm state another run of their controller also started from). Runs "
         "sharing a warm state are not independent samples of traffic, so every interval is "
         "widened by its design effect (the rate's variance over the binomial one, in the "
         f"tables; collision rate: {effects}). The paired McNemar tests are not adjusted "
         "for it.")
-    if warm["distinct"] < FEW_WARM_STATES:
+    if warm.distinct < FEW_WARM_STATES:
         lines.append(f"WARNING: the traffic's variety is only "
-                     f"{_plural(warm['distinct'], 'warm state')}: the intervals cannot speak "
+                     f"{_plural(warm.distinct, 'warm state')}: the intervals cannot speak "
                      "for traffic beyond them.")
     return lines
 
@@ -359,15 +383,15 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
 def coverage_lines(summary: SweepSummary) -> list[str]:
     """Whether the sweep is partial, and which samples the comparisons use."""
     cov, lines = summary.coverage, []
-    if cov["partial"]:
-        planned = "?" if cov["runs_planned"] is None else cov["runs_planned"]
-        missing = "" if cov["runs_missing"] is None else f", {cov['runs_missing']} missing"
-        lines.append(f"PARTIAL sweep: {cov['runs']} of {planned} planned runs{missing} "
-                     f"(sweep status: {cov['sweep_status'] or 'unknown'}).")
-    if cov["samples_compared"] < cov["samples"]:
-        lines.append(f"Controllers are compared on the {cov['samples_compared']} samples every "
-                     f"one of them ran, of {cov['samples']} with a run "
-                     f"({cov['runs_left_out']} runs left out of every table).")
+    if cov.partial:
+        planned = "?" if cov.runs_planned is None else cov.runs_planned
+        missing = "" if cov.runs_missing is None else f", {cov.runs_missing} missing"
+        lines.append(f"PARTIAL sweep: {cov.runs} of {planned} planned runs{missing} "
+                     f"(sweep status: {cov.sweep_status or 'unknown'}).")
+    if cov.samples_compared < cov.samples:
+        lines.append(f"Controllers are compared on the {cov.samples_compared} samples every "
+                     f"one of them ran, of {cov.samples} with a run "
+                     f"({cov.runs_left_out} runs left out of every table).")
     return lines
 
 
@@ -492,24 +516,24 @@ def _paired_completed(pair: PairedTest) -> str:
             f"p = {pair.p_value:.3g}")
 
 
-def _envelope(envelope: dict, completes_rarely: bool) -> str:
-    limit = f"{envelope['threshold']:.0%}"
-    stopped = envelope["stopped_at"]
+def _envelope(envelope: SafeEnvelope, completes_rarely: bool) -> str:
+    limit = f"{envelope.threshold:.0%}"
+    stopped = envelope.stopped_at
     if stopped is None:
         text = f"is shown at or below {limit} over the whole range"
     else:
-        counts = (f"{stopped['collisions']} of {stopped['n_ok']} ok runs collided"
-                  + (f", {stopped['n_failed']} runs without an outcome" if stopped["n_failed"]
-                     else "") + f"; 95% up to {percent(stopped['high'])}")
-        why = {"above": f"exceeds {limit} in {stopped['group']} ({counts})",
-               "too_few": f"cannot be shown at or below {limit} in {stopped['group']}: too "
+        counts = (f"{stopped.collisions} of {stopped.n_ok} ok runs collided"
+                  + (f", {stopped.n_failed} runs without an outcome" if stopped.n_failed
+                     else "") + f"; 95% up to {percent(stopped.high)}")
+        why = {"above": f"exceeds {limit} in {stopped.group} ({counts})",
+               "too_few": f"cannot be shown at or below {limit} in {stopped.group}: too "
                           f"few runs there ({counts})",
-               "no_runs": f"has no ok run in {stopped['group']}"}[stopped["why"]]
-        text = (why if envelope["safe_up_to"] is None else
-                f"is shown at or below {limit} up to {envelope['safe_up_to']:.3g} m/s, then "
+               "no_runs": f"has no ok run in {stopped.group}"}[stopped.why]
+        text = (why if envelope.safe_up_to is None else
+                f"is shown at or below {limit} up to {envelope.safe_up_to:.3g} m/s, then "
                 + why)
-    line = f"{envelope['controller']}: the collision rate along ego speed {text}"
-    if completes_rarely and (stopped is None or envelope["safe_up_to"] is not None):
+    line = f"{envelope.controller}: the collision rate along ego speed {text}"
+    if completes_rarely and (stopped is None or envelope.safe_up_to is not None):
         line += "; but it rarely completes, so a low collision rate there is not safety"
     return line
 
@@ -520,7 +544,7 @@ def findings(summary: SweepSummary) -> list[str]:
     verdicts = summary.verdicts.by_controller if summary.verdicts else {}
     lines = [verdict_sentence(c, numbers) for c, numbers in verdicts.items()]
     rare = {c for c, numbers in verdicts.items() if completes_rarely(numbers)}
-    lines += [_envelope(e, e["controller"] in rare) for e in summary.envelope]
+    lines += [_envelope(e, e.controller in rare) for e in summary.envelope]
     if summary.gate is not None:
         lines.append(gate_bounds_line(summary.gate))  # its verdict: the command's last line
     return lines
@@ -818,9 +842,8 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary.sweep))
     terminal = terminal_table(summary) + findings(summary) + comparison_lines(summary)
-    gate_failed = summary.gate["failed"] if summary.gate else []
     return Report(plain, html_path, summary_path, markdown_path, junit_path, terminal,
-                  gate_failed)
+                  summary.gate)
 
 
 #: what the stuck table of a search or estimate holds

@@ -10,16 +10,35 @@ passes: a controller without runs has the bounds 100% and 0%.
 
 from __future__ import annotations
 
+import dataclasses
+
 import pandas as pd
 
 from analysis.stats.rates import STATUSES, Method, flag_interval, upper_bound_counting_failures
 from analysis.stats.verdicts import completed_runs, percent
 
 
+@dataclasses.dataclass(frozen=True)
+class Gate:
+    """The gate's options, per controller its 95% bounds and their design effects, and
+    the controllers that failed it (``failed``, in order) with their ``reasons``."""
+
+    rate: float | None  # --fail-above
+    min_completed: float | None
+    upper_bounds: dict[str, float]  # of the collision rate
+    design_effects: dict[str, float]
+    completed_lower_bounds: dict[str, float]
+    completed_design_effects: dict[str, float]
+    failed: list[str]
+    reasons: dict[str, list[str]]
+
+    def to_plain(self) -> dict:
+        return dataclasses.asdict(self)
+
+
 def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None,
-         method: Method, min_completed: float | None = None) -> dict:
-    """The gate on ``results``: per controller its bounds, design effects and the
-    reasons it failed (``failed``: the controllers with a reason, in order)."""
+         method: Method, min_completed: float | None = None) -> Gate:
+    """The :class:`Gate` on ``results``."""
     upper, lower, effects, completed_effects, reasons = {}, {}, {}, {}, {}
     for c in controllers:
         rows = results[results.controller == c]
@@ -38,23 +57,20 @@ def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None
                            f"{min_completed:g}")
         if why:
             reasons[c] = why
-    return {"rate": fail_above, "min_completed": min_completed, "upper_bounds": upper,
-            "design_effects": effects, "completed_lower_bounds": lower,
-            "completed_design_effects": completed_effects, "failed": list(reasons),
-            "reasons": reasons}
+    return Gate(fail_above, min_completed, upper, effects, lower, completed_effects,
+                list(reasons), reasons)
 
 
-def gate_bounds_line(gate: dict) -> str:
+def gate_bounds_line(gate: Gate) -> str:
     """The bounds the gate judged, per controller (and the design effects that widened
     them, where runs shared a warm state)."""
     parts = []
-    if gate["rate"] is not None:
+    if gate.rate is not None:
         parts.append("collision rate at most (errors and timeouts counted as collisions): "
-                     + _bounds(gate["upper_bounds"], gate["design_effects"]))
-    if gate["min_completed"] is not None:
+                     + _bounds(gate.upper_bounds, gate.design_effects))
+    if gate.min_completed is not None:
         parts.append("completed at least (errors and timeouts counted as not completed): "
-                     + _bounds(gate["completed_lower_bounds"],
-                               gate["completed_design_effects"]))
+                     + _bounds(gate.completed_lower_bounds, gate.completed_design_effects))
     return "gate, 95% bounds: " + "; ".join(parts)
 
 
@@ -66,12 +82,12 @@ def _bounds(bounds: dict[str, float], effects: dict[str, float]) -> str:
             + ", ".join(f"{c} {effects[c]:.2f}" for c in bounds) + ")")
 
 
-def gate_verdict_line(gate: dict) -> str:
+def gate_verdict_line(gate: Gate) -> str:
     """``gate passed`` or ``gate FAILED:`` with each failing controller and why."""
     options = " ".join(f"{name} {value:g}" for name, value in
-                       (("--fail-above", gate["rate"]), ("--min-completed", gate["min_completed"]))
+                       (("--fail-above", gate.rate), ("--min-completed", gate.min_completed))
                        if value is not None)
-    if not gate["failed"]:
+    if not gate.failed:
         return f"gate passed ({options})"
     return "gate FAILED: " + "; ".join(f"{c}: {' and '.join(why)}"
-                                       for c, why in gate["reasons"].items())
+                                       for c, why in gate.reasons.items())

@@ -156,20 +156,31 @@ def count_warm_states(rows: pd.DataFrame) -> int | None:
     return None if states is None else int(states.nunique(dropna=True))
 
 
-def warm_state_summary(rows: pd.DataFrame) -> dict:
-    """How the runs shared their traffic: ``{"recorded": False}`` without the column;
-    else the number of distinct warm states, how many runs started from a warm state
-    another run of the same controller also started from (``runs_sharing``; a sample's
-    controllers sharing theirs is the paired design, not a cluster), and whether any
-    did (``shared``)."""
+@dataclasses.dataclass(frozen=True)
+class WarmStates:
+    """How the runs shared their traffic: the distinct warm states, how many runs started
+    from a warm state another run of the same controller also started from
+    (``runs_sharing``; a sample's controllers sharing theirs is the paired design, not a
+    cluster), and whether any did (``shared``)."""
+
+    runs: int
+    distinct: int
+    runs_sharing: int
+    shared: bool
+
+    def to_plain(self) -> dict:
+        return {"recorded": True, **dataclasses.asdict(self)}
+
+
+def warm_state_summary(rows: pd.DataFrame) -> WarmStates | None:
+    """The :class:`WarmStates` of ``rows``; None without the column."""
     states = warm_states_of(rows)
     if states is None:
-        return {"recorded": False}
+        return None
     per_controller = rows.assign(_state=states).dropna(subset=["_state"]).groupby(
         ["controller", "_state"]).size()
     sharing = int(per_controller[per_controller > 1].sum())
-    return {"recorded": True, "runs": len(rows), "distinct": int(states.nunique(dropna=True)),
-            "runs_sharing": sharing, "shared": sharing > 0}
+    return WarmStates(len(rows), int(states.nunique(dropna=True)), sharing, sharing > 0)
 
 
 def flag_interval(flags, rows: pd.DataFrame, method: Method) -> tuple[tuple[float, float],
@@ -392,8 +403,33 @@ def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> Stop
         paired=[mcnemar(possible, a, b) for a, b in itertools.combinations(controllers, 2)])
 
 
+@dataclasses.dataclass(frozen=True)
+class EnvelopeStop:
+    """The group where a :class:`SafeEnvelope` stopped, why (``above``, ``too_few``,
+    ``no_runs``), its counts and the upper end of its interval."""
+
+    group: str
+    why: str
+    n_ok: int
+    collisions: int
+    n_failed: int  # errors and timeouts, counted as collisions
+    high: float
+
+
+@dataclasses.dataclass(frozen=True)
+class SafeEnvelope:
+    """How far along ``column`` the collision rate of ``controller`` is shown to stay at
+    or below ``threshold`` (:func:`safe_envelope`)."""
+
+    controller: str
+    column: str
+    threshold: float
+    safe_up_to: float | None
+    stopped_at: EnvelopeStop | None  # None: every group was shown at or below
+
+
 def safe_envelope(results: pd.DataFrame, column: str, controller: str,
-                  threshold: float = ENVELOPE_RATE) -> dict:
+                  threshold: float = ENVELOPE_RATE) -> SafeEnvelope:
     """How far along ``column`` the collision rate of ``controller`` is shown to stay at
     or below ``threshold``.
 
@@ -425,9 +461,7 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
             continue
         else:
             why = "above" if k / n_ok > threshold else "too_few"
-        stopped = {"group": group_label(group), "why": why, "n_ok": n_ok, "collisions": k,
-                   "n_failed": failed, "high": high}
+        stopped = EnvelopeStop(group_label(group), why, n_ok, k, failed, high)
         break
-    return {"controller": controller, "column": column, "threshold": threshold,
-            "safe_up_to": None if safe_up_to is None else float(safe_up_to),
-            "stopped_at": stopped}
+    return SafeEnvelope(controller, column, threshold,
+                        None if safe_up_to is None else float(safe_up_to), stopped)

@@ -62,9 +62,9 @@ def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: 
     for line in result.terminal:
         click.echo(line)
     click.echo(f"report: {result.html_path}")
-    if result.summary.get("gate") is not None:  # the last line: the gate's verdict
+    if result.gate is not None:  # the last line: the gate's verdict
         from analysis.stats.gate import gate_verdict_line
 
-        click.echo(gate_verdict_line(result.summary["gate"]))
+        click.echo(gate_verdict_line(result.gate))
     if result.gate_failed:
         sys.exit(EXIT_RUN_ERROR)
