@@ -25,7 +25,8 @@ def first_failure_words(first_run: int | None, first_run_id: str | None) -> str:
     """", the first: run ID, after N runs" (ids count from 0, N from 1), or nothing."""
     if not first_run:
         return ""
-    return f", the first: run {first_run_id}, after {first_run} runs"
+    return (f", the first: run {first_run_id}, after {first_run} run"
+            + ("" if first_run == 1 else "s"))
 
 
 def headline(summary: RareSummary) -> list[str]:
