@@ -181,21 +181,26 @@ class SweepSummary:
 
     def to_plain(self) -> dict:
         plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
-        not_recorded = {"recorded": False}
         return {**plain, "coverage": dataclasses.asdict(self.coverage),
-                "warm_states": self.warm_states.to_plain() if self.warm_states else not_recorded,
-                "verdicts": self.verdicts.to_plain() if self.verdicts else not_recorded,
+                "warm_states": _recorded(self.warm_states),
+                "verdicts": _recorded(self.verdicts),
                 "by_controller": _plain_rates(self.by_controller),
                 "by_backend": {b: _plain_rates(rates) for b, rates in self.by_backend.items()},
                 "paired": [dataclasses.asdict(p) for p in self.paired],
-                "stop_possible": (self.stop_possible.to_plain() if self.stop_possible
-                                  else not_recorded),
+                "stop_possible": _recorded(self.stop_possible),
                 "envelope": [dataclasses.asdict(e) for e in self.envelope],
-                "gate": self.gate.to_plain() if self.gate else None}
+                "gate": dataclasses.asdict(self.gate) if self.gate else None}
+
+
+def _recorded(part) -> dict:
+    """A part that results from before its columns lack (None): its fields, and whether
+    it was ``recorded``."""
+    return ({"recorded": False} if part is None
+            else {"recorded": True, **dataclasses.asdict(part)})
 
 
 def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
-    return {controller: rate.to_plain() for controller, rate in rates.items()}
+    return {controller: dataclasses.asdict(rate) for controller, rate in rates.items()}
 
 
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,

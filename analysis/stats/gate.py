@@ -32,9 +32,6 @@ class Gate:
     failed: list[str]
     reasons: dict[str, list[str]]
 
-    def to_plain(self) -> dict:
-        return dataclasses.asdict(self)
-
 
 def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None,
          method: Method, min_completed: float | None = None) -> Gate:

@@ -168,9 +168,6 @@ class WarmStates:
     runs_sharing: int
     shared: bool
 
-    def to_plain(self) -> dict:
-        return {"recorded": True, **dataclasses.asdict(self)}
-
 
 def warm_state_summary(rows: pd.DataFrame) -> WarmStates | None:
     """The :class:`WarmStates` of ``rows``; None without the column."""
@@ -223,9 +220,6 @@ class CollisionRate:
         """The 95% interval by ``method``."""
         return ((self.wilson_low, self.wilson_high) if method == "wilson"
                 else (self.cp_low, self.cp_high))
-
-    def to_plain(self) -> dict:
-        return dataclasses.asdict(self)
 
 
 def rate_summary(rows: pd.DataFrame) -> CollisionRate:
@@ -382,9 +376,6 @@ class StopPossible:
     samples_stop_possible: int
     by_controller: dict[str, CollisionRate]
     paired: list[PairedTest]
-
-    def to_plain(self) -> dict:
-        return {"recorded": True, **dataclasses.asdict(self)}
 
 
 def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> StopPossible | None:

@@ -128,9 +128,6 @@ class Verdicts:
     by_controller: dict[str, OutcomeSummary]
     paired: list[PairedTest]
 
-    def to_plain(self) -> dict:
-        return {"recorded": True, **dataclasses.asdict(self)}
-
 
 def verdict_summary(results: pd.DataFrame, method: Method = "wilson") -> Verdicts | None:
     """The :class:`Verdicts` of the results (intervals by ``method``); None for results
