@@ -19,6 +19,8 @@ import math
 import numpy as np
 import pandas as pd
 
+#: the statuses a run ends with (as the sweep runner writes them); only ``ok`` has an outcome
+STATUSES = ("ok", "error", "timeout")
 COMPLETED, COLLIDED, STUCK, UNFINISHED = "completed", "collided", "stuck", "unfinished"
 OUTCOMES = (COMPLETED, COLLIDED, STUCK, UNFINISHED)
 #: under this speed [m/s] the car stands still

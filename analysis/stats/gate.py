@@ -14,7 +14,8 @@ import dataclasses
 
 import pandas as pd
 
-from analysis.stats.rates import STATUSES, Method, flag_interval, upper_bound_counting_failures
+from analysis.run.run_outcome import STATUSES
+from analysis.stats.rates import Method, flag_interval, upper_bound_counting_failures
 from analysis.stats.verdicts import completed_runs, percent
 
 

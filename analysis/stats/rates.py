@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from analysis.run.run_outcome import failed_or_collided
+from analysis.run.run_outcome import STATUSES, failed_or_collided
 
 Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
@@ -31,9 +31,6 @@ MAX_GROUPS = 12
 ENVELOPE_RATE = 0.05
 #: the column naming the warm state (shared background traffic) a run started from
 WARM_STATE = "warm_state"
-#: the statuses a run ends with (as the sweep runner writes them): a rate over every
-#: run counts the rows with one of these
-STATUSES = ("ok", "error", "timeout")
 
 
 def wilson_interval(k: float, n: float, confidence: float = 0.95) -> tuple[float, float]:

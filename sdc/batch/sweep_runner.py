@@ -21,8 +21,7 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from analysis.run.run_outcome import COLLIDED, OUTCOMES
-from analysis.stats.rates import STATUSES
+from analysis.run.run_outcome import COLLIDED, OUTCOMES, STATUSES
 from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
