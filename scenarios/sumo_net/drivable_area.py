@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 #: cached road edges carry this number: change it when the search for edges changes
 EDGE_SEARCH_VERSION = 3
@@ -82,6 +81,8 @@ class DrivableArea:
         edges (those outside junctions); every lane counts as drivable. ``edges``
         are the road edges found earlier for the same lanes and junctions (their
         search takes a moment on a big network)."""
+        from scipy.spatial import cKDTree  # here: a process that builds no area skips 0.3 s
+
         starts, ends, owner = polyline_segments(lane_shapes)
         keep = np.hypot(*(ends - starts).T) > 1e-9
         a, b, source = _pieces(starts[keep], ends[keep], INDEX_PIECE_M)
@@ -171,7 +172,7 @@ class DrivableArea:
         return np.where(self.contains(points), gaps, -np.abs(gaps))
 
 
-def _pieces_near(tree: cKDTree, points: np.ndarray, reach_m: float):
+def _pieces_near(tree, points: np.ndarray, reach_m: float):
     """Every (point index, piece index) pair with the piece's midpoint within
     ``reach_m`` of the point: the ``NEAREST_PIECES`` nearest at once, and the
     whole neighbourhood of a point where that many are all within reach."""
