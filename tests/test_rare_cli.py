@@ -19,6 +19,7 @@ import pandas as pd
 import pytest
 
 from analysis.rare.rare_events import estimate_from_rows
+from analysis.report.rare_report import estimate_lines
 from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
@@ -73,6 +74,20 @@ def test_a_score_is_zero_exactly_for_a_collision_or_no_outcome():
     assert 0 < run_score(_row(min_gap_obstacle_m=0.0)) < 1e-6  # touching is not a collision
     assert run_score(_row(min_ttc_s=None), "ttc") == math.inf
     assert run_score(_row(min_ttc_s=1.5), "ttc") == 1.5
+
+
+def test_the_estimate_says_its_bound_or_its_interval_and_never_rounds_a_loss_to_1x():
+    e = {"p_collision": 0.418, "ci_low": 0.367, "ci_high": 0.469, "rhw": 0.12, "runs": 400,
+         "estimation_runs": 350, "failures": 120, "ess": 279.4, "mc_equivalent_runs": 361.0,
+         "acceleration": 361 / 400}
+    interval, cost = estimate_lines(e, "budget", 0.15)
+    assert interval == ("P(collision) = 0.418, 95% interval [0.367, 0.469], RHW 0.12 "
+                        "(target 0.15; budget spent before the target RHW)")
+    assert "0.9x the 400 runs spent (350 weighted, ESS 279)" in cost
+    assert "25x the" in estimate_lines({**e, "acceleration": 25.3}, "target_rhw", 0.3)[1]
+    [bound] = estimate_lines({**e, "failures": 0}, None, 0.3)
+    assert bound == "P(collision) <= 0.469 (95%): no collision in 350 weighted runs (not finished)"
+    assert estimate_lines(None, None, 0.3)[0].startswith("no estimate")
 
 
 # ---------------------------------------------------------------- SUMO on the executors

@@ -65,8 +65,14 @@ def estimate_lines(e: dict | None, stopped: str | None, target_rhw: float | None
             f"[{e['ci_low']:.3g}, {e['ci_high']:.3g}], RHW {e['rhw']:.2f} "
             f"(target {target_rhw:g}; {why})",
             f"plain Monte Carlo would need {e['mc_equivalent_runs']:,.0f} runs for "
-            f"this RHW: {e['acceleration']:.0f}x the {e['runs']} runs spent "
+            f"this RHW: {_times(e['acceleration'])} the {e['runs']} runs spent "
             f"({e['estimation_runs']} weighted, ESS {e['ess']:.0f})"]
+
+
+def _times(ratio: float) -> str:
+    """``25x``, ``1.4x`` or ``0.9x``: a ratio of run counts (under 10 with its tenth, so
+    an estimate that cost more than plain Monte Carlo never reads as 1x)."""
+    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
 
 
 def _modes_count(modes: list[dict], what: str) -> str:
