@@ -110,7 +110,8 @@ def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     assert summary["first_failure_run"] == first
     first_id = results.set_index("run_index").run_id[first - 1]
     assert summary["first_failure_run_id"] == first_id  # ids count from 0
-    assert f"the first: run {first_id}, after {first} run{'s' * (first > 1)}" in done.stdout
+    runs = "run" if first == 1 else "runs"
+    assert f"the first: run {first_id}, after {first} {runs}" in done.stdout
     modes = summary["failure_modes"]
     assert sum(m["runs"] for m in modes) == summary["failures"]
     assert {m["outcome"] for m in modes} <= {"obstacle", "road_edge"}
