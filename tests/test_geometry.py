@@ -454,12 +454,10 @@ def brute_first_contact_s(a, va, b, vb, horizon_s, dt_s) -> float:
     moving both boxes by the same amount can round two boxes 1e-15 m apart into touching
     (boxes at equal velocities that never meet)."""
     times = np.arange(0.0, horizon_s, dt_s)
-    for t in times:
-        moved_b = b.copy()
-        moved_b[:2] += t * (vb - va)
-        if boxes_overlap(a, moved_b[None])[0]:
-            return float(t)
-    return math.inf
+    moved_b = np.repeat(b[None], times.size, axis=0)  # b at every step, each on its own
+    moved_b[:, :2] += times[:, None] * (vb - va)
+    overlap = boxes_overlap(a, moved_b)
+    return float(times[overlap.argmax()]) if overlap.any() else math.inf
 
 
 velocity_st = st.tuples(st.floats(-20, 20), st.floats(-20, 20)).map(np.array)
