@@ -71,8 +71,8 @@ SPEED = f"{PARAM_PREFIX}ego.speed_mps"
 MAX_LISTED_FAILURES = 500
 MAX_LISTED_RARE = 50  # runs listed by a search's or estimate's report; all are in results.parquet
 LOOK_AT_RARE = ("Runs with no outcome (error, timeout) first, then collisions and stuck runs: "
-                "in an estimate, its estimation runs by weight (the most of P first), then "
-                "the adaptation's by run; in a search, by run.")
+                "in an estimate, its failed estimation runs by weight (the most of P first), "
+                "then the rest by run; in a search, by run.")
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
@@ -193,8 +193,8 @@ class SweepSummary:
 
 
 def _recorded(part) -> dict:
-    """A part that results from before its columns lack (None): its fields, and whether
-    it was ``recorded``."""
+    """A part that results from before its columns cannot give (None) is ``{"recorded":
+    False}``; any other is its fields with ``"recorded": True``."""
     return ({"recorded": False} if part is None
             else {"recorded": True, **dataclasses.asdict(part)})
 
@@ -581,11 +581,12 @@ def failures(results: pd.DataFrame, estimate: bool = False) -> pd.DataFrame:
     <= 0) by weight, the largest share of P first, before the rest; otherwise by run."""
     stuck = results.outcome == STUCK if "outcome" in results else False
     bad = results[failed_or_collided(results) | stuck]
-    weighted = (bad.phase == "estimate") & (bad.score <= 0) if estimate else False
-    return bad.assign(_ok=bad.status == "ok", _weighted=weighted,
-                      _weight=bad.weight.where(weighted, 0.0) if estimate else 0.0).sort_values(
-        ["_ok", "_weighted", "_weight", "run_index"], ascending=[True, False, False, True],
-        kind="stable").drop(columns=["_ok", "_weighted", "_weight"])
+    counted = (bad.phase == "estimate") & (bad.score <= 0) & estimate
+    key = pd.DataFrame({"ok": bad.status == "ok", "counted": counted,
+                        "weight": bad.weight.where(counted, 0.0), "run": bad.run_index})
+    order = key.sort_values(["ok", "counted", "weight", "run"],
+                            ascending=[True, False, False, True], kind="stable").index
+    return bad.loc[order]
 
 
 def _row_outcome(row: dict) -> str:
