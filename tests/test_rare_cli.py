@@ -79,7 +79,7 @@ def test_a_score_is_zero_exactly_for_a_collision_or_no_outcome():
 def test_the_estimate_says_its_bound_or_its_interval_and_never_rounds_a_loss_to_1x():
     e = {"p_collision": 0.418, "ci_low": 0.367, "ci_high": 0.469, "rhw": 0.12, "runs": 400,
          "estimation_runs": 350, "failures": 120, "ess": 279.4, "mc_equivalent_runs": 361.0,
-         "acceleration": 361 / 400}
+         "acceleration": 361 / 400, "max_term_share": 0.012}
     interval, cost = estimate_lines(e, "budget", 0.15)
     assert interval == ("P(collision) = 0.418, 95% interval [0.367, 0.469], RHW 0.12 "
                         "(target 0.15; budget spent before the target RHW)")
@@ -88,6 +88,16 @@ def test_the_estimate_says_its_bound_or_its_interval_and_never_rounds_a_loss_to_
     [bound] = estimate_lines({**e, "failures": 0}, None, 0.3)
     assert bound == "P(collision) <= 0.469 (95%): no collision in 350 weighted runs (not finished)"
     assert estimate_lines(None, None, 0.3)[0].startswith("no estimate")
+    # below its target RHW, but stopped by the budget before the RHW could be judged
+    rule = {"estimation_runs": 1500, "failures": 30, "max_term_share": 0.1}
+    [unjudged, _] = estimate_lines({**e, "failures": 12, "max_term_share": 0.14}, "budget",
+                                   0.15, rule)
+    assert unjudged.endswith("(target 0.15; budget spent before the RHW could be judged: 350 "
+                             "of the 1500 weighted runs it needs, 12 of the 30 collisions it "
+                             "needs, one run carries 14% of P (at most 10%))")
+    judged = {**e, "estimation_runs": 1500, "rhw": 0.2}
+    assert estimate_lines(judged, "budget", 0.15, rule)[0].endswith(
+        "(target 0.15; budget spent before the target RHW)")
 
 
 # ---------------------------------------------------------------- SUMO on the executors

@@ -151,6 +151,7 @@ class RareSummary:
     adaptation_levels: list[float] | None
     # an estimate's alone
     target_rhw: float | None = None
+    judged_from: dict[str, float] | None = None  # when the RHW is judged (None: not saved)
     stopped: str | None = None
     level_ess: list[float] | None = None
     level_uncovered: list[int] | None = None
@@ -177,7 +178,8 @@ class RareSummary:
         return plain
 
 
-_ESTIMATE_FIELDS = ("target_rhw", "stopped", "level_ess", "level_uncovered", "estimate")
+_ESTIMATE_FIELDS = ("target_rhw", "judged_from", "stopped", "level_ess", "level_uncovered",
+                    "estimate")
 
 
 def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
@@ -208,7 +210,8 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
     }
     if mode != "estimate":
         return RareSummary(**common)
-    return RareSummary(**common, target_rhw=settings["target_rhw"], stopped=saved.get("stopped"),
+    return RareSummary(**common, target_rhw=settings["target_rhw"],
+                       judged_from=saved.get("judged_from"), stopped=saved.get("stopped"),
                        level_ess=saved.get("level_ess"),
                        level_uncovered=saved.get("level_uncovered"),
                        estimate=estimate_of(results, max_weight=max_weight))

@@ -650,17 +650,39 @@ class EstimationLoop:
             return
         current = self.sampler.estimate()
         self.history.append(HistoryPoint(current.runs, current.p_collision, current.rhw))
-        if (current.estimation_runs >= self.min_estimation_runs
-                and current.failures >= self.min_failures
-                and current.max_term_share <= self.max_term_share
-                and current.rhw <= self.target_rhw):
+        if not unjudged(current, self.judged_from) and current.rhw <= self.target_rhw:
             self.stopped = "target_rhw"
+
+    @property
+    def judged_from(self) -> dict[str, float]:
+        """When the RHW is judged: at least these estimation runs and failures, at most
+        this share of P in one run (:func:`unjudged`)."""
+        return {"estimation_runs": self.min_estimation_runs, "failures": self.min_failures,
+                "max_term_share": self.max_term_share}
 
     def result(self) -> Estimate:
         """The estimate so far; ``stopped`` is ``"budget"`` until the target was reached."""
         if self.sampler.estimation_log_weights.size == 0:
             raise ValueError(f"max_runs={self.max_runs} left no estimation batch")
         return self.sampler.estimate(stopped=self.stopped or "budget")
+
+
+def unjudged(estimate: Estimate | dict, judged_from: dict[str, float]) -> list[str]:
+    """Why an estimate's RHW cannot be judged yet (nothing when it can), in words:
+    ``judged_from`` as :attr:`EstimationLoop.judged_from`; ``estimate`` an
+    :class:`Estimate` or its fields. (Without a failure its RHW is infinite: never
+    judged good.)"""
+    e = estimate if isinstance(estimate, dict) else dataclasses.asdict(estimate)
+    words = []
+    if e["estimation_runs"] < judged_from["estimation_runs"]:
+        words.append(f"{e['estimation_runs']} of the {judged_from['estimation_runs']:g} "
+                     "weighted runs it needs")
+    if e["failures"] < judged_from["failures"]:
+        words.append(f"{e['failures']} of the {judged_from['failures']:g} collisions it needs")
+    if e["failures"] and e["max_term_share"] > judged_from["max_term_share"]:
+        words.append(f"one run carries {100 * e['max_term_share']:.0f}% of P (at most "
+                     f"{100 * judged_from['max_term_share']:g}%)")
+    return words
 
 
 ScoreFn = Callable[[np.ndarray], np.ndarray]

@@ -16,6 +16,7 @@ import pandas as pd
 
 from analysis.rare.adaptive_summary import RareSummary, convergence
 from analysis.rare.failure_modes import OTHER, region_words
+from analysis.rare.rare_events import unjudged
 from analysis.report import plots
 from analysis.run.run_outcome import outcomes_text
 from scenarios.sweep_spec import PARAM_PREFIX
@@ -36,7 +37,8 @@ def headline(summary: RareSummary) -> list[str]:
              f"{summary.runs} runs in {summary.batches} batches ({counts['ok']} ok, "
              f"{counts['error']} error, {counts['timeout']} timeout); {summary.state}"]
     if summary.mode == "estimate":
-        lines += estimate_lines(summary.estimate_plain, summary.stopped, summary.target_rhw)
+        lines += estimate_lines(summary.estimate_plain, summary.stopped, summary.target_rhw,
+                                summary.judged_from)
         if summary.estimate_plain is not None and summary.estimate_plain["failures"]:
             lines.append(_diagnostics(summary))
     lines.append(f"{summary.failures} failed runs"
@@ -49,15 +51,19 @@ def headline(summary: RareSummary) -> list[str]:
     return lines
 
 
-def estimate_lines(e: dict | None, stopped: str | None, target_rhw: float | None) -> list[str]:
+def estimate_lines(e: dict | None, stopped: str | None, target_rhw: float | None,
+                   judged_from: dict[str, float] | None = None) -> list[str]:
     """What an estimate says: P(collision) with its interval, or its bound when no run
     failed, and what plain Monte Carlo would have cost. ``e``: the estimate's fields
     (``estimate.json``'s, or :attr:`RareSummary.estimate_plain`), None before the
-    estimation phase; ``stopped``: its ``stopped`` field."""
+    estimation phase; ``stopped`` and ``judged_from``: its fields of those names (when
+    the budget stopped it before its RHW could be judged, it says why)."""
     if e is None:
         return ["no estimate: the adaptation had not ended when the runs stopped"]
-    why = {"target_rhw": "target RHW reached",
-           "budget": "budget spent before the target RHW"}.get(stopped, "not finished")
+    unmet = unjudged(e, judged_from) if judged_from and stopped == "budget" else []
+    why = ("budget spent before the RHW could be judged: " + ", ".join(unmet) if unmet else
+           {"target_rhw": "target RHW reached",
+            "budget": "budget spent before the target RHW"}.get(stopped, "not finished"))
     if e["failures"] == 0:
         return [f"P(collision) <= {e['ci_high']:.3g} (95%): no collision in "
                 f"{e['estimation_runs']} weighted runs ({why})"]

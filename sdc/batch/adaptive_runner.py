@@ -311,7 +311,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
 
 def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
     sampler = loop.sampler
-    fields = {"target_rhw": loop.target_rhw,
+    fields = {"target_rhw": loop.target_rhw, "judged_from": loop.judged_from,
               "level_ess": [float(e) for e in sampler.level_ess],
               "level_uncovered": list(sampler.level_uncovered),
               "max_weight": loop.max_weight,

@@ -42,7 +42,7 @@ def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int
     outcome = adaptive_outcome("estimate", sweep_file, options, max_runs, batch_size, target_rhw)
     summary = outcome.summary
     estimate = summary if "p_collision" in summary else None
-    for line in estimate_lines(estimate, summary["stopped"], target_rhw):
+    for line in estimate_lines(estimate, summary["stopped"], target_rhw, summary["judged_from"]):
         click.echo(line)
     adaptive_exit(outcome, "estimate", options["out_dir"])
 
