@@ -180,7 +180,7 @@ def test_a_search_reports_its_stuck_runs_beside_its_collisions(tmp_path):
 
 def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path):
     sweep = write(tmp_path, "toy", TOY)
-    args = ["--target-rhw", 0.15, "--max-runs", 400, "--batch-size", 50, "--workers", 2,
+    args = ["--target-rhw", 0.15, "--max-runs", 200, "--batch-size", 40, "--workers", 2,
             "--quiet"]
     whole = tmp_path / "whole"
     done = sdc("estimate", sweep, "--out", whole, *args)
