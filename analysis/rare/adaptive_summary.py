@@ -161,13 +161,7 @@ class RareSummary:
     def estimate_plain(self) -> dict | None:
         """The estimate as the report states it, with its acceleration over plain Monte
         Carlo (None before the estimation phase)."""
-        e = self.estimate
-        return None if e is None else {
-            "p_collision": e.p_collision, "ci_low": e.ci_low, "ci_high": e.ci_high,
-            "rhw": e.rhw, "runs": e.runs, "estimation_runs": e.estimation_runs,
-            "failures": e.failures, "ess": e.ess, "max_term_share": e.max_term_share,
-            "mc_equivalent_runs": e.mc_equivalent_runs,
-            "acceleration": e.mc_equivalent_runs / e.runs}
+        return None if self.estimate is None else self.estimate.to_plain()
 
     def to_plain(self) -> dict:
         plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)

@@ -263,6 +263,13 @@ class Estimate:
     def no_failure_seen(self) -> bool:
         return self.failures == 0
 
+    def to_plain(self) -> dict:
+        """Its fields but ``stopped`` (which a summary says apart), and its
+        ``acceleration`` over plain Monte Carlo, ``mc_equivalent_runs / runs``."""
+        plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)
+                 if field.name != "stopped"}
+        return {**plain, "acceleration": self.mc_equivalent_runs / self.runs}
+
 
 def estimate_from_rows(weights: np.ndarray, failed: np.ndarray, *, runs: int | None = None,
                        max_weight: float = math.inf, stopped: Stopped = "budget") -> Estimate:

@@ -39,7 +39,7 @@ def headline(summary: RareSummary) -> list[str]:
     if summary.mode == "estimate":
         lines += estimate_lines(summary.estimate_plain, summary.stopped, summary.target_rhw,
                                 summary.judged_from)
-        if summary.estimate_plain is not None and summary.estimate_plain["failures"]:
+        if summary.estimate is not None and summary.estimate.failures:
             lines.append(_diagnostics(summary))
     lines.append(f"{summary.failures} failed runs"
                  + first_failure_words(summary.first_failure_run, summary.first_failure_run_id)

@@ -319,8 +319,4 @@ def _estimate_fields(loop: EstimationLoop, state: str) -> dict:
               "stopped": loop.stopped if state == "finished" else None}
     if sampler.estimation_log_weights.size == 0:
         return fields
-    estimate = loop.result()
-    values = dataclasses.asdict(estimate)
-    values.pop("stopped")
-    acceleration = estimate.mc_equivalent_runs / estimate.runs
-    return {**fields, **values, "acceleration": acceleration}
+    return {**fields, **loop.result().to_plain()}
