@@ -28,7 +28,9 @@ def sweep_params(manifest: dict) -> list[Param]:
     return [parse_param(path, dist, f'sweep.params."{path}"') for path, dist in table.items()]
 
 
-def _failed(rows: pd.DataFrame) -> pd.Series:
+def scored_failure(rows: pd.DataFrame) -> pd.Series:
+    """Per row of a search or estimate: did it fail (score <= 0; a run with no outcome
+    scores 0)?"""
     return rows.score.notna() & (rows.score <= 0)
 
 
@@ -41,7 +43,7 @@ def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
     if estimation.empty:
         return None
     return estimate_from_rows(estimation.weight.to_numpy(dtype=float),
-                              _failed(estimation).to_numpy(), runs=len(rows),
+                              scored_failure(estimation).to_numpy(), runs=len(rows),
                               max_weight=max_weight)
 
 
@@ -57,7 +59,7 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     if estimation.empty:
         return modes
     weights = estimation.weight.to_numpy(dtype=float)
-    failed = _failed(estimation).to_numpy()
+    failed = scored_failure(estimation).to_numpy()
     total = float(np.mean(weights * failed))
     out = []
     for mode in modes:
@@ -86,7 +88,7 @@ def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
     the report get them from."""
     if results.empty:
         return []
-    return mode_estimates(results, _described(results, params, _failed(results), sweep_dir),
+    return mode_estimates(results, _described(results, params, scored_failure(results), sweep_dir),
                           max_weight)
 
 
@@ -181,7 +183,7 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
     """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
     settings = manifest["adaptive"]
     mode = settings["mode"]
-    failed = results[_failed(results)]
+    failed = results[scored_failure(results)]
     max_weight = saved.get("max_weight") or math.inf
     first = failed.run_index.idxmin() if len(failed) else None
     common = {

@@ -32,7 +32,7 @@ from analysis.report.settling_report import (
     settling_lines,
     settling_summary,
 )
-from analysis.run.run_outcome import STUCK, collided, failed_or_collided
+from analysis.run.run_outcome import collided
 from analysis.run.safety import REACTION_TIME_S
 from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
@@ -69,10 +69,6 @@ from scenarios.sweep_spec import PARAM_PREFIX
 
 SPEED = f"{PARAM_PREFIX}ego.speed_mps"
 MAX_LISTED_FAILURES = 500
-MAX_LISTED_RARE = 50  # runs listed by a search's or estimate's report; all are in results.parquet
-LOOK_AT_RARE = ("Runs with no outcome (error, timeout) first, then collisions and stuck runs: "
-                "in an estimate, its failed estimation runs by weight (the most of P first), "
-                "then the rest by run; in a search, by run.")
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
@@ -575,20 +571,6 @@ def terminal_table(summary: SweepSummary) -> list[str]:
             *table[len(rows):], *_world_lines(summary)]
 
 
-def failures(results: pd.DataFrame, estimate: bool = False) -> pd.DataFrame:
-    """Runs to look at in a search or estimate: failed runs (error, timeout) first, then
-    collisions and stuck runs; in an estimate, the estimation runs that count in P (score
-    <= 0) by weight, the largest share of P first, before the rest; otherwise by run."""
-    stuck = results.outcome == STUCK if "outcome" in results else False
-    bad = results[failed_or_collided(results) | stuck]
-    counted = (bad.phase == "estimate") & (bad.score <= 0) & estimate
-    key = pd.DataFrame({"ok": bad.status == "ok", "counted": counted,
-                        "weight": bad.weight.where(counted, 0.0), "run": bad.run_index})
-    order = key.sort_values(["ok", "counted", "weight", "run"],
-                            ascending=[True, False, False, True], kind="stable").index
-    return bad.loc[order]
-
-
 def _row_outcome(row: dict) -> str:
     """How a run (a record) ended, in words."""
     if row["status"] != "ok":
@@ -871,8 +853,8 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     stuck = rare_report.mode_rows(summary.stuck_modes)
     images = rare_report.adaptive_figures(results, summary, saved.get("max_weight") or math.inf)
     title = f"{summary.mode.capitalize()} report: {summary.sweep}"
-    bad = failures(results, estimate=summary.estimate is not None)
-    listed = bad.head(MAX_LISTED_RARE).to_dict("records")
+    bad = rare_report.runs_to_look_at(results, estimate=summary.estimate is not None)
+    listed = bad.head(rare_report.MAX_LISTED).to_dict("records")
     more = (f"... {len(bad) - len(listed)} more in results.parquet"
             if len(bad) > len(listed) else None)
     terms = [rare_report.ESTIMATE_TERMS] if summary.estimate else []
@@ -881,7 +863,7 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
           rare_report.mode_columns(summary.failure_modes), "", "## Stuck runs", "",
           STUCK_WORDS, "",
           *(_markdown_table(stuck) if len(stuck) > 1 else ["No run was stuck."]), "",
-          "## Runs to look at", "", LOOK_AT_RARE, ""]
+          "## Runs to look at", "", rare_report.LOOK_AT, ""]
     md += [f"- `{row['run_id']}` (batch {row['batch']}): {_row_outcome(row)} — "
            f"`{replay_command(sweep_dir, row['run_id'])}`" for row in listed]
     md += [f"- {more}"] if more else []
@@ -895,8 +877,9 @@ def _write_adaptive(sweep_dir: Path, results: pd.DataFrame, manifest: dict,
     table = [["run", "batch", "outcome", "replay"]]
     table += [[row["run_id"], str(row["batch"]), _row_outcome(row),
                replay_command(sweep_dir, row["run_id"])] for row in listed]
-    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", f"<p>{html.escape(LOOK_AT_RARE)}</p>",
-              _table_html(table), f"<p>{html.escape(more)}</p>" if more else ""]
+    parts += [f"<h2>Runs to look at ({len(bad)})</h2>",
+              f"<p>{html.escape(rare_report.LOOK_AT)}</p>", _table_html(table),
+              f"<p>{html.escape(more)}</p>" if more else ""]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     html_path.write_text(f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
                          f"<title>sdc {html.escape(title)}</title><style>{_CSS}</style></head>"
