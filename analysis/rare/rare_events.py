@@ -657,7 +657,7 @@ class EstimationLoop:
             return
         current = self.sampler.estimate()
         self.history.append(HistoryPoint(current.runs, current.p_collision, current.rhw))
-        if not unjudged(current, self.judged_from) and current.rhw <= self.target_rhw:
+        if not unjudged(current.to_plain(), self.judged_from) and current.rhw <= self.target_rhw:
             self.stopped = "target_rhw"
 
     @property
@@ -674,12 +674,10 @@ class EstimationLoop:
         return self.sampler.estimate(stopped=self.stopped or "budget")
 
 
-def unjudged(estimate: Estimate | dict, judged_from: dict[str, float]) -> list[str]:
-    """Why an estimate's RHW cannot be judged yet (nothing when it can), in words:
-    ``judged_from`` as :attr:`EstimationLoop.judged_from`; ``estimate`` an
-    :class:`Estimate` or its fields. (Without a failure its RHW is infinite: never
-    judged good.)"""
-    e = estimate if isinstance(estimate, dict) else dataclasses.asdict(estimate)
+def unjudged(e: dict, judged_from: dict[str, float]) -> list[str]:
+    """Why an estimate's RHW cannot be judged yet (nothing when it can), in words: ``e``
+    its :meth:`Estimate.to_plain`, ``judged_from`` as :attr:`EstimationLoop.judged_from`.
+    (Without a failure its RHW is infinite: never judged good.)"""
     words = []
     if e["estimation_runs"] < judged_from["estimation_runs"]:
         words.append(f"{e['estimation_runs']} of the {judged_from['estimation_runs']:g} "
