@@ -11,11 +11,27 @@ from dataclasses import dataclass
 
 GRAVITY_MPS2 = 9.81
 
-#: kind -> (length_m, width_m) of a stationary obstacle
+#: kind -> (length_m, width_m) of a stationary obstacle; a standing person and a
+#: stopped bicycle are SUMO's default pedestrian and bicycle (DEFAULT_PEDTYPE,
+#: DEFAULT_BIKETYPE of SUMO 1.28), facing along the road
 OBSTACLE_SIZES_M: dict[str, tuple[float, float]] = {
     "car": (4.5, 1.8),
     "truck": (12.0, 2.5),
     "barrel": (0.6, 0.6),
+    "pedestrian": (0.215, 0.478),
+    "bicycle": (1.6, 0.65),
+}
+#: the class of a person on foot (SUMO's vClass of people), whatever its type says, and
+#: what a collision with one is called
+PEDESTRIAN = "pedestrian"
+#: kind -> the SUMO vehicle class of an obstacle of it (None: a thing, not a road user);
+#: every contact with a ``pedestrian`` is a collision with a person, whoever moved
+OBSTACLE_CLASSES: dict[str, str | None] = {
+    "car": "passenger",
+    "truck": "truck",
+    "barrel": None,
+    "pedestrian": PEDESTRIAN,
+    "bicycle": "bicycle",
 }
 
 

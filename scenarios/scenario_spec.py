@@ -14,7 +14,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.bodies import OBSTACLE_CLASSES, OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.controller_ref import BUILTIN_CONTROLLERS, check_name, controller_label
 from scenarios.errors import SpecError
 from scenarios.seeding import SEED_LIMIT
@@ -155,7 +155,7 @@ class TrafficSpec(Spec):
 
 @spec_class
 class ObstacleSpec(Spec):
-    kind: Literal["car", "truck", "barrel"]
+    kind: Literal["car", "truck", "barrel", "pedestrian", "bicycle"]
     lane: int = num(ge=0)
     position_m: float = num(ge=0)
     lateral_offset_m: float = 0.0
@@ -163,6 +163,11 @@ class ObstacleSpec(Spec):
     @property
     def size_m(self) -> tuple[float, float]:
         return OBSTACLE_SIZES_M[self.kind]
+
+    @property
+    def vehicle_class(self) -> str | None:
+        """Its SUMO vehicle class, ``pedestrian`` for a standing person (None: a thing)."""
+        return OBSTACLE_CLASSES[self.kind]
 
 
 @spec_class

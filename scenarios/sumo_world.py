@@ -62,6 +62,10 @@ TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_mode
 #: what is read of each nearby vehicle every step (each variable read costs, and a step
 #: may read dozens); its size and class are read once (scenarios.vehicle_types)
 _TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+#: and of each nearby person: the same (SUMO places a person by its front too, and
+#: angles it as a vehicle), and the vehicle it rides in ("" on foot: a person riding
+#: is inside that vehicle's body, not a body of its own)
+_PERSON_VARS = (*_TRAFFIC_VARS, tc.VAR_VEHICLE)
 
 
 def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
@@ -231,6 +235,16 @@ def _is_traffic(vehicle_id: str) -> bool:
     return vehicle_id != EGO_ID and not vehicle_id.startswith(OBSTACLE_PREFIX)
 
 
+def _is_person(values: dict) -> bool:
+    """Are these subscription results a person's (not a vehicle's)?"""
+    return tc.VAR_VEHICLE in values
+
+
+def _riding(nearby: dict) -> frozenset[str]:
+    """The persons of ``nearby`` riding in a vehicle (inside its body)."""
+    return frozenset(pid for pid, values in nearby.items() if values.get(tc.VAR_VEHICLE))
+
+
 def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
     """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
     cx, cy, yaw, length, _ = box.tolist()
@@ -378,15 +392,18 @@ class SumoWorld:
         return self._snapshot(ego_box, taken)
 
     def _watch_types(self) -> None:
-        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles around
-        the ego (only those are read, whatever the size of the network) within a radius
-        that holds the longest type's."""
+        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles and
+        persons around the ego (only those are read, whatever the size of the network)
+        within a radius that holds the longest type's."""
         self._types.refresh(self._sumo.vehicletype, (EGO_TYPE, OBSTACLE_TYPE_PREFIX))
         radius_m = self._radius_m + subscription_slack_m(self._types.longest_m,
                                                          self._model.length_m)
         if radius_m > self._subscribed_m:
+            # libsumo hands both back in one dict (vehicle.getContextSubscriptionResults)
             self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE, radius_m,
                                                 _TRAFFIC_VARS)
+            self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE, radius_m,
+                                                _PERSON_VARS)
             self._subscribed_m = radius_m
 
     def warm_state(self) -> WarmState:
@@ -537,9 +554,10 @@ class SumoWorld:
 
     def _traffic(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Boxes, speeds and vehicle classes of the vehicles within the sensing radius,
-        ego and obstacles aside, in SUMO's order; each vehicle's size and class its
-        type's (:mod:`scenarios.vehicle_types`).
+        """Boxes, speeds and vehicle classes of the vehicles and the persons on foot
+        within the sensing radius, ego and obstacles aside, in SUMO's order; each one's
+        size and class its type's, a person's class ``pedestrian``
+        (:mod:`scenarios.vehicle_types`).
 
         A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
         half a length behind its front bumper, along the yaw. The read of the dict of
@@ -548,15 +566,17 @@ class SumoWorld:
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         # the results are the step's, from before they were taken off
-        hidden = taken | self._on_other_levels(nearby, ego_box)
+        hidden = taken | self._on_other_levels(nearby, ego_box) | _riding(nearby)
         if hidden:
             nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
         n = len(nearby)
         boxes, speeds, kinds = np.empty((n, 5)), np.empty(n), np.empty(n)
         try:
             count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
-        except KeyError:  # vehicles met for the first time
-            self._types.add([v for v in nearby if _is_traffic(v)], self._sumo)
+        except KeyError:  # vehicles or persons met for the first time
+            new = [v for v in nearby if v not in self._types.sizes and _is_traffic(v)]
+            self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
+            self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
             count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
         return boxes[:count], speeds[:count], self._types.names(kinds[:count])
 
@@ -569,12 +589,12 @@ class SumoWorld:
             return frozenset()
         if np.min(np.hypot(*(points - ego_box[:2]).T)) > self._radius_m + LEVEL_REACH_M:
             return frozenset()
-        lane_of = self._sumo.vehicle.getLaneID
         hidden = []
         for vid, values in nearby.items():
             x_m, y_m = values[tc.VAR_POSITION]
             near = np.min(np.hypot(points[:, 0] - x_m, points[:, 1] - y_m)) <= LEVEL_REACH_M
-            if near and _is_traffic(vid) and lane_of(vid) in lanes:
+            domain = self._sumo.person if _is_person(values) else self._sumo.vehicle
+            if near and _is_traffic(vid) and domain.getLaneID(vid) in lanes:
                 hidden.append(vid)
         return frozenset(hidden)
 

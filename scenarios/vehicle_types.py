@@ -1,7 +1,7 @@
-"""What sdc sees of each traffic vehicle besides its pose: its vehicle type's length,
-width and vehicle class (SUMO's ``vClass``: passenger, truck, bus, motorcycle,
-bicycle, ...), so that a truck is seen, hit and measured as the 16.5 m it is and a
-bicycle as the bicycle.
+"""What sdc sees of each traffic vehicle and person besides its pose: its type's
+length, width and vehicle class (SUMO's ``vClass``: passenger, truck, bus, motorcycle,
+bicycle, ...; a person on foot is always a ``pedestrian``), so that a truck is seen, hit
+and measured as the 16.5 m it is, a bicycle as the bicycle and a person as the person.
 
 Read from SUMO once per vehicle (its type id) and once per type (its size and
 class), not every step: a subscribed variable costs on every vehicle at every step.
@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from scenarios.bodies import PEDESTRIAN
+
 #: the vehicle types SUMO always has (DEFAULT_VEHTYPE, DEFAULT_BIKETYPE, ...): no
 #: vehicle of them unless a demand names them (then they are read with the vehicle)
 SUMO_DEFAULT_PREFIX = "DEFAULT_"
 
 
 class VehicleTypes:
-    """The vehicles and types met so far: ``sizes`` (vehicle id -> (length, width,
-    class index), as :func:`scenarios.road_kernels.traffic` reads it), ``classes``
+    """The vehicles, persons and types met so far: ``sizes`` (vehicle or person id ->
+    (length, width, class index), as :func:`scenarios.road_kernels.traffic` reads it), ``classes``
     (class index -> vClass) and ``longest_m``, the longest traffic type loaded or met."""
 
     def __init__(self):
@@ -31,16 +33,19 @@ class VehicleTypes:
     def _type(self, type_id: str, vehicletype) -> tuple[float, float, float]:
         """(length, width, class index) of type ``type_id``, from SUMO's first time."""
         if type_id not in self._types:
-            vclass = vehicletype.getVehicleClass(type_id)
-            found = np.flatnonzero(self.classes == vclass)
-            index = int(found[0]) if len(found) else len(self.classes)
-            if not len(found):
-                self.classes = np.append(self.classes, np.array([vclass], dtype=object))
             length_m = float(vehicletype.getLength(type_id))
             self._types[type_id] = (length_m, float(vehicletype.getWidth(type_id)),
-                                    float(index))
+                                    self._class_index(vehicletype.getVehicleClass(type_id)))
             self.longest_m = max(self.longest_m, length_m)
         return self._types[type_id]
+
+    def _class_index(self, vclass: str) -> float:
+        """The index of ``vclass`` in ``classes`` (added when new)."""
+        found = np.flatnonzero(self.classes == vclass)
+        if len(found):
+            return float(found[0])
+        self.classes = np.append(self.classes, np.array([vclass], dtype=object))
+        return float(len(self.classes) - 1)
 
     def add(self, vehicle_ids, sumo) -> None:
         """Read the vehicles of ``vehicle_ids`` not met yet from ``sumo`` (libsumo or
@@ -48,6 +53,13 @@ class VehicleTypes:
         for vid in vehicle_ids:
             if vid not in self.sizes:
                 self.sizes[vid] = self._type(sumo.vehicle.getTypeID(vid), sumo.vehicletype)
+
+    def add_persons(self, person_ids, sumo) -> None:
+        """The same for persons: their type's size, the class :data:`PEDESTRIAN`."""
+        for pid in person_ids:
+            if pid not in self.sizes:
+                length_m, width_m, _ = self._type(sumo.person.getTypeID(pid), sumo.vehicletype)
+                self.sizes[pid] = (length_m, width_m, self._class_index(PEDESTRIAN))
 
     def refresh(self, vehicletype, not_traffic: tuple[str, ...]) -> None:
         """Read the types SUMO has loaded since last asked (``longest_m`` with them),

@@ -11,8 +11,10 @@ not part of it: they enter when a run loads it.
 One state is one file (:class:`WarmState`): a zip holding SUMO's own state
 (``simulation.saveState`` with ``--save-state.precision 17`` and
 ``--save-state.rng true``, so positions and SUMO's random generators come back
-exact) beside what SUMO cannot save: our random-trip generator and its count of
-trips (``sumo_net`` roads), and how the traffic settled while it warmed up
+exact; ``--save-state.transportables true``, so its persons and their flows come
+back too: without it a loaded state has none and their person flows stop) beside
+what SUMO cannot save: our random-trip generator and its count of trips
+(``sumo_net`` roads), and how the traffic settled while it warmed up
 (:data:`SETTLING_COLUMNS`, sampled every :data:`SETTLING_SAMPLE_S`).
 
 Loading a state into a SUMO that already ran does not rewind it exactly (lane-change
@@ -36,10 +38,11 @@ from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
 from scenarios.scenario_spec import ScenarioSpec
 
-#: bumped whenever what a state holds or how a warm-up runs changes
-WARM_FORMAT = 1
-#: SUMO's options of the warm-up that saves a state
-SAVE_OPTIONS = ("--save-state.precision", "17", "--save-state.rng", "true")
+#: bumped whenever what a state holds or how a warm-up runs changes (2: its persons)
+WARM_FORMAT = 2
+#: SUMO's options of the warm-up that saves a state (loading needs none of them)
+SAVE_OPTIONS = ("--save-state.precision", "17", "--save-state.rng", "true",
+                "--save-state.transportables", "true")
 #: how often the warm-up records the network's traffic [s of simulated time]
 SETTLING_SAMPLE_S = 1.0
 SETTLING_COLUMNS = ("t_s", "vehicles", "mean_speed_mps", "halting")

@@ -57,7 +57,7 @@ def test_error_and_timeout_rows_are_counted_apart_never_as_safe():
     assert (summary.n_ok, summary.n_error, summary.n_timeout) == (2, 1, 1)
     assert summary.collisions == 1 and summary.collision_rate == 0.5
     assert summary.wilson_low == pytest.approx(wilson_interval(1, 2)[0])
-    assert summary.collision_with == {"obstacle": 1}
+    assert summary.collision_with == {"pedestrian": 0, "obstacle": 1}  # people always first
 
 
 def test_continuous_parameters_are_binned_and_discrete_ones_kept():

@@ -23,7 +23,7 @@ from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_world import SumoWorld
 from scenarios.sweep_spec import expand, load_sweep, warm_seeds
 from scenarios.toml_io import load_spec
-from scenarios.warm_state import WarmState, cached_path, file_sha256, warm_key
+from scenarios.warm_state import WARM_FORMAT, WarmState, cached_path, file_sha256, warm_key
 from scenarios.world_backends import make_road
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
@@ -282,12 +282,12 @@ def test_a_warm_state_file_missing_a_part_is_refused_by_name(tmp_path):
 
     path = tmp_path / "half.zip"
     with zipfile.ZipFile(path, "w") as z:
-        z.writestr("warm-state.json", json.dumps({"format": 1, "t_s": 1.0}))
+        z.writestr("warm-state.json", json.dumps({"format": WARM_FORMAT, "t_s": 1.0}))
         z.writestr("sumo-state.xml.gz", b"")
     with pytest.raises(SdcError, match=r"half.zip: cannot be read \(KeyError"):
         WarmState.read(path)
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("warm-state.json", json.dumps({"format": 99}))
         z.writestr("sumo-state.xml.gz", b"")
-    with pytest.raises(SdcError, match="format 99, this sdc reads 1"):
+    with pytest.raises(SdcError, match=f"format 99, this sdc reads {WARM_FORMAT}"):
         WarmState.read(path)

@@ -81,9 +81,9 @@ def what_happened(row: Mapping[str, Any]) -> str:
                if gap is not None and np.isfinite(gap) else "")
     outcome = value.get("outcome")
     if outcome == COLLIDED or (outcome is None and value["collision"]):
-        what = {"obstacle": "the obstacle", "road_edge": "the road edge"}.get(
-            value["collision_with"], "a vehicle")
-        if value.get("collision_vclass"):
+        what = {"obstacle": "the obstacle", "road_edge": "the road edge",
+                "pedestrian": "a pedestrian"}.get(value["collision_with"], "a vehicle")
+        if value.get("collision_vclass") and value["collision_with"] != "pedestrian":
             what += f" ({value['collision_vclass']})"
         speed = value.get("collision_speed_mps")
         verb = "was hit by" if value.get("collision_role") == "was_hit" else "hit"

@@ -15,10 +15,15 @@ from matplotlib.figure import Figure
 
 from analysis.rare.failure_modes import OTHER
 from analysis.run.run_outcome import STUCK
-from analysis.stats.rates import Method, group_label, group_levels, group_values, rates_by
+from analysis.stats.rates import (
+    HIT_ORDER,
+    Method,
+    group_label,
+    group_levels,
+    group_values,
+    rates_by,
+)
 from analysis.stats.verdicts import completed_runs
-
-COLLISION_KINDS = ("obstacle", "vehicle", "road_edge")
 
 
 def png_bytes(fig: Figure) -> bytes:
@@ -227,7 +232,7 @@ def collision_breakdown(results: pd.DataFrame) -> bytes:
     ax = fig.subplots()
     bottom = np.zeros(len(controllers))
     ok = results[results.status == "ok"]
-    bars = [(kind, ok[ok.collision_with == kind]) for kind in COLLISION_KINDS]
+    bars = [(kind, ok[ok.collision_with == kind]) for kind in HIT_ORDER]
     bars += [(status, results[results.status == status]) for status in ("error", "timeout")]
     for label, rows in bars:
         counts = rows.controller.value_counts().reindex(controllers, fill_value=0).to_numpy()

@@ -27,12 +27,15 @@ from matplotlib.patches import Patch
 from analysis.run.metrics import central_range_m
 from analysis.run.run_outcome import rest_step
 from analysis.run.trace_file import Trace
+from scenarios.bodies import PEDESTRIAN
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec, beam_angles_rad
 from scenarios.snapshot import obstacle_boxes
 
 VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
+#: a person's marker, drawn over its box whatever the frame's scale: colour, area [pt^2]
+PERSON_COLOR, PERSON_MARKER_PT2 = "magenta", 30.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,7 +46,9 @@ class Scene:
     step: np.ndarray  # (N,) the run's step number of each entry
     ego: np.ndarray  # (N, 5) body boxes
     traffic: list[np.ndarray]  # per step (M, 5)
+    people: list[np.ndarray]  # per step (P, 2): where the persons among the traffic are
     obstacles: np.ndarray  # (K, 5)
+    standing_people: np.ndarray  # (Q, 2): where the standing persons among them are
     mount_xy: np.ndarray  # (N, 2) lidar position
     beam_yaw_rad: np.ndarray  # (N, B) world direction of each beam
     ranges_m: np.ndarray  # (N, B), inf = no return
@@ -95,10 +100,16 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
     obstacles = (np.array(metadata["obstacle_boxes"], float).reshape(-1, 5)
                  if "obstacle_boxes" in metadata else obstacle_boxes(spec, road))
     run = metadata.get("run", {})
+    traffic = [np.asarray(row, float).reshape(-1, 5) for row in trace.traffic]
+    standing = [o.vehicle_class == PEDESTRIAN for o in spec.obstacles]
     return Scene(
-        t_s=f["t_s"], step=np.arange(len(trace)), ego=ego,
-        traffic=[np.asarray(row, float).reshape(-1, 5) for row in trace.traffic],
-        obstacles=obstacles, mount_xy=mount_xy,
+        t_s=f["t_s"], step=np.arange(len(trace)), ego=ego, traffic=traffic,
+        people=[boxes[np.array([c == PEDESTRIAN for c in classes], bool).reshape(-1), :2]
+                for boxes, classes in zip(traffic, trace.traffic_class, strict=True)],
+        obstacles=obstacles,
+        standing_people=(obstacles[np.array(standing, bool), :2]
+                         if len(standing) == len(obstacles) else np.zeros((0, 2))),
+        mount_xy=mount_xy,
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
         lane_offset_m=f["lane_offset_m"],
@@ -163,10 +174,15 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
                                facecolors="tab:red", edgecolors="k", linewidths=0.5, zorder=3)
     for artist in (beams, traffic, obstacles, ego):
         ax.add_collection(artist)
+    # a person (0.2 x 0.5 m) is a few pixels at frame scale: a marker of its own on top
+    people = ax.scatter(np.zeros(0), np.zeros(0), s=PERSON_MARKER_PT2, c=PERSON_COLOR,
+                        edgecolors="k", linewidths=0.6, zorder=4)
     if legend:
         ax.legend(handles=[Patch(facecolor="tab:green", edgecolor="k", label="ego"),
                            Patch(facecolor="tab:blue", edgecolor="k", label="traffic"),
                            Patch(facecolor="tab:red", edgecolor="k", label="obstacle"),
+                           Line2D([], [], marker="o", linestyle="", color=PERSON_COLOR,
+                                  markeredgecolor="k", label="person"),
                            Line2D([], [], color=(1.0, 0.5, 0.0), label="lidar return")],
                   loc="lower right", fontsize=7, framealpha=0.8)
     label = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
@@ -180,6 +196,7 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
         beams.set_segments(segments)
         beams.set_colors(np.where(hit[:, None], [[1.0, 0.5, 0.0, 0.9]], [[0.5, 0.5, 0.5, 0.12]]))
         traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
+        people.set_offsets(np.vstack([scene.people[k], scene.standing_people]))
         ego.set_verts(box_corners(scene.ego[k : k + 1]))
         cx, cy, yaw = scene.ego[k, :3]
         view = scene.view_yaw_rad[k]
@@ -318,12 +335,14 @@ def html_data(scene: Scene, every: int = 1) -> dict:
         "laneLines": [_round(line, 2) for line in scene.lane_lines],
         "edges": [_round(edge, 2) for edge in scene.edges],
         "obstacles": _round(scene.obstacles),
+        "standingPeople": _round(scene.standing_people, 2),
         "series": {"t": _round(scene.t_s), "speed": _round(scene.speed_mps),
                    "offset": _round(scene.lane_offset_m),
                    "range": _round(np.minimum(scene.central_range_m, 20.0))},
         "frames": [{
             "k": k, "t": round(float(scene.t_s[k]), 3), "phase": scene.phase[k],
             "ego": _round(scene.ego[k]), "traffic": _round(scene.traffic[k]),
+            "people": _round(scene.people[k], 2),
             "mount": _round(scene.mount_xy[k]), "ranges": _round(scene.ranges_m[k], 2),
             "view": round(float(scene.view_yaw_rad[k]), 4),
         } for k in steps],

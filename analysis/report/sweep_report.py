@@ -201,7 +201,8 @@ def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
 
 def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: Method,
                   shared: pd.Index, fail_above: float | None = None,
-                  min_completed: float | None = None) -> SweepSummary:
+                  min_completed: float | None = None,
+                  max_pedestrian_rate: float | None = None) -> SweepSummary:
     """Everything the report says. Controllers are compared on the ``shared`` samples,
     those every one of them ran (:func:`analysis.stats.verdicts.shared_samples`: all of them,
     unless the sweep is partial or lost runs)."""
@@ -237,7 +238,9 @@ def build_summary(results: pd.DataFrame, manifest: dict, by: list[str], method: 
         envelope=([safe_envelope(counted, SPEED, c) for c in controllers]
                      if SPEED in counted.columns else []),
         gate=(None if fail_above is None and min_completed is None
-                 else gate(counted, controllers, fail_above, method, min_completed)),
+              and max_pedestrian_rate is None
+              else gate(counted, controllers, fail_above, method, min_completed,
+                        max_pedestrian_rate)),
         traffic_model=manifest.get("traffic_model"),
         sumo_config=manifest.get("sumo_config"),
         world=world_summary(counted),
@@ -344,10 +347,16 @@ def _deff(value: float) -> str:
     return f"{value:.2f}"
 
 
+#: the collision table's columns of what was hit, people first (analysis.stats.rates)
+HIT_HEADS = {"pedestrian": "people", "vehicle": "vehicles", "obstacle": "obstacles",
+             "road_edge": "road edge"}
+
+
 def _rate_row(keys: list[str], rate: CollisionRate, method: Method, deff: bool) -> list[str]:
     low, high = rate.interval(method)
     return [*keys, str(rate.n_ok), str(rate.collisions),
             percent(rate.collision_rate), f"{percent(low)} - {percent(high)}",
+            *(str(rate.collision_with.get(kind, 0)) for kind in HIT_HEADS),
             str(rate.n_error), str(rate.n_timeout), *([_deff(rate.deff)] if deff else [])]
 
 
@@ -432,7 +441,9 @@ NOT_RECORDED = ("How the runs ended: not recorded (results from before the outco
 COLLISION_TITLE = "Collisions (of the ok runs; errors and timeouts counted apart):"
 def collision_notes(summary: SweepSummary) -> str:
     """What the collision table's columns mean (the design effect where it has one)."""
-    return ("Rate: the collisions of the ok runs, with its 95% interval; errors and "
+    return ("Rate: the collisions of the ok runs, with its 95% interval; people, vehicles, "
+            "obstacles, road edge: the collisions by what was hit (any contact with a person "
+            "counts as people, whatever else was touched); errors and "
             "timeouts: runs without an outcome, never counted as safe (the gate counts them "
             "as collisions). "
             + ("Design effect: how much the runs' shared traffic (runs from one warm state) "
@@ -452,7 +463,8 @@ def headline_rows(summary: SweepSummary) -> list[list[str]]:
         groups = [([c], rate) for c, rate in summary.by_controller.items()]
     deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
-             "rate", "95% interval", "errors", "timeouts", *([DEFF_HEAD] if deff else [])]]
+             "rate", "95% interval", *HIT_HEADS.values(), "errors", "timeouts",
+             *([DEFF_HEAD] if deff else [])]]
     return rows + [_rate_row(keys, rate, summary.interval, deff) for keys, rate in groups]
 
 
@@ -539,11 +551,19 @@ def _envelope(envelope: SafeEnvelope, completes_rarely: bool) -> str:
     return line
 
 
+def people_lines(summary: SweepSummary) -> list[str]:
+    """A sentence per controller that hit people: how often, of its ok runs."""
+    return [f"{c} HIT PEOPLE in {_plural(rate.people_hit, 'run')} of {rate.n_ok} "
+            f"({percent(rate.people_hit / rate.n_ok)})"
+            for c, rate in summary.by_controller.items() if rate.people_hit]
+
+
 def findings(summary: SweepSummary) -> list[str]:
     """Sentences: each controller's verdict, the paired comparisons (completing; on
     collisions over all samples and where a stop was possible) and the envelope."""
     verdicts = summary.verdicts.by_controller if summary.verdicts else {}
-    lines = [verdict_sentence(c, numbers) for c, numbers in verdicts.items()]
+    lines = [*people_lines(summary), *(verdict_sentence(c, numbers)
+                                       for c, numbers in verdicts.items())]
     rare = {c for c, numbers in verdicts.items() if completes_rarely(numbers)}
     lines += [_envelope(e, e.controller in rare) for e in summary.envelope]
     if summary.gate is not None:
@@ -793,9 +813,10 @@ def by_column(results: pd.DataFrame, name: str) -> str:
 
 def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),
                  junit_path: Path | None = None, method: Method = "wilson",
-                 fail_above: float | None = None, min_completed: float | None = None
-                 ) -> Report:
-    """Write the report of ``sweep_dir``; with ``fail_above`` or ``min_completed`` the
+                 fail_above: float | None = None, min_completed: float | None = None,
+                 max_pedestrian_rate: float | None = None) -> Report:
+    """Write the report of ``sweep_dir``; with ``fail_above``, ``min_completed`` or
+    ``max_pedestrian_rate`` the
     summary holds the gate (:func:`analysis.stats.gate.gate`), and ``Report.gate_failed``
     lists the controllers that fail it."""
     sweep_dir = Path(sweep_dir)
@@ -807,14 +828,18 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
         if by:
             raise ReportError("--by", "a search or estimate has no rates by parameter (its "
                               "runs were drawn toward failure); see its failure modes")
-        if fail_above is not None or min_completed is not None:
-            raise ReportError("--fail-above" if fail_above is not None else "--min-completed",
-                              "a search or estimate has no rates to "
+        gated = [name for name, value in (("--fail-above", fail_above),
+                                          ("--min-completed", min_completed),
+                                          ("--max-pedestrian-rate", max_pedestrian_rate))
+                 if value is not None]
+        if gated:
+            raise ReportError(gated[0], "a search or estimate has no rates to "
                               "gate (its runs were drawn toward failure); gate on a sweep")
         return _write_adaptive(sweep_dir, results, manifest, html_path, junit_path)
     by = [by_column(results, column) for column in by] or varying_parameters(results)
     shared = shared_samples(results)
-    summary = build_summary(results, manifest, by, method, shared, fail_above, min_completed)
+    summary = build_summary(results, manifest, by, method, shared, fail_above, min_completed,
+                            max_pedestrian_rate)
     warm_ups = read_settling(sweep_dir)
     summary = dataclasses.replace(summary, settling=settling_summary(warm_ups))
     counted = results[results["sample"].isin(shared)]

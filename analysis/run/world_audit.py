@@ -2,16 +2,19 @@
 
 In a consistent world no two bodies overlap: SUMO's traffic sees every body where it
 stands (``scenarios/traffic_model.py``). :func:`world_overlaps` counts the steps in
-which a traffic vehicle overlaps another traffic vehicle or an obstacle, among the
+which a traffic vehicle or person overlaps another one or an obstacle, among the
 bodies a trace holds (those within the sensing radius). It must read 0; anything
-else is a world that made something up (traffic driving through an obstacle, or
-through another car during a lane change).
+else is a world that made something up (traffic driving through an obstacle, through
+another car during a lane change, or through a person). People overlapping people are
+not counted: SUMO's pedestrians squeeze past each other in a crowd (its striping
+model), which is no vehicle through anybody.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from scenarios.bodies import PEDESTRIAN
 from scenarios.boxes import as_boxes
 
 #: a collision's ``collision_role`` (sdc.car.collision) as the report and the CLI say it
@@ -39,15 +42,17 @@ def pairs_overlap(a: np.ndarray, b: np.ndarray, tolerance_m: float = OVERLAP_TOL
     return np.all(gap < radius_a + radius_b - tolerance_m, axis=1)
 
 
-def _overlapping_steps(bodies: np.ndarray, traffic: int) -> np.ndarray:
+def _overlapping_steps(bodies: np.ndarray, traffic: int, people: np.ndarray) -> np.ndarray:
     """Of (T, M, 5) bodies per step (NaN rows: none), the first ``traffic`` of each step
-    traffic and the rest obstacles: the steps with an overlapping pair that holds a
-    traffic vehicle."""
+    traffic and the rest obstacles, ``people`` (T, M) those that are persons: the steps
+    with an overlapping pair that holds a traffic vehicle or person, and not two
+    persons."""
     reach = np.hypot(bodies[..., 3], bodies[..., 4]) / 2
     d = bodies[:, :traffic, None, :2] - bodies[:, None, :, :2]
     touch = reach[:, :traffic, None] + reach[:, None, :]
     near = (d[..., 0] ** 2 + d[..., 1] ** 2) < touch**2  # NaN: False
     near &= np.triu(np.ones(near.shape[1:], bool), k=1)  # each pair once
+    near &= ~(people[:, :traffic, None] & people[:, None, :])
     t, i, j = np.nonzero(near)
     hits = pairs_overlap(bodies[t, i], bodies[t, j])
     return np.unique(t[hits])
@@ -57,10 +62,14 @@ def _overlapping_steps(bodies: np.ndarray, traffic: int) -> np.ndarray:
 _PAIRS_PER_PASS = 1 << 20
 
 
-def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray) -> int:
-    """Steps of a trace (``traffic`` rows: N x 5 boxes, flattened) in which a traffic
-    vehicle overlaps another one or an obstacle (two obstacles on one another are the
-    spec's doing, not the world's)."""
+def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
+                   traffic_classes: list[list[str]] | None = None,
+                   obstacle_classes: tuple[str | None, ...] = ()) -> int:
+    """Steps of a trace (``traffic`` rows: N x 5 boxes, flattened; ``traffic_classes``
+    their classes, row by row) in which a traffic vehicle or person overlaps another
+    one or an obstacle (``obstacle_classes``: theirs, ``pedestrian`` for a standing
+    person), two persons aside (two obstacles on one another are the spec's doing, not
+    the world's)."""
     rows = [np.asarray(row, float).reshape(-1, 5) for row in traffic_rows]
     most = max((len(r) for r in rows), default=0)
     if most == 0:
@@ -72,9 +81,13 @@ def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray) -
     for start in range(0, len(rows), chunk):
         part = rows[start : start + chunk]
         bodies = np.full((len(part), most + len(obstacles), 5), np.nan)
+        people = np.zeros(bodies.shape[:2], bool)
         for k, row in enumerate(part):
             bodies[k, : len(row)] = row
+            if traffic_classes is not None:
+                people[k, : len(row)] = [c == PEDESTRIAN for c in traffic_classes[start + k]]
         bodies[:, most:] = obstacles
-        steps += len(_overlapping_steps(bodies, most))
+        people[:, most:] = [c == PEDESTRIAN for c in obstacle_classes or [None] * len(obstacles)]
+        steps += len(_overlapping_steps(bodies, most, people))
     return steps
 

@@ -24,6 +24,7 @@ import pandas as pd
 from scipy import stats
 
 from analysis.run.run_outcome import STATUSES, failed_or_collided
+from scenarios.bodies import PEDESTRIAN
 
 Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
@@ -192,7 +193,7 @@ class CollisionRate:
     ``deff`` is the design effect, ``n_eff`` the effective number of ok runs the
     intervals were taken on, ``warm_states`` the distinct warm states of the ok runs
     (None for results without the column), ``collision_with`` the collisions by what
-    was hit."""
+    was hit, people first (:data:`HIT_ORDER`)."""
 
     n_ok: int
     n_error: int
@@ -212,6 +213,11 @@ class CollisionRate:
     def n_failed(self) -> int:
         """The runs without an outcome (error, timeout)."""
         return self.n_error + self.n_timeout
+
+    @property
+    def people_hit(self) -> int:
+        """The collisions with a person."""
+        return self.collision_with.get(PEDESTRIAN, 0)
 
     def interval(self, method: Method) -> tuple[float, float]:
         """The 95% interval by ``method``."""
@@ -236,9 +242,21 @@ def rate_summary(rows: pd.DataFrame) -> CollisionRate:
         cp_low=exact[0], cp_high=exact[1],
         deff=counts.deff, n_eff=float(counts.n_eff),
         warm_states=count_warm_states(ok),
-        collision_with={str(kind): int(count) for kind, count in
-                        ok.collision_with[ok.collision].value_counts().sort_index().items()},
+        collision_with=hits_by_kind(ok.collision_with[ok.collision]),
     )
+
+
+#: what a collision was with, in the order the reports list it: people first, always
+HIT_ORDER = (PEDESTRIAN, "vehicle", "obstacle", "road_edge")
+
+
+def hits_by_kind(collision_with: pd.Series) -> dict[str, int]:
+    """Collisions counted by what was hit: people first (0 too), then the kinds of
+    :data:`HIT_ORDER` that were hit, then any other, by name."""
+    counts = collision_with.astype(str).value_counts()
+    kinds = [PEDESTRIAN, *(k for k in HIT_ORDER[1:] if k in counts),
+             *sorted(k for k in counts.index if k not in HIT_ORDER)]
+    return {kind: int(counts.get(kind, 0)) for kind in kinds}
 
 
 def counted_failures(rows: pd.DataFrame) -> pd.Series:
@@ -247,12 +265,16 @@ def counted_failures(rows: pd.DataFrame) -> pd.Series:
     return failed_or_collided(rows[rows.status.isin(STATUSES)])
 
 
-def upper_bound_counting_failures(rows: pd.DataFrame,
-                                  method: Method = "wilson") -> tuple[float, float]:
+def upper_bound_counting_failures(rows: pd.DataFrame, method: Method = "wilson",
+                                  collision_with: str | None = None) -> tuple[float, float]:
     """The upper end of the 95% interval (by ``method``, clustered by warm state) of
-    the collision rate with error and timeout runs counted as collisions, and the
-    design effect it was taken with."""
+    the collision rate (with ``collision_with``: of the collisions with that only, e.g.
+    ``pedestrian``) with error and timeout runs counted as collisions, and the design
+    effect it was taken with."""
     flags = counted_failures(rows)
+    if collision_with is not None:
+        counted = rows.loc[flags.index]
+        flags = (counted.status != "ok") | (counted.collision_with == collision_with)
     (_, high), counts = flag_interval(flags, rows.loc[flags.index], method)
     return high, counts.deff
 

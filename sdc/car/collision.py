@@ -1,6 +1,8 @@
-"""Our own collision test: the ego's body box against obstacles, traffic and the
-road edges, every step; and, for a collision, which part of the ego was hit and
-who moved into whom."""
+"""Our own collision test: the ego's body box against obstacles, traffic, people and
+the road edges, every step; and, for a collision, which part of the ego was hit and
+who moved into whom. A contact with a person (one of SUMO's pedestrians, or a
+standing person among the obstacles) is a ``pedestrian`` collision, whatever else the
+ego touches at that step: every contact with a person is counted under one name."""
 
 from __future__ import annotations
 
@@ -9,10 +11,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from scenarios.bodies import PEDESTRIAN
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.snapshot import Snapshot
-from sdc.car.geometry import one_box_corners
+from sdc.car.geometry import boxes_overlap, one_box_corners
 from sdc.car.geometry_kernels import Contacts
 
 OBSTACLE, VEHICLE, ROAD_EDGE = "obstacle", "vehicle", "road_edge"
@@ -22,25 +25,49 @@ RAN_INTO, WAS_HIT = "ran_into", "was_hit"
 
 
 class Collision(NamedTuple):
-    with_: str  # OBSTACLE, VEHICLE or ROAD_EDGE
+    with_: str  # PEDESTRIAN, OBSTACLE, VEHICLE or ROAD_EDGE
     part: str  # FRONT, SIDE or REAR: the part of the ego's body that was hit
     role: str  # RAN_INTO or WAS_HIT
     vehicle_class: str | None = None  # a vehicle's SUMO vClass (passenger, truck, ...)
 
 
-def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry) -> str | None:
-    """What the ego touches (``obstacle``, ``vehicle``, ``road_edge``) or ``None``,
-    given its box's ``contacts`` with the obstacles and traffic.
+def _is_person(classes) -> np.ndarray:
+    return np.array([c == PEDESTRIAN for c in classes], bool)
+
+
+def person_touched(ego_box: np.ndarray, snapshot: Snapshot,
+                   obstacle_classes: tuple[str | None, ...]) -> tuple[np.ndarray, float] | None:
+    """The box and speed [m/s] of a person the ego's box touches (a standing person
+    among the obstacles, whose ``obstacle_classes`` say which, before SUMO's persons),
+    or None."""
+    for boxes, people, speeds in (
+            (snapshot.obstacle_boxes, _is_person(obstacle_classes), None),
+            (snapshot.traffic_boxes, _is_person(snapshot.traffic_classes),
+             snapshot.traffic_speeds_mps)):
+        touched = np.flatnonzero(people)
+        touched = touched[boxes_overlap(ego_box, boxes[touched])] if len(touched) else touched
+        if len(touched):
+            return boxes[touched[0]], 0.0 if speeds is None else float(speeds[touched[0]])
+    return None
+
+
+def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry,
+                   snapshot: Snapshot | None = None,
+                   obstacle_classes: tuple[str | None, ...] = ()) -> str | None:
+    """What the ego touches (``pedestrian``, ``obstacle``, ``vehicle``, ``road_edge``)
+    or ``None``, given its box's ``contacts`` with the obstacles and traffic of
+    ``snapshot`` (the obstacles' ``obstacle_classes``: which is a person).
 
     A body corner off the road (beyond either edge, while alongside it; off the
     drivable area of a network) counts as a road-edge collision, unless it is past
     the route's end (where the route leaves the network there is no kerb: SUMO's
     vehicles leave it; the run ends there).
     """
-    if contacts.obstacle >= 0:
-        return OBSTACLE
-    if contacts.vehicle >= 0:
-        return VEHICLE
+    if contacts.obstacle >= 0 or contacts.vehicle >= 0:
+        if snapshot is not None and person_touched(ego_box, snapshot,
+                                                   obstacle_classes) is not None:
+            return PEDESTRIAN
+        return OBSTACLE if contacts.obstacle >= 0 else VEHICLE
     corners = one_box_corners(ego_box)
     off = corners[road.off_road(corners)]
     if len(off) and (road.to_frenet(off)[0] < road.length_m).any():
@@ -82,17 +109,23 @@ def _velocity(yaw_rad: float, speed_mps: float) -> np.ndarray:
 
 
 def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Contacts,
-             snapshot: Snapshot, road: RoadGeometry | None, road_heading_rad: float
-             ) -> Collision:
+             snapshot: Snapshot, road: RoadGeometry | None, road_heading_rad: float,
+             obstacle_classes: tuple[str | None, ...] = ()) -> Collision:
     """The :class:`Collision` of a step where the ego touched ``hit``: the part of its
     body nearest the contact, and who moved into it, judged in the road's frame (the
     road heading ``road_heading_rad`` there): for a side contact across the road, for a
     front or rear one along it, the ego ``ran_into`` it when it closed in on the
-    contact faster than the other body did, else it ``was_hit``. Obstacles, road edges
-    and standing cars are always run into. A vehicle's class comes with it."""
+    contact faster than the other body did, else it ``was_hit``. Obstacles, road edges,
+    standing cars and standing people are always run into. A vehicle's class comes
+    with it (``pedestrian`` for a person)."""
     ego_box = np.asarray(ego_box, float)
     vehicle_class = None
-    if hit == ROAD_EDGE:
+    if hit == PEDESTRIAN:
+        other, other_speed_mps = person_touched(ego_box, snapshot, obstacle_classes)
+        point = contact_point(ego_box, other)
+        other_mps = _velocity(float(other[2]), other_speed_mps)
+        vehicle_class = PEDESTRIAN
+    elif hit == ROAD_EDGE:
         corners = one_box_corners(ego_box)
         point, other_mps = corners[road.off_road(corners)].mean(axis=0), np.zeros(2)
     elif hit == OBSTACLE:

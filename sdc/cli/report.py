@@ -13,13 +13,15 @@ from sdc.cli.common import EXIT_RUN_ERROR, a_number, bad_input
 
 def write_sweep_report(sweep_dir: Path, html_path: Path | None = None, by: tuple[str, ...] = (),
             junit: Path | None = None, interval: str = "wilson",
-            fail_above: float | None = None, min_completed: float | None = None):
+            fail_above: float | None = None, min_completed: float | None = None,
+            max_pedestrian_rate: float | None = None):
     from analysis.report.sweep_report import write_report
 
     try:
         return write_report(sweep_dir, html_path=html_path, by=list(by), junit_path=junit,
                             method=interval, fail_above=fail_above,
-                            min_completed=min_completed)
+                            min_completed=min_completed,
+                            max_pedestrian_rate=max_pedestrian_rate)
     except SdcError as e:  # a ReportError too
         bad_input(str(e))
 
@@ -46,8 +48,15 @@ def write_sweep_report(sweep_dir: Path, html_path: Path | None = None, by: tuple
               help="Exit 1 when any controller's rate of runs completed without a collision "
                    "may fall short of RATE: the lower end of its 95% interval, error and "
                    "timeout runs counted as not completed (a gate for CI, e.g. 0.9).")
+@click.option("--max-pedestrian-rate", type=click.FloatRange(0.0, 1.0), metavar="RATE",
+              callback=a_number,
+              help="Exit 1 when any controller's rate of collisions with people may exceed "
+                   "RATE: the upper end of its 95% interval, error and timeout runs counted "
+                   "as such collisions (people held to a stricter bound than --fail-above, "
+                   "e.g. 0.001).")
 def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: Path | None,
-           interval: str, fail_above: float | None, min_completed: float | None) -> None:
+           interval: str, fail_above: float | None, min_completed: float | None,
+           max_pedestrian_rate: float | None) -> None:
     """How the runs of a sweep directory ended, and its collision statistics.
 
     Leads with the verdicts: per controller the runs that completed without a
@@ -58,7 +67,7 @@ def report(sweep_dir: Path, html_path: Path | None, by: tuple[str, ...], junit: 
     sweep says so and controllers are compared on the samples they all ran.
     """
     result = write_sweep_report(sweep_dir, html_path, by, junit, interval, fail_above,
-                                min_completed)
+                                min_completed, max_pedestrian_rate)
     for line in result.terminal:
         click.echo(line)
     click.echo(f"report: {result.html_path}")

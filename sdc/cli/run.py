@@ -43,7 +43,7 @@ def summary_lines(name: str, row: dict) -> list[str]:
     if row["status"] != "ok":
         return [f"{name}: run failed: {row['error']}"]
     what = row["collision_with"]
-    if row.get("collision_vclass"):
+    if row.get("collision_vclass") and row["collision_vclass"] != what:
         what += f" ({row['collision_vclass']})"
     outcome = row["outcome"] + (
         f": COLLISION with {what} at {row['collision_time_s']:.2f} s "

@@ -98,6 +98,7 @@ class Simulation:
         self.stop_lines = StopLineWatch(self.road.stops())
         self.beside = LanesBesideMap(self.road.lanes_beside(spec.ego.lane))
         self.recorder = TraceRecorder()
+        self.obstacle_classes = tuple(o.vehicle_class for o in spec.obstacles)
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
         self.hit: str | None = None
@@ -160,12 +161,14 @@ class Simulation:
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
-        self.hit = collision_with(self.box, self.contacts, self.road)
+        self.hit = collision_with(self.box, self.contacts, self.road, self.snapshot,
+                                  self.obstacle_classes)
         if self.hit is not None:
             s_m, _ = self.road.locate_near(float(self.box[0]), float(self.box[1]),
                                            self.lane_sensor.s_m)
             self.collision = describe(self.hit, self.box, self.state.speed_mps, self.contacts,
-                                      self.snapshot, self.road, self.road.heading_at_s(s_m))
+                                      self.snapshot, self.road, self.road.heading_at_s(s_m),
+                                      self.obstacle_classes)
             return COLLISION
         front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
         front_s_m, _ = self.road.locate_near(float(front[0]), float(front[1]),
@@ -245,7 +248,8 @@ class Simulation:
             collision_part=self.collision.part if self.collision else None,
             collision_role=self.collision.role if self.collision else None,
             collision_vclass=self.collision.vehicle_class if self.collision else None,
-            world_overlaps=world_overlaps(trace.traffic, obstacles),
+            world_overlaps=world_overlaps(trace.traffic, obstacles, trace.traffic_class,
+                                          self.obstacle_classes),
             red_light_violations=self.stop_lines.red_light_violations,
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
                                             floats["speed_mps"]),

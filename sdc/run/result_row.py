@@ -58,7 +58,9 @@ COLUMNS: tuple[Column, ...] = (
     Column("termination", pa.string(), OUTCOME, "what ended the run: "
            "collision | duration | route_end"),
     Column("collision", pa.bool_(), OUTCOME, "the ego's body touched something"),
-    Column("collision_with", pa.string(), OUTCOME, "none | obstacle | vehicle | road_edge"),
+    Column("collision_with", pa.string(), OUTCOME,
+           "none | obstacle | vehicle | road_edge | pedestrian (a person: one of SUMO's, or "
+           "a standing person among the obstacles; first whatever else was touched)"),
     Column("collision_time_s", pa.float64(), OUTCOME, "simulated time of the collision [s]"),
     Column("collision_part", pa.string(), OUTCOME,
            "front | side | rear: the part of the ego's body nearest the contact (sdc.car."
@@ -69,10 +71,12 @@ COLUMNS: tuple[Column, ...] = (
            "collision"),
     Column("collision_vclass", pa.string(), OUTCOME,
            "the SUMO vehicle class (vClass) of the vehicle hit: passenger, truck, bus, "
-           "motorcycle, bicycle, ...; None unless collision_with is vehicle"),
+           "motorcycle, bicycle, ...; pedestrian for a person; None unless collision_with "
+           "is vehicle or pedestrian"),
     Column("world_overlaps", pa.int64(), OUTCOME,
-           "steps in which a traffic vehicle overlapped another one or an obstacle within "
-           "the sensing radius (analysis.run.world_audit); 0 in a consistent world"),
+           "steps in which a traffic vehicle or person overlapped another one or an "
+           "obstacle within the sensing radius, two persons aside "
+           "(analysis.run.world_audit); 0 in a consistent world"),
     Column("red_light_violations", pa.int64(), OUTCOME,
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),

@@ -1,0 +1,411 @@
+"""People on the road: SUMO's persons stay in the world, are bodies the lidar sees and
+the ego can hit (``collision_with = "pedestrian"``), count in the world audit, and a
+standing person can be the obstacle.
+
+The SUMO tests run real libsumo simulations: SUMO's own scenarios with pedestrian
+demand (``tools/game`` of the installed package, read at run time) and a junction with
+two crossings built here with netconvert. Contacts are judged independently of the
+run's own collision test: libsumo's person getters (not the subscription the run
+reads) against the ego's box, with the brute-force overlap of ``tests/test_geometry``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analysis.run.world_audit import world_overlaps
+from scenarios.bodies import OBSTACLE_SIZES_M, PEDESTRIAN
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.snapshot import Snapshot
+from scenarios.sumo_net.build import sumo_binary
+from scenarios.world_backends import make_road, make_world
+from sdc.car.collision import OBSTACLE, RAN_INTO, VEHICLE, collision_with, describe
+from sdc.car.controller_plugins import make_controller
+from sdc.car.geometry import box_edges, ray_segment_ranges
+from sdc.car.geometry_kernels import Contacts
+from sdc.car.sensors import Lidar
+from sdc.run.episode import Simulation, run_episode
+from tests.test_geometry import brute_overlap
+
+PERSON = [0.215, 0.478]  # SUMO's default pedestrian: length, width [m]
+
+
+def game(name: str) -> str:
+    return f"sumo:tools/game/{name}"
+
+
+def config_spec(lesson_plain: dict, config: str, enter_s: float, *, seed: int = 1,
+                controller: str = "lane-keep", route_edges: list[str] | None = None,
+                start_m: float = 10.0, duration_s: float = 30.0) -> ScenarioSpec:
+    plain = copy.deepcopy(lesson_plain)
+    plain["scenario"].update(seed=seed, duration_s=duration_s, step_s=0.1)
+    plain["road"] = {"kind": "sumo_config", "config_file": config, "length_m": 300.0,
+                     **({"route_edges": route_edges} if route_edges else {})}
+    plain["traffic"] = {"enter_s": enter_s}
+    plain["obstacles"] = []
+    plain["ego"] = {"lane": 0, "start_m": start_m, "speed_mps": 8.0}
+    plain["lidar"] = {"beams": 360, "fov_deg": 360.0, "max_range_m": 60.0}
+    plain["controller"] = {"name": controller}
+    return ScenarioSpec.from_plain(plain)
+
+
+def persons_on_foot(sumo) -> list[str]:
+    return [p for p in sumo.person.getIDList() if not sumo.person.getVehicle(p)]
+
+
+# ---------------------------------------------------------------- people stay in the world
+
+
+def sumo_own_person_counts(config: str, times_s: list[float], seed: int, step_s: float
+                           ) -> list[int]:
+    """Persons in SUMO's own run of its configuration ``config`` (``tools/game``; nothing
+    of ours in it) at ``times_s``."""
+    import libsumo
+    import sumo
+
+    libsumo.start(["sumo", "-c", str(Path(sumo.SUMO_HOME) / "tools" / "game" / config),
+                   "--seed", str(seed), "--step-length", repr(step_s),
+                   "--no-step-log", "true", "--no-warnings", "true",
+                   "--duration-log.disable", "true"])
+    counts = []
+    try:
+        for t_s in times_s:
+            while libsumo.simulation.getTime() < t_s - 1e-9:
+                libsumo.simulationStep()
+            counts.append(len(libsumo.person.getIDList()))
+    finally:
+        libsumo.close()
+    return counts
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("config, times_s", [
+    ("fokr_bs_demo.sumocfg", [54300.0, 54600.0, 54900.0]),  # Braunschweig: people walking
+    ("DRT2.sumocfg", [300.0, 600.0, 900.0]),  # a town's people waiting for their rides
+])
+def test_a_configurations_persons_are_there_when_the_ego_enters(lesson_plain, config,
+                                                                times_s):
+    import libsumo
+
+    ours = []
+    for t_s in times_s:
+        spec = config_spec(lesson_plain, game(config), t_s)
+        with make_world(spec, make_road(spec, None), None, False, None) as world:
+            Simulation(spec, world).start()  # the ego has entered: one step after t_s
+            ours.append(len(libsumo.person.getIDList()))
+    # on the same clock: what departs at t_s is in after its step
+    own = sumo_own_person_counts(config, [t_s + 0.1 for t_s in times_s], seed=1, step_s=0.1)
+    assert min(own) > 0, own
+    for t_s, n_own, n_ours in zip(times_s, own, ours, strict=True):
+        assert abs(n_ours - n_own) <= 0.1 * n_own, (t_s, n_own, n_ours)
+
+
+# ---------------------------------------------------------------- a person is a body
+
+
+def crossing_config(folder: Path) -> Path:
+    """A junction of a 3.2 m east-west road and a north-south one, with a crossing over
+    each east-west arm (pedestrians first), and people walking north-south all the
+    time, nothing else: every contact of the ego is with a person."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "x.nod.xml").write_text(
+        '<nodes><node id="W" x="-250" y="0"/><node id="M" x="0" y="0" type="priority"/>'
+        '<node id="E" x="250" y="0"/><node id="N" x="0" y="150"/>'
+        '<node id="S" x="0" y="-150"/></nodes>')
+    arms = [("W2M", "W", "M", 2), ("M2E", "M", "E", 2), ("E2M", "E", "M", 2),
+            ("M2W", "M", "W", 2), ("N2M", "N", "M", 1), ("M2N", "M", "N", 1),
+            ("S2M", "S", "M", 1), ("M2S", "M", "S", 1)]
+    (folder / "x.edg.xml").write_text("<edges>" + "".join(
+        f'<edge id="{e}" from="{a}" to="{b}" numLanes="1" speed="13.9" priority="{p}" '
+        'width="3.2" sidewalkWidth="2"/>' for e, a, b, p in arms) + "</edges>")
+    (folder / "x.con.xml").write_text(
+        '<connections><crossing node="M" edges="M2E E2M" priority="true"/>'
+        '<crossing node="M" edges="W2M M2W" priority="true"/></connections>')
+    subprocess.run([sumo_binary("netconvert"), "-n", "x.nod.xml", "-e", "x.edg.xml",
+                    "-x", "x.con.xml", "-o", "cross.net.xml", "--no-turnarounds", "true",
+                    "--walkingareas", "true"], cwd=folder, check=True, capture_output=True)
+    (folder / "cross.rou.xml").write_text(
+        '<routes><personFlow id="ns" begin="0" end="3600" period="4">'
+        '<walk from="N2M" to="M2S"/></personFlow>'
+        '<personFlow id="sn" begin="1" end="3600" period="5">'
+        '<walk from="S2M" to="M2N"/></personFlow></routes>')
+    (folder / "cross.sumocfg").write_text(
+        '<configuration><input><net-file value="cross.net.xml"/>'
+        '<route-files value="cross.rou.xml"/></input>'
+        '<time><begin value="0"/><end value="3600"/></time></configuration>')
+    return folder / "cross.sumocfg"
+
+
+def box_of(x_m: float, y_m: float, angle_deg: float, length_m: float, width_m: float):
+    """SUMO's front position and angle as our box (centre half a length behind)."""
+    yaw = math.radians(90.0 - angle_deg)
+    return np.array([x_m - length_m / 2 * math.cos(yaw), y_m - length_m / 2 * math.sin(yaw),
+                     yaw, length_m, width_m])
+
+
+def run_against_the_oracle(spec: ScenarioSpec) -> tuple[dict, int | None, int]:
+    """Run ``spec``; the first step at which libsumo's own person getters put a person on
+    foot inside the ego's box (None: never), and the run's last step."""
+    import libsumo
+
+    controller = make_controller(spec.controller)
+    with make_world(spec, make_road(spec, None), None, False, None) as world:
+        sim = Simulation(spec, world)
+        sim.start()
+        first, termination = None, None
+        while termination is None:
+            person = libsumo.person
+            if first is None and any(
+                    brute_overlap(sim.box, box_of(*person.getPosition(p), person.getAngle(p),
+                                                  person.getLength(p), person.getWidth(p)))
+                    for p in persons_on_foot(libsumo)):
+                first = sim.k
+            termination = sim.control(controller)
+        last = sim.k
+    return sim.finish(termination).row, first, last
+
+
+def check_against_the_oracle(row: dict, first: int | None, last: int) -> None:
+    if row["collision_with"] == PEDESTRIAN:
+        assert first == last, (first, last)
+        assert row["collision_vclass"] == PEDESTRIAN
+        assert row["collision_part"] in ("front", "side", "rear")
+        assert row["collision_role"] in ("ran_into", "was_hit")
+    else:
+        assert first is None, (row["collision_with"], first, last)
+
+
+@pytest.mark.slow
+def test_every_contact_with_a_person_at_a_crossing_is_a_pedestrian_collision(lesson_plain,
+                                                                           tmp_path):
+    config = crossing_config(tmp_path / "cross")
+    outcomes = []
+    for enter_s in (75.0, 105.0, 135.0):
+        for controller in ("lane-keep", "seed"):
+            spec = config_spec(lesson_plain, str(config), enter_s, controller=controller,
+                               route_edges=["W2M", "M2E"], start_m=150.0)
+            row, first, last = run_against_the_oracle(spec)
+            check_against_the_oracle(row, first, last)
+            outcomes.append(row["collision_with"])
+            assert row["world_overlaps"] == 0
+    assert PEDESTRIAN in outcomes  # the check was put to the test
+    assert set(outcomes) <= {PEDESTRIAN, "none"}  # nothing else to hit there
+
+
+@pytest.mark.slow
+def test_on_a_real_junction_the_people_and_the_collisions_agree(lesson_plain):
+    for seed, enter_s in ((1, 54600.0), (2, 55200.0), (3, 54900.0)):
+        spec = config_spec(lesson_plain, game("fokr_bs_demo.sumocfg"), enter_s, seed=seed)
+        row, first, last = run_against_the_oracle(spec)
+        check_against_the_oracle(row, first, last)
+
+
+@pytest.mark.slow
+def test_the_lidar_sees_the_people_of_a_real_junction_as_brute_force_does(lesson_plain):
+    spec = config_spec(lesson_plain, game("fokr_bs_demo.sumocfg"), 54600.0)
+    controller = make_controller(spec.controller)
+    with make_world(spec, make_road(spec, None), None, False, None) as world:
+        sim = Simulation(spec, world)
+        sim.start()
+        while (sim.snapshot.traffic_classes == PEDESTRIAN).sum() < 10 and sim.k < 250:
+            sim.control(controller)  # on toward the junction
+        snapshot = sim.snapshot
+    people = snapshot.traffic_classes == PEDESTRIAN
+    assert people.sum() >= 10  # a crowd around the ego
+    np.testing.assert_allclose(snapshot.traffic_boxes[people, 3:5],
+                               np.tile(PERSON, (people.sum(), 1)))
+    lidar = Lidar(dataclasses.replace(spec.lidar, beams=3600), np.zeros((0, 4)),
+                  np.random.default_rng(0))
+    boxes = np.vstack([snapshot.obstacle_boxes, snapshot.traffic_boxes])
+    # from each person's side, 3 m away: every person is seen by someone
+    for box in snapshot.traffic_boxes[people]:
+        origin = box[:2] + 3.0 * np.array([math.cos(box[2] + 1.0), math.sin(box[2] + 1.0)])
+        ranges = lidar.scan(origin, 0.0, boxes, np.zeros((0, 5)))
+        brute = ray_segment_ranges(origin, lidar.angles_rad, box_edges(boxes).reshape(-1, 4),
+                                   spec.lidar.max_range_m)
+        np.testing.assert_array_equal(np.isinf(ranges), np.isinf(brute))
+        finite = np.isfinite(brute)
+        np.testing.assert_allclose(ranges[finite], brute[finite], rtol=0, atol=5e-5)
+        nearest = float(np.min(ranges))
+        assert nearest <= 3.0  # the person it looks at, or one nearer still
+
+
+# ---------------------------------------------------------------- collisions, without SUMO
+
+
+def snapshot_of(traffic, classes, obstacles=(), speeds=None) -> Snapshot:
+    traffic = np.asarray(traffic, float).reshape(-1, 5)
+    return Snapshot(0.0, traffic, np.asarray(obstacles, float).reshape(-1, 5),
+                    np.zeros(len(traffic)) if speeds is None else np.asarray(speeds, float),
+                    np.array(classes, dtype=object))
+
+
+EGO = np.array([0.0, 0.0, 0.0, 4.85, 1.93])
+
+
+def test_a_person_touched_is_a_pedestrian_collision_before_anything_else_touched(lesson_plain):
+    road = make_road(ScenarioSpec.from_plain(lesson_plain), None)
+    car = [2.0, 1.5, 0.0, 4.5, 1.8]  # touches the ego's left side
+    person = [2.5, 0.0, math.pi / 2, *PERSON]  # just before its front, walking left
+    far_person = [30.0, 0.0, 0.0, *PERSON]
+    both = snapshot_of([car, person], ["passenger", PEDESTRIAN], speeds=[5.0, 1.3])
+    assert collision_with(EGO, Contacts(-1, 0, math.inf), road, both) == PEDESTRIAN
+    hit = describe(PEDESTRIAN, EGO, 6.0, Contacts(-1, 0, math.inf), both, road, 0.0)
+    assert hit.vehicle_class == PEDESTRIAN and hit.role == RAN_INTO and hit.part == "front"
+    # a person walking into the side of the standing ego hit it
+    beside = snapshot_of([[0.0, -1.05, math.pi / 2, *PERSON]], [PEDESTRIAN], speeds=[1.3])
+    hit = describe(PEDESTRIAN, EGO, 0.0, Contacts(-1, 0, math.inf), beside, road, 0.0)
+    assert (hit.part, hit.role) == ("side", "was_hit")
+    only_car = snapshot_of([car, far_person], ["passenger", PEDESTRIAN])
+    assert collision_with(EGO, Contacts(-1, 0, math.inf), road, only_car) == VEHICLE
+    # a standing person among the obstacles, and a barrel
+    standing = snapshot_of([], [], obstacles=[[0.6, 0.0, 0.0, 0.6, 0.6], [2.4, 0.0, 0.0,
+                                                                          *PERSON]])
+    assert collision_with(EGO, Contacts(0, -1, 0.0), road, standing,
+                          (None, PEDESTRIAN)) == PEDESTRIAN
+    assert collision_with(EGO, Contacts(0, -1, 0.0), road, standing, (None, None)) == OBSTACLE
+    hit = describe(PEDESTRIAN, EGO, 6.0, Contacts(0, -1, 0.0), standing, road, 0.0,
+                   (None, PEDESTRIAN))
+    assert hit.vehicle_class == PEDESTRIAN and hit.role == RAN_INTO and hit.part == "front"
+
+
+def test_the_audit_counts_a_vehicle_through_a_person_and_not_people_in_a_crowd():
+    person, other_person = [0.0, 0.0, 0.0, *PERSON], [0.05, 0.1, 1.0, *PERSON]
+    car, bicycle = [1.0, 0.0, 0.0, 4.5, 1.8], [0.3, 0.0, 0.0, 1.6, 0.65]
+    row = lambda *boxes: np.asarray(boxes, float).ravel()  # noqa: E731
+    crowd = [row(person, other_person)]
+    assert world_overlaps(crowd, np.zeros((0, 5)), [[PEDESTRIAN, PEDESTRIAN]]) == 0
+    assert world_overlaps(crowd, np.zeros((0, 5))) == 1  # without classes: two bodies
+    through = [row(person, car), row(person, bicycle), row(person)]
+    classes = [[PEDESTRIAN, "passenger"], [PEDESTRIAN, "bicycle"], [PEDESTRIAN]]
+    assert world_overlaps(through, np.zeros((0, 5)), classes) == 2
+    standing = np.array([[0.1, 0.0, 0.0, *PERSON]])
+    assert world_overlaps([row(person)], standing, [[PEDESTRIAN]], (PEDESTRIAN,)) == 0
+    assert world_overlaps([row(car)], standing, [["passenger"]], (PEDESTRIAN,)) == 1
+
+
+# ---------------------------------------------------------------- a person as the obstacle
+
+
+def straight(lesson_plain: dict, kind: str, *, controller: str, speed_mps: float,
+             lateral_offset_m: float = 0.0, flow_vph: float = 0.0, lanes: int = 1,
+             ego_lane: int = 0, duration_s: float = 30.0) -> ScenarioSpec:
+    plain = copy.deepcopy(lesson_plain)
+    plain["scenario"].update(duration_s=duration_s)
+    plain["road"].update(length_m=400.0, lanes=lanes, lane_width_m=3.2, speed_limit_mps=14.0)
+    plain["traffic"] = ({"flow_vph_per_lane": flow_vph, "speed_mean_mps": 12.0,
+                         "speed_dev": 0.1} if flow_vph else {})
+    plain["obstacles"] = [{"kind": kind, "lane": 0, "position_m": 120.0,
+                           "lateral_offset_m": lateral_offset_m}]
+    plain["ego"].update(lane=ego_lane, start_m=40.0, speed_mps=speed_mps)
+    plain["controller"] = {"name": controller}
+    return ScenarioSpec.from_plain(plain)
+
+
+def assert_hit_a_standing_person(row: dict, part: str = "front") -> None:
+    assert row["collision_with"] == PEDESTRIAN
+    assert row["collision_vclass"] == PEDESTRIAN
+    assert row["collision_role"] == RAN_INTO and row["collision_part"] == part
+    assert row["outcome"] == "collided"
+
+
+@pytest.mark.parametrize("speed_mps", [3.74, 10.0])
+def test_lane_keep_hits_a_standing_person_in_its_lane_and_it_is_named_a_pedestrian(
+        lesson_plain, speed_mps):
+    assert_hit_a_standing_person(run_episode(straight(
+        lesson_plain, "pedestrian", controller="lane-keep", speed_mps=speed_mps)).row)
+
+
+def test_the_lessons_seed_maneuver_passes_a_person_at_its_speed_and_hits_one_faster(
+        lesson_plain):
+    """The lesson's scenario with its barrel a person: at 3.74 m/s the open-loop swerve
+    clears it as it clears the barrel; at 14 m/s the fixed 5 m threshold leaves 0.36 s,
+    and the swerving car hits the person with its right side."""
+    lesson_plain["obstacles"][0]["kind"] = "pedestrian"
+    row = run_episode(ScenarioSpec.from_plain(lesson_plain)).row
+    assert row["collision_with"] == "none" and row["outcome"] == "completed"
+    lesson_plain["ego"]["speed_mps"] = 14.0
+    assert_hit_a_standing_person(run_episode(ScenarioSpec.from_plain(lesson_plain)).row, "side")
+
+
+def test_a_stopped_bicycle_is_an_obstacle_of_its_size(lesson_plain):
+    spec = straight(lesson_plain, "bicycle", controller="lane-keep", speed_mps=10.0)
+    assert spec.obstacles[0].size_m == OBSTACLE_SIZES_M["bicycle"] == (1.6, 0.65)
+    row = run_episode(spec).row
+    assert row["collision_with"] == OBSTACLE and row["outcome"] == "collided"
+
+
+@pytest.mark.parametrize("kind", ["pedestrian", "bicycle"])
+def test_traffic_sees_a_standing_person_or_bicycle_and_does_not_drive_through(lesson_plain,
+                                                                             kind):
+    """One world: the ego keeps to the other lane; traffic in the person's lane stops
+    behind it or changes lanes, and nobody drives through it."""
+    spec = straight(lesson_plain, kind, controller="lane-keep", speed_mps=5.0, lanes=2,
+                    ego_lane=1, flow_vph=600.0, duration_s=40.0)
+    episode = run_episode(spec)
+    assert episode.row["world_overlaps"] == 0
+    assert episode.row["collision_with"] == "none"
+    seen = [len(r) for r in episode.trace.traffic]
+    assert max(seen) >= 5 * 3  # traffic came by
+
+
+# ---------------------------------------------------------------- the verdicts count people
+
+
+@pytest.fixture(scope="module")
+def person_sweep(tmp_path_factory):
+    from scenarios import CATALOG_DIR
+    from scenarios.sweep_spec import load_sweep
+    from sdc.batch.executors import LocalExecutor
+    from sdc.batch.progress import QuietReporter
+    from sdc.batch.sweep_runner import run_sweep
+
+    root = tmp_path_factory.mktemp("people")
+    (root / "sweep.toml").write_text(f"""[sweep]
+name = "people"
+base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+samples = 4
+seed = 3
+controllers = ["lane-keep", "seed"]
+
+[sweep.params]
+"ego.speed_mps" = {{ uniform = [3.0, 4.0] }}
+"obstacles[0].kind" = {{ choice = ["pedestrian"] }}
+""")
+    out = root / "out"
+    run_sweep(load_sweep(root / "sweep.toml"), out, LocalExecutor(2), QuietReporter())
+    return out
+
+
+def test_the_report_counts_people_first_and_the_gate_holds_them_to_their_bound(person_sweep):
+    import json
+
+    from click.testing import CliRunner
+
+    from sdc.cli import main
+
+    result = CliRunner().invoke(main, ["report", str(person_sweep), "--fail-above", "1.0",
+                                       "--max-pedestrian-rate", "0.5"])
+    assert result.exit_code == 1, result.output
+    lines = result.output.splitlines()
+    assert lines[-1] == ("gate FAILED: lane-keep: collisions with people up to 100.0%, over "
+                         "--max-pedestrian-rate 0.5")
+    assert "lane-keep HIT PEOPLE in 4 runs of 4 (100.0%)" in lines
+    head = next(line for line in lines if line.startswith("controller") and "people" in line)
+    assert head.split()[:6] == ["controller", "ok", "runs", "collisions", "rate", "95%"]
+    summary = json.loads((person_sweep / "summary.json").read_text())
+    by = summary["by_controller"]
+    assert list(by["lane-keep"]["collision_with"].items()) == [("pedestrian", 4)]
+    assert list(by["seed"]["collision_with"].items()) == [("pedestrian", 0)]  # it swerved
+    assert "hit a pedestrian with its front at" in (person_sweep / "report.md").read_text()
+    passed = CliRunner().invoke(main, ["report", str(person_sweep), "--max-pedestrian-rate",
+                                       "1.0"])
+    assert passed.exit_code == 0 and passed.output.splitlines()[-1] == \
+        "gate passed (--max-pedestrian-rate 1)"
