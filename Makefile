@@ -36,6 +36,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_gym.py
 	$(BIN)/python benchmarks/bench_perf.py
 	$(BIN)/python benchmarks/bench_world.py
+	$(BIN)/python benchmarks/bench_people.py
 	$(BIN)/python benchmarks/bench_controllers.py
 	$(BIN)/python benchmarks/bench_rare.py
 	$(BIN)/python benchmarks/bench_rare_bank.py

@@ -35,6 +35,19 @@ class RouteStop(NamedTuple):
 NO_STOPS: tuple[RouteStop, ...] = ()
 
 
+class RouteCrosswalk(NamedTuple):
+    """A pedestrian crossing over the route, as a map gives it: where the route runs
+    across it and how far it reaches either side of the route's centre line."""
+
+    near_s_m: float  # where the route enters it, along the road
+    far_s_m: float  # where it leaves it
+    right_d_m: float  # its far end right of the route's centre line (negative) [m]
+    left_d_m: float  # its far end left of it [m]
+
+
+NO_CROSSWALKS: tuple[RouteCrosswalk, ...] = ()
+
+
 class Crossings(NamedTuple):
     """Roads that cross the route without a junction: over or under it."""
 
@@ -172,6 +185,10 @@ class RoadGeometry:
     def crossings(self) -> Crossings:
         """Roads over or under this one (none on a road of its own)."""
         return NO_CROSSINGS
+
+    def crosswalks(self) -> tuple[RouteCrosswalk, ...]:
+        """The pedestrian crossings over the road, in order (none on a road of its own)."""
+        return NO_CROSSWALKS
 
     def lanes_beside(self, lane: int) -> tuple[np.ndarray, np.ndarray]:
         """Where a lane of the road's own direction, open to cars, lies beside lane

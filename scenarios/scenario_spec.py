@@ -382,6 +382,15 @@ class AvoidParams(Spec):
     give_way_gap_s: float = num(5.0, ge=0, le=60)
     #: ... and stops short of the line (if it can) until none was seen for this long
     give_way_hold_s: float = num(1.0, ge=0, le=60)
+    #: before a pedestrian crossing, within give_way_watch_m of it, the car watches its
+    #: roadway (returns on it, this far along the route beyond either side of it, and
+    #: up to crosswalk_kerb_m short of its ends: the kerbs and the people waiting
+    #: there are not on it) for a body no bigger than crosswalk_body_m (a person, a
+    #: bicycle: not a car, nor a kerb running on) and stops short of it (if it can)
+    #: until none was seen there for give_way_hold_s
+    crosswalk_margin_m: float = num(0.0, ge=0, le=20)
+    crosswalk_kerb_m: float = num(0.5, ge=0, le=5)
+    crosswalk_body_m: float = num(1.8, gt=0, le=20)
     #: through a bend of the lane tighter than this radius the car checks the room
     #: its body sweeps against the range image and picks its line by it ...
     bend_radius_m: float = num(25.0, gt=0, le=1000)

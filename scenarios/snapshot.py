@@ -41,10 +41,11 @@ def within_m(boxes: np.ndarray, center_xy: np.ndarray, radius_m: float) -> np.nd
 
 class Snapshot(NamedTuple):
     t_s: float
-    traffic_boxes: np.ndarray  # (N, 5) moving vehicles within the sensing radius
+    traffic_boxes: np.ndarray  # (N, 5) vehicles and persons on foot within the sensing radius
     obstacle_boxes: np.ndarray  # (K, 5) the spec's stationary obstacles, in spec order
     traffic_speeds_mps: np.ndarray  # (N,) speeds of the traffic boxes, along their headings
-    traffic_classes: np.ndarray  # (N,) their SUMO vehicle classes (vClass): passenger, truck...
+    #: (N,) their SUMO vehicle classes (vClass): passenger, truck, ..., pedestrian (a person)
+    traffic_classes: np.ndarray
     #: the traffic lights along the ego's route: each one's state string (SUMO's
     #: link states, one character per link: r red, y yellow, G/g green, ...)
     signals: Mapping[str, str] = MappingProxyType({})

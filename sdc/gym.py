@@ -144,7 +144,14 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
 
 def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     """sdc's drawing of the simulation's current step."""
-    from analysis.report.render import Scene, frame_rgb, road_heading_rad, road_lines
+    from analysis.report.render import (
+        Scene,
+        frame_rgb,
+        people_xy,
+        road_heading_rad,
+        road_lines,
+        standing_people_xy,
+    )
     from analysis.run.metrics import central_range_m
     from scenarios.scenario_spec import beam_angles_rad
 
@@ -153,7 +160,10 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     lane_lines, edges = road_lines(road, road.drawn_edge_segments())
     scene = Scene(
         t_s=np.array([sim.k * sim.step_s]), step=np.array([sim.k]), ego=sim.box[None],
-        traffic=[snapshot.traffic_boxes], obstacles=snapshot.obstacle_boxes,
+        traffic=[snapshot.traffic_boxes],
+        people=[people_xy(snapshot.traffic_boxes, snapshot.traffic_classes)],
+        obstacles=snapshot.obstacle_boxes,
+        standing_people=standing_people_xy(spec, snapshot.obstacle_boxes),
         mount_xy=sim.vehicle.point_ahead(state, spec.lidar.mount_ahead_m)[None],
         beam_yaw_rad=(state.yaw_rad + angles)[None], ranges_m=sim.ranges[None],
         max_range_m=spec.lidar.max_range_m, phase=["agent"],

@@ -257,8 +257,8 @@ def test_the_report_says_how_few_warm_states_and_widens(tmp_path):
     assert "every interval is widened by its design effect" in markdown
     assert f"**{warning}**" in markdown
     assert f"collision rate: seed {seed['deff']:.2f}, lane-keep" in markdown
-    assert "| controller | ok runs | collisions | rate | 95% interval | errors | timeouts | " \
-           "design effect |" in markdown
+    assert "| controller | ok runs | collisions | rate | 95% interval | people | vehicles | " \
+           "obstacles | road edge | errors | timeouts | design effect |" in markdown
     assert "| seed | 60 | 17 | 28.3% |" in markdown
     assert warning in warm.terminal
     assert f'<p class="warn">{html.escape(warning)}</p>' in warm.html_path.read_text()

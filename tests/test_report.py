@@ -450,8 +450,9 @@ def test_collisions_with_vehicles_are_counted_by_the_class_of_what_was_hit():
         "world_overlaps": [0] * 5, "collision": [True, True, True, False, True],
         "collision_part": ["front", "side", "front", None, "front"],
         "collision_role": ["ran_into", "was_hit", "ran_into", None, "ran_into"],
-        "collision_vclass": ["truck", "passenger", "truck", None, None]})
+        "collision_vclass": ["truck", "passenger", "truck", None, "pedestrian"]})
     summary = world_summary(rows)
+    # a person is no vehicle: the collisions with people are counted apart
     assert summary["vehicle_classes"] == {"avoid": {"truck": 2, "passenger": 1}}
     lines = world_lines(summary)
     assert "avoid's collisions with vehicles by vehicle class: passenger 1, truck 2." in lines

@@ -82,6 +82,17 @@ def road_heading_rad(yaw_rad: np.ndarray, heading_error_rad: np.ndarray) -> np.n
     return np.where(np.isfinite(heading_error_rad), yaw_rad - heading_error_rad, yaw_rad)
 
 
+def people_xy(boxes: np.ndarray, classes) -> np.ndarray:
+    """(P, 2): where the persons among ``boxes`` (their ``classes``) are."""
+    return boxes[np.array([c == PEDESTRIAN for c in classes], bool).reshape(-1), :2]
+
+
+def standing_people_xy(spec: ScenarioSpec, obstacles: np.ndarray) -> np.ndarray:
+    """(Q, 2): where the standing persons among the spec's ``obstacles`` are."""
+    return people_xy(obstacles, [o.vehicle_class for o in spec.obstacles]
+                     if len(spec.obstacles) == len(obstacles) else [None] * len(obstacles))
+
+
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
     spec = ScenarioSpec.from_plain(metadata["spec"])
     plain_road = metadata["road"]
@@ -101,14 +112,11 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
                  if "obstacle_boxes" in metadata else obstacle_boxes(spec, road))
     run = metadata.get("run", {})
     traffic = [np.asarray(row, float).reshape(-1, 5) for row in trace.traffic]
-    standing = [o.vehicle_class == PEDESTRIAN for o in spec.obstacles]
     return Scene(
         t_s=f["t_s"], step=np.arange(len(trace)), ego=ego, traffic=traffic,
-        people=[boxes[np.array([c == PEDESTRIAN for c in classes], bool).reshape(-1), :2]
+        people=[people_xy(boxes, classes)
                 for boxes, classes in zip(traffic, trace.traffic_class, strict=True)],
-        obstacles=obstacles,
-        standing_people=(obstacles[np.array(standing, bool), :2]
-                         if len(standing) == len(obstacles) else np.zeros((0, 2))),
+        obstacles=obstacles, standing_people=standing_people_xy(spec, obstacles),
         mount_xy=mount_xy,
         beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
         max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],

@@ -62,6 +62,7 @@ from analysis.stats.verdicts import (
     verdict_sentence,
     verdict_summary,
 )
+from scenarios.bodies import PEDESTRIAN
 from scenarios.errors import SpecError
 from scenarios.file_read import read_json, read_parquet, require_keys
 from scenarios.plain_json import json_plain, json_scalar
@@ -256,7 +257,8 @@ def world_summary(results: pd.DataFrame) -> dict:
     ok = results[results.status == "ok"]
     overlaps = ok.world_overlaps.fillna(0)
     hits = ok[collided(ok) & ok.collision_role.notna()]
-    classes = (hits[hits.collision_vclass.notna()] if "collision_vclass" in hits.columns
+    classes = (hits[hits.collision_vclass.notna() & (hits.collision_vclass != PEDESTRIAN)]
+               if "collision_vclass" in hits.columns
                else hits.iloc[:0].assign(collision_vclass=None))
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
             "overlap_steps": int(overlaps.sum()),

@@ -25,7 +25,7 @@ LEVEL_REACH_M = 100.0
 BLOCK = 4096
 
 
-def _intersections(a0, a1, b0, b1):
+def intersections(a0, a1, b0, b1):
     """Where segments a (N) cross segments b (M): (index in a, index in b, point)."""
     da, db = a1 - a0, b1 - b0
     cross = da[:, None, 0] * db[None, :, 1] - da[:, None, 1] * db[None, :, 0]
@@ -69,7 +69,7 @@ def crossing_lanes(net: NetFile, route_xy: np.ndarray, route_lane_ids: set[str])
     lanes, points = set(), []
     for start in range(0, len(s0), BLOCK):
         block = slice(start, start + BLOCK)
-        _, j, xy = _intersections(r0, r1, s0[block], s1[block])
+        _, j, xy = intersections(r0, r1, s0[block], s1[block])
         for k, point in zip(j, xy, strict=True):
             if not _near_junction(point, net.junction_shapes):
                 lanes.add(others[owner[block][k]].id)

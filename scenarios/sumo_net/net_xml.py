@@ -1,4 +1,5 @@
-"""Reading a SUMO ``.net.xml`` into plain data: lanes, connections, junction shapes.
+"""Reading a SUMO ``.net.xml`` into plain data: lanes, connections, junction shapes,
+pedestrian crossings.
 
 Only what sdc needs is read: every lane's centre-line shape, width and SUMO
 length, which lanes follow which (through the junction's internal lanes), and
@@ -78,6 +79,9 @@ class NetFile:
     lanes: dict[str, NetLane]
     turns: dict[str, tuple[Turn, ...]]  # by normal lane id
     junction_shapes: tuple[np.ndarray, ...]  # outlines (P, 2) of the non-internal junctions
+    #: the pedestrian crossings over roads: each its centre line from kerb to kerb (P, 2)
+    #: and its width [m]
+    crosswalks: tuple[tuple[np.ndarray, float], ...] = ()
 
     def trip_edges(self) -> list[tuple[str, float]]:
         """Edges a passenger car may start or end a trip on, with their lengths [m]."""
@@ -125,13 +129,14 @@ def parse_net(data: bytes, path: Path) -> NetFile:
     if root.tag != "net":
         raise FileError(path, f"is not a SUMO network (root element <{root.tag}>)")
     try:
-        lanes, turns, junctions = _parse(root)
+        lanes, turns, junctions, crosswalks = _parse(root)
     except (TypeError, ValueError, AttributeError) as e:  # a missing or malformed attribute
         raise FileError(path, f"the SUMO network has a missing or malformed attribute "
                               f"({e})") from None
     if not any(not lane.internal for lane in lanes.values()):
         raise FileError(path, "the SUMO network holds no lanes")
-    return NetFile(path, hashlib.sha256(data).hexdigest(), lanes, turns, junctions)
+    return NetFile(path, hashlib.sha256(data).hexdigest(), lanes, turns, junctions,
+                   crosswalks)
 
 
 def _parse(root: ET.Element):
@@ -176,4 +181,8 @@ def _parse(root: ET.Element):
     junctions = tuple(
         _shape(j.get("shape")) for j in root.iter("junction")
         if j.get("type") != "internal" and len(j.get("shape", "").split()) >= 3)
-    return lanes, turns, junctions
+    crosswalks = tuple((_shape(_required(lane, "shape")),
+                        float(lane.get("width", DEFAULT_LANE_WIDTH_M)))
+                       for edge in root.iter("edge") if edge.get("function") == "crossing"
+                       for lane in edge.iter("lane"))
+    return lanes, turns, junctions, crosswalks

@@ -29,9 +29,16 @@ from scenarios.atomic_write import write_atomic
 from scenarios.bodies import GRAVITY_MPS2, VEHICLE_MODELS
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError, SpecError
-from scenarios.road_geometry import Crossings, RoadGeometry, RouteStop, merged_stretches
+from scenarios.road_geometry import (
+    Crossings,
+    RoadGeometry,
+    RouteCrosswalk,
+    RouteStop,
+    merged_stretches,
+)
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import input_path
+from scenarios.sumo_net.crosswalks import route_crosswalks
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
 from scenarios.sumo_net.grade_separation import crossing_lanes
 from scenarios.sumo_net.net_xml import (
@@ -309,6 +316,7 @@ class NetworkRoad(RoadGeometry):
         self._stops = _route_stops(net, self.pieces)
         self._beside = _lanes_beside(net, self.pieces)
         self._crossings = crossing_lanes(net, self.center_xy, {lane.id for lane in route})
+        self._crosswalks = route_crosswalks(net, self)
 
     def piece_at(self, s_m: float) -> RoutePiece:
         """The route lane holding route position ``s_m``."""
@@ -348,6 +356,9 @@ class NetworkRoad(RoadGeometry):
 
     def crossings(self) -> Crossings:
         return self._crossings
+
+    def crosswalks(self) -> tuple[RouteCrosswalk, ...]:
+        return self._crosswalks
 
     def lanes_beside(self, lane: int) -> tuple[np.ndarray, np.ndarray]:
         """Where the network has a lane of the route's direction beside it (its own

@@ -90,6 +90,22 @@ class LaneFrame:
         bumper, ``front_m`` ahead of the body centre (0.5 m of slack behind it)."""
         return self.within(lo_m, hi_m, front_m - 0.5, math.inf)
 
+    def small_bodies(self, among: np.ndarray, size_m: float) -> bool:
+        """Is any of the returns ``among`` these part of a body no bigger than ``size_m``
+        across and along the lane (a person, a bicycle; not a car, nor a kerb or an
+        island's edge running on)? A body's returns: neighbours in beam order less than
+        ``FACE_JOIN_M`` apart."""
+        if not among.any():
+            return False
+        gaps = np.hypot(*np.diff(self.xy_m, axis=0).T)
+        starts = np.concatenate([[0], np.flatnonzero(gaps > FACE_JOIN_M) + 1])
+        body = np.repeat(np.arange(len(starts)), np.diff(np.append(starts, len(gaps) + 1)))
+        span = np.maximum(
+            np.maximum.reduceat(self.s_m, starts) - np.minimum.reduceat(self.s_m, starts),
+            np.maximum.reduceat(self.lateral_m, starts)
+            - np.minimum.reduceat(self.lateral_m, starts))
+        return bool((span[body[among]] <= size_m).any())
+
     def nearest(self, among: np.ndarray, front_m: float) -> tuple[float, float | None]:
         """The nearest return ``among`` these: its gap along the lane from the front
         bumper ``front_m`` ahead of the body centre, and its station (inf, None: none)."""
@@ -159,6 +175,7 @@ class AvoidController:
         self.lines_s_m: list[float] = []  # the stop lines seen, along the road
         self.foes = FoeWatch(self.params)  # before a line where the car gives way
         self.foe_seen_s = -math.inf  # when a foe was seen last
+        self.walker_seen_s = -math.inf  # when a person was seen on the crossing ahead
         self.bend_offset_m: float | None = None  # the offset held through a tight bend
         self.pass_in_lane = False  # passing in a lane of the car's direction (it may end)
         self._cos_sin: np.ndarray | None = None
@@ -358,6 +375,7 @@ class AvoidController:
         gap_path, path_s = frame.nearest(in_path, front_m)
         self._track(frame, obs, lane_s, path_s)
         self._watch_foes(frame, obs, path, half_lane)
+        self._watch_crosswalk(frame, obs)
         following = self.leader.is_traffic(obs.t_s)  # not an obstacle to pass
         waiting = not following and self._waits_at_junction(obs, gap_lane)
         accel = self._decide(frame, obs, path, gap_lane, in_lane, following or waiting)
@@ -381,6 +399,7 @@ class AvoidController:
             accel = self._cruise_accel(obs, gap_lane, gap_path, following, waiting, turn_mps)
         accel = min(accel, self._signal_accel(obs, turn_mps))  # whatever else it does
         accel = min(accel, self._give_way_accel(obs, turn_mps))
+        accel = min(accel, self._crosswalk_accel(obs, turn_mps))
         if math.isfinite(free_m):  # no room for the body in the bend ahead: stop short
             accel = min(accel, self._speed_accel(free_m, obs, turn_mps, wait_m=p.stop_margin_m))
         accel = min(accel, self._lane_end_accel(obs, turn_mps))
@@ -625,6 +644,31 @@ class AvoidController:
             return math.inf
         return self._stop_at_line_accel(obs, obs.vehicle.max_decel_mps2, turn_mps)
 
+    def _watch_crosswalk(self, frame: LaneFrame, obs: Observation) -> None:
+        """Before a pedestrian crossing, within ``give_way_watch_m``: note when a body
+        the size of a person or a bicycle (``crosswalk_body_m``) was seen on its roadway
+        (someone on it, or stepping onto it)."""
+        p, walk = self.params, obs.crosswalk
+        if walk is None or walk.distance_m > p.give_way_watch_m:
+            return
+        near_m = obs.vehicle.length_m / 2 + walk.distance_m
+        on_it = frame.within(-walk.right_m + p.crosswalk_kerb_m, walk.left_m - p.crosswalk_kerb_m,
+                             near_m - p.crosswalk_margin_m,
+                             near_m + walk.depth_m + p.crosswalk_margin_m)
+        if frame.small_bodies(on_it, p.crosswalk_body_m):
+            self.walker_seen_s = obs.t_s
+
+    def _crosswalk_accel(self, obs: Observation, turn_mps: float) -> float:
+        """Stopping short of a pedestrian crossing while a person (or a bicycle) was seen
+        on it in the last ``give_way_hold_s``, if the car can stop there (not once its front is on
+        it); else no limit."""
+        walk = obs.crosswalk
+        if (walk is None or walk.distance_m < 0
+                or obs.t_s - self.walker_seen_s > self.params.give_way_hold_s + 1e-9):
+            return math.inf
+        return self._stop_short_accel(walk.distance_m, obs, obs.vehicle.max_decel_mps2,
+                                      turn_mps)
+
     def _signal_accel(self, obs: Observation, turn_mps: float) -> float:
         """Stopping short of the next stop line when its light is red and the car can
         stop there, or yellow and it can stop braking at ``yellow_decel_fraction`` of its
@@ -637,13 +681,19 @@ class AvoidController:
 
     def _stop_at_line_accel(self, obs: Observation, decel_mps2: float, turn_mps: float
                             ) -> float:
-        """To a stop ``stop_margin_m`` short of the next stop line, if the car can stop
-        there braking at ``decel_mps2``; else no limit (too close: go on across)."""
-        p, line = self.params, obs.stop_line
+        """To a stop ``stop_margin_m`` short of the next stop line (:meth:`_stop_short_accel`)."""
+        return self._stop_short_accel(obs.stop_line.distance_m, obs, decel_mps2, turn_mps)
+
+    def _stop_short_accel(self, distance_m: float, obs: Observation, decel_mps2: float,
+                          turn_mps: float) -> float:
+        """To a stop ``stop_margin_m`` short of a place ``distance_m`` ahead of the front
+        bumper, if the car can stop there braking at ``decel_mps2``; else no limit (too
+        close: go on across)."""
+        p = self.params
         if (obs.speed_mps > p.creep_speed_mps
-                and obs.speed_mps**2 > 2 * decel_mps2 * max(line.distance_m, 0.0)):
+                and obs.speed_mps**2 > 2 * decel_mps2 * max(distance_m, 0.0)):
             return math.inf
-        return self._speed_accel(line.distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
+        return self._speed_accel(distance_m, obs, turn_mps, wait_m=p.stop_margin_m)
 
     def _brake_accel(self, gap_m: float, obs: Observation, wait_m: float | None = None,
                      far_back: bool = False) -> float:

@@ -25,8 +25,8 @@ from scenarios.bodies import VehicleModel
 from sdc.car.sensors import LaneReading
 from sdc.car.vehicle import Command
 
-__all__ = ["Command", "Controller", "LaneReading", "LanesBeside", "Observation", "StopLine",
-           "VehicleModel"]
+__all__ = ["Command", "Controller", "Crosswalk", "LaneReading", "LanesBeside", "Observation",
+           "StopLine", "VehicleModel"]
 
 #: a stop line's signal: its light's colour for the car's way, or none (no light)
 RED, YELLOW, GREEN, NO_SIGNAL = "red", "yellow", "green", "none"
@@ -52,6 +52,16 @@ class LanesBeside(NamedTuple):
     right_m: float
 
 
+class Crosswalk(NamedTuple):
+    """The next pedestrian crossing over the car's route, as a map gives it: where it
+    lies along the route and how far it reaches either side of the lane's centre."""
+
+    distance_m: float  # along the route from the front bumper to its near side (< 0: on it)
+    depth_m: float  # its extent along the route
+    right_m: float  # how far it reaches right of the lane's centre line (>= 0)
+    left_m: float  # and left of it (>= 0)
+
+
 class Observation(NamedTuple):
     """What the car senses at one step (ISO 8855: x ahead, y and angles to the left)."""
 
@@ -68,6 +78,7 @@ class Observation(NamedTuple):
     lidar_range_m: float = math.inf  # the lidar's range: no return means nothing up to it
     stop_line: StopLine | None = None  # the next stop line ahead (None: none on the route)
     lanes_beside: LanesBeside | None = None  # from the map (None: not known)
+    crosswalk: Crosswalk | None = None  # the next pedestrian crossing (None: none ahead)
 
 
 class Controller(Protocol):

@@ -30,12 +30,13 @@ from scenarios.snapshot import Snapshot
 from scenarios.warm_state import warm_state_id
 from scenarios.world_backends import World, make_road, make_world
 from sdc.car.collision import Collision, collision_with, describe
-from sdc.car.controller_api import LanesBeside, Observation, StopLine
+from sdc.car.controller_api import Crosswalk, LanesBeside, Observation, StopLine
 from sdc.car.controller_plugins import make_controller
 from sdc.car.geometry_kernels import Conflicts, Contacts
 from sdc.car.road_frame import RoadFrame
 from sdc.car.sensors import LaneReading, LaneSensor, Lidar
 from sdc.car.vehicle import Command, Vehicle, VehicleState
+from sdc.run.crosswalk_ahead import CrosswalkAhead
 from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
@@ -96,6 +97,7 @@ class Simulation:
         self.road_frame = RoadFrame(self.road, self.lane_sensor.lane_d_m)
         self.lane_width_m = self.road.lane_width_m
         self.stop_lines = StopLineWatch(self.road.stops())
+        self.crosswalks = CrosswalkAhead(self.road.crosswalks())
         self.beside = LanesBesideMap(self.road.lanes_beside(spec.ego.lane))
         self.recorder = TraceRecorder()
         self.obstacle_classes = tuple(o.vehicle_class for o in spec.obstacles)
@@ -113,6 +115,7 @@ class Simulation:
         self.ranges: np.ndarray | None = None  # the lidar's range image [m]
         self.lane: LaneReading | None = None  # None off the road's ends
         self.stop_line: StopLine | None = None
+        self.crosswalk: Crosswalk | None = None
         self.lanes_beside: LanesBeside | None = None
         self.contacts: Contacts | None = None
         self.conflicts: Conflicts | None = None
@@ -135,6 +138,7 @@ class Simulation:
         self.lane = self.lane_sensor.measure(self.box[:2], state.yaw_rad, self.look_ahead_m)
         front_s_m = self.lane.s_m + self.model.length_m / 2 if self.lane else None
         self.stop_line = self.stop_lines.update(front_s_m, snapshot.signals)
+        self.crosswalk = self.crosswalks.update(front_s_m)
         self.lanes_beside = self.beside.at(self.lane.s_m if self.lane else None)
         self.contacts, self.conflicts = self.road_frame.measure(self.box, state.speed_mps,
                                                                 snapshot)
@@ -145,7 +149,8 @@ class Simulation:
         return Observation(self.k * self.step_s, self.step_s, self.ranges,
                            self.lidar.angles_rad, self.spec.lidar.mount_ahead_m, self.lane,
                            self.lane_width_m, state.speed_mps, state.steer_rad, self.model,
-                           self.spec.lidar.max_range_m, self.stop_line, self.lanes_beside)
+                           self.spec.lidar.max_range_m, self.stop_line, self.lanes_beside,
+                           self.crosswalk)
 
     def record(self, command: Command, phase: str) -> None:
         """Add the current step's row to the trace."""
