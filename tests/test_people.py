@@ -547,3 +547,23 @@ def test_the_time_to_collision_counts_a_person_in_the_path(lesson_plain):
     aside = person + np.array([[0.0, 4.0, 0.0, 0.0, 0.0]])  # in the next lane, walking away
     _, conflicts = step(ego_box, 10.0, np.zeros((0, 5)), aside, np.array([1.4]), road, 1.0)
     assert conflicts.ttc_s == math.inf
+
+
+@pytest.mark.parametrize("lanes, width_m", [(1, 3.2), (2, 3.0), (3, 3.5)])
+def test_avoid_never_hits_a_standing_person_and_keeps_clear_of_one(lesson_plain, lanes,
+                                                                    width_m):
+    """On the lesson's road, the barrel a person 80 m ahead at 1 m either side of the
+    lane's centre or on it, 3.74 to 14 m/s: avoid stops on a road of one lane and
+    passes on two or three, never nearer the person than 0.5 m."""
+    for speed_mps in (3.74, 8.0, 14.0):
+        for offset_m in (-1.0, 0.0, 1.0):
+            plain = copy.deepcopy(lesson_plain)
+            plain["obstacles"][0].update(kind="pedestrian", lateral_offset_m=offset_m,
+                                         position_m=80.0)
+            plain["ego"]["speed_mps"] = speed_mps
+            plain["road"].update(lanes=lanes, lane_width_m=width_m)
+            plain["controller"] = {"name": "avoid"}
+            row = run_episode(ScenarioSpec.from_plain(plain)).row
+            assert row["collision_with"] == "none" and row["stop_possible"]
+            assert row["outcome"] == ("stuck" if lanes == 1 else "completed")
+            assert row["min_gap_obstacle_m"] > 0.5, (speed_mps, offset_m)
