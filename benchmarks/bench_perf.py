@@ -142,6 +142,9 @@ def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
         Simulation(spec, world, 0.0).start()
         libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
                                            world._subscribed_m)
+        if world.people_subscribed:
+            libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE,
+                                               world._subscribed_m)
         if ego:  # its speed mode and lane change mode stay off: it keeps speed and lane
             libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
         else:

@@ -279,6 +279,7 @@ class SumoWorld:
         self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
         self._types = VehicleTypes()
         self._subscribed_m = 0.0  # the context subscription's radius
+        self.people_subscribed = False  # the persons around the ego are read too
         # a sumo_config road's configuration (its files are written into the scratch folder)
         self._config = (load_bundle(spec.road.config_file) if spec.road.kind == "sumo_config"
                         else None)
@@ -392,19 +393,22 @@ class SumoWorld:
         return self._snapshot(ego_box, taken)
 
     def _watch_types(self) -> None:
-        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles and
-        persons around the ego (only those are read, whatever the size of the network)
-        within a radius that holds the longest type's."""
+        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles
+        around the ego (only those are read, whatever the size of the network) within a
+        radius that holds the longest type's, and to the persons too from the step SUMO
+        has loaded any (its count holds them before they depart, so none is missed)."""
         self._types.refresh(self._sumo.vehicletype, (EGO_TYPE, OBSTACLE_TYPE_PREFIX))
         radius_m = self._radius_m + subscription_slack_m(self._types.longest_m,
                                                          self._model.length_m)
-        if radius_m > self._subscribed_m:
+        people = self.people_subscribed or self._sumo.person.getIDCount() > 0
+        if radius_m > self._subscribed_m or people != self.people_subscribed:
             # libsumo hands both back in one dict (vehicle.getContextSubscriptionResults)
             self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE, radius_m,
                                                 _TRAFFIC_VARS)
-            self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE, radius_m,
-                                                _PERSON_VARS)
-            self._subscribed_m = radius_m
+            if people:
+                self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE,
+                                                    radius_m, _PERSON_VARS)
+            self._subscribed_m, self.people_subscribed = radius_m, people
 
     def warm_state(self) -> WarmState:
         """The spec's warm state: the one given, else the cached one, else computed
@@ -566,7 +570,9 @@ class SumoWorld:
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         # the results are the step's, from before they were taken off
-        hidden = taken | self._on_other_levels(nearby, ego_box) | _riding(nearby)
+        hidden = taken | self._on_other_levels(nearby, ego_box)
+        if self.people_subscribed:
+            hidden |= _riding(nearby)
         if hidden:
             nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
         n = len(nearby)
