@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 GRAVITY_MPS2 = 9.81
 
 #: kind -> (length_m, width_m) of a stationary obstacle; a standing person and a
@@ -24,6 +26,14 @@ OBSTACLE_SIZES_M: dict[str, tuple[float, float]] = {
 #: the class of a person on foot (SUMO's vClass of people), whatever its type says, and
 #: what a collision with one is called
 PEDESTRIAN = "pedestrian"
+
+
+def are_people(classes) -> np.ndarray:
+    """Which of ``classes`` (SUMO vehicle classes; None for a thing) are persons: a bool
+    array."""
+    return np.array([c == PEDESTRIAN for c in classes], bool).reshape(-1)
+
+
 #: kind -> the SUMO vehicle class of an obstacle of it (None: a thing, not a road user);
 #: every contact with a ``pedestrian`` is a collision with a person, whoever moved
 OBSTACLE_CLASSES: dict[str, str | None] = {

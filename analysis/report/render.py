@@ -27,7 +27,7 @@ from matplotlib.patches import Patch
 from analysis.run.metrics import central_range_m
 from analysis.run.run_outcome import rest_step
 from analysis.run.trace_file import Trace
-from scenarios.bodies import PEDESTRIAN
+from scenarios.bodies import are_people
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec, beam_angles_rad
@@ -84,7 +84,7 @@ def road_heading_rad(yaw_rad: np.ndarray, heading_error_rad: np.ndarray) -> np.n
 
 def people_xy(boxes: np.ndarray, classes) -> np.ndarray:
     """(P, 2): where the persons among ``boxes`` (their ``classes``) are."""
-    return boxes[np.array([c == PEDESTRIAN for c in classes], bool).reshape(-1), :2]
+    return boxes[are_people(classes), :2]
 
 
 def standing_people_xy(spec: ScenarioSpec, obstacles: np.ndarray) -> np.ndarray:

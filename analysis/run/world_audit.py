@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.bodies import PEDESTRIAN
+from scenarios.bodies import are_people
 from scenarios.boxes import as_boxes
 
 #: a collision's ``collision_role`` (sdc.car.collision) as the report and the CLI say it
@@ -85,9 +85,9 @@ def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
         for k, row in enumerate(part):
             bodies[k, : len(row)] = row
             if traffic_classes is not None:
-                people[k, : len(row)] = [c == PEDESTRIAN for c in traffic_classes[start + k]]
+                people[k, : len(row)] = are_people(traffic_classes[start + k])
         bodies[:, most:] = obstacles
-        people[:, most:] = [c == PEDESTRIAN for c in obstacle_classes or [None] * len(obstacles)]
+        people[:, most:] = are_people(obstacle_classes or [None] * len(obstacles))
         steps += len(_overlapping_steps(bodies, most, people))
     return steps
 

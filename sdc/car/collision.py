@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.bodies import PEDESTRIAN
+from scenarios.bodies import PEDESTRIAN, are_people
 from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.snapshot import Snapshot
@@ -31,18 +31,14 @@ class Collision(NamedTuple):
     vehicle_class: str | None = None  # a vehicle's SUMO vClass (passenger, truck, ...)
 
 
-def _is_person(classes) -> np.ndarray:
-    return np.array([c == PEDESTRIAN for c in classes], bool)
-
-
 def person_touched(ego_box: np.ndarray, snapshot: Snapshot,
                    obstacle_classes: tuple[str | None, ...]) -> tuple[np.ndarray, float] | None:
     """The box and speed [m/s] of a person the ego's box touches (a standing person
     among the obstacles, whose ``obstacle_classes`` say which, before SUMO's persons),
     or None."""
     for boxes, people, speeds in (
-            (snapshot.obstacle_boxes, _is_person(obstacle_classes), None),
-            (snapshot.traffic_boxes, _is_person(snapshot.traffic_classes),
+            (snapshot.obstacle_boxes, are_people(obstacle_classes), None),
+            (snapshot.traffic_boxes, are_people(snapshot.traffic_classes),
              snapshot.traffic_speeds_mps)):
         touched = np.flatnonzero(people)
         touched = touched[boxes_overlap(ego_box, boxes[touched])] if len(touched) else touched
