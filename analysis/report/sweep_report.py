@@ -38,6 +38,7 @@ from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
 from analysis.stats.gate import Gate, gate, gate_bounds_line
 from analysis.stats.rates import (
+    HIT_ORDER,
     CollisionRate,
     Method,
     PairedTest,
@@ -349,7 +350,7 @@ def _deff(value: float) -> str:
     return f"{value:.2f}"
 
 
-#: the collision table's columns of what was hit, people first (analysis.stats.rates)
+#: the collision table's heads of what was hit (in the order of analysis.stats.rates.HIT_ORDER)
 HIT_HEADS = {"pedestrian": "people", "vehicle": "vehicles", "obstacle": "obstacles",
              "road_edge": "road edge"}
 
@@ -358,7 +359,7 @@ def _rate_row(keys: list[str], rate: CollisionRate, method: Method, deff: bool) 
     low, high = rate.interval(method)
     return [*keys, str(rate.n_ok), str(rate.collisions),
             percent(rate.collision_rate), f"{percent(low)} - {percent(high)}",
-            *(str(rate.collision_with.get(kind, 0)) for kind in HIT_HEADS),
+            *(str(rate.collision_with.get(kind, 0)) for kind in HIT_ORDER),
             str(rate.n_error), str(rate.n_timeout), *([_deff(rate.deff)] if deff else [])]
 
 
@@ -465,7 +466,8 @@ def headline_rows(summary: SweepSummary) -> list[list[str]]:
         groups = [([c], rate) for c, rate in summary.by_controller.items()]
     deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
-             "rate", "95% interval", *HIT_HEADS.values(), "errors", "timeouts",
+             "rate", "95% interval", *(HIT_HEADS[kind] for kind in HIT_ORDER), "errors",
+             "timeouts",
              *([DEFF_HEAD] if deff else [])]]
     return rows + [_rate_row(keys, rate, summary.interval, deff) for keys, rate in groups]
 
