@@ -117,6 +117,13 @@ class RoadGeometry:
     def lane_center_d_m(self, lane: int) -> float:
         return (lane - (self.lanes - 1) / 2) * self.lane_width_m
 
+    def lane_widths_m(self, s_m: float, lane: int) -> tuple[float, tuple[float | None,
+                                                                     float | None]]:
+        """The width of ``lane`` at ``s_m`` and of the lanes on its right and left
+        (None: no lane there) [m]. On a built-in road every lane is ``lane_width_m``
+        wide, and so is what lies beyond its outer lanes."""
+        return self.lane_width_m, (self.lane_width_m, self.lane_width_m)
+
     def lane_at_d(self, d_m: float) -> int:
         """The lane holding offset ``d_m`` (the inverse of :meth:`lane_center_d_m`; below
         0 or from ``lanes`` on: off the road's lanes)."""

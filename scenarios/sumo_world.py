@@ -140,22 +140,29 @@ def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
     return f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>'
 
 
-def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
-    """The lanes of a built-in road in which SUMO must see an obstacle standing at
-    ``box``: the lane of its centre first, then each neighbouring lane it reaches into
-    too far for traffic to pass (:func:`scenarios.traffic_model.blocks_neighbour`)."""
+def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
+                  traffic_width_m: float) -> list[int]:
+    """The lanes beside ``lane`` (-1 on its right, +1 on its left) that a body standing
+    at ``box`` reaches into too far for traffic ``traffic_width_m`` wide to pass
+    (:func:`scenarios.traffic_model.blocks_neighbour`), each lane as wide as it is there."""
     (s_m,), (d_m,) = road.to_frenet(box[None, :2])
     lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
-    width = road.lane_width_m
+    width_m, (right_m, left_m) = road.lane_widths_m(s_m, lane)
+    centre_m = road.lane_center_d_m(lane)
+    reaches = ((-1, right_m, (centre_m - width_m / 2) - lo_m),
+               (1, left_m, hi_m - (centre_m + width_m / 2)))
+    return [step for step, beside_m, reach_m in reaches if beside_m is not None
+            and traffic_model.blocks_neighbour(reach_m, beside_m, traffic_width_m)]
+
+
+def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
+    """The lanes of a built-in road in which SUMO must see an obstacle standing at
+    ``box``: the lane of its centre first, then each neighbouring lane it blocks
+    (:func:`lanes_blocked`, for the built-in traffic)."""
+    (_,), (d_m,) = road.to_frenet(box[None, :2])
     own = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
-    lanes = [own]
-    for lane in range(road.lanes):
-        centre_m = road.lane_center_d_m(lane)
-        reach_m = (hi_m - (centre_m - width / 2) if lane > own
-                   else (centre_m + width / 2) - lo_m)
-        if lane != own and traffic_model.blocks_neighbour(reach_m, width, TRAFFIC_WIDTH_M):
-            lanes.append(lane)
-    return lanes
+    return [own] + [own + step for step in lanes_blocked(road, box, own, TRAFFIC_WIDTH_M)
+                    if 0 <= own + step < road.lanes]
 
 
 def _across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:
@@ -387,6 +394,7 @@ class SumoWorld:
         for tl in sorted({stop.tl for stop in self.road.stops() if stop.tl is not None}):
             sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
         self._watch_types()
+        self._show_obstacles_beside()
         self._push(ego_box, ego_speed_mps)
         # what departed in this step entered beside the ego, not after it: checked here
         taken = self._clear_start(among=self._sumo.simulation.getDepartedIDList())
@@ -501,16 +509,45 @@ class SumoWorld:
         s_m, d_m = road.locate_near(float(box[0]), float(box[1]), self._ego_s_m)
         self._ego_s_m = s_m
         heading = road.heading_at_s(s_m)
-        lane = road.lane_at_d(d_m)
-        if not (0 <= lane < road.lanes and 0 <= s_m <= road.length_m):
+        lane = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
+        lane_d_m = road.lane_center_d_m(lane)
+        width_m, beside_m = road.lane_widths_m(s_m, lane)
+        if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
             return x, y, angle_deg
         lo_m, hi_m = _across_m(box, heading, d_m)
-        lateral_m = traffic_model.sumo_lateral_m(
-            lo_m, hi_m, road.lane_center_d_m(lane), road.lane_width_m, model.width_m,
-            TRAFFIC_WIDTH_M)
+        lateral_m = traffic_model.sumo_lateral_m(lo_m, hi_m, lane_d_m, width_m, model.width_m,
+                                                 self._traffic_width_m(), beside_m)
         front_d_m = d_m + model.length_m / 2 * math.sin(float(box[2]) - heading)
         shift_m = lateral_m - front_d_m
         return x - shift_m * math.sin(heading), y + shift_m * math.cos(heading), angle_deg
+
+    def _traffic_width_m(self) -> float:
+        """The widest traffic that may pass a body in a lane beside it: of the types
+        SUMO has loaded, or the built-in traffic's before any [m]."""
+        return self._types.widest_m or TRAFFIC_WIDTH_M
+
+    def _show_obstacles_beside(self) -> None:
+        """On a network, an obstacle standing in a lane beside its own too far for
+        the traffic to pass (:func:`lanes_blocked`, for the widest type SUMO has loaded)
+        stands there too, as a second stopped vehicle (``obstacle.<i>.<lane>``)."""
+        road = self.road
+        if not isinstance(road, NetworkRoad):
+            return
+        vehicle = self._sumo.vehicle
+        for i, (obstacle, box) in enumerate(zip(self.spec.obstacles, self._obstacle_boxes,
+                                                strict=True)):
+            s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
+            edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
+            for step in lanes_blocked(road, box, 0, self._traffic_width_m()):
+                beside = road.net.lanes[f"{edge}_{own + step}"]
+                own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
+                pos_m = front_m * beside.sumo_length_m / own_length_m
+                vid = f"{OBSTACLE_PREFIX}{i}.{beside.index}"
+                self._sumo.route.add(vid, [edge])
+                vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
+                            depart="now", departLane=str(beside.index),
+                            departPos=f"{pos_m:.6f}", departSpeed="0")
+                vehicle.setStop(vid, edge, pos=pos_m, laneIndex=beside.index, duration=1e9)
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""

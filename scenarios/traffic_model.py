@@ -20,7 +20,10 @@ traffic car driving at that lane's centre less than :data:`PASS_CLEARANCE_M` to 
 (:func:`blocks_neighbour`): the ego through the lateral position it is given
 (:func:`sumo_lateral_m`), an obstacle as a second stopped vehicle in that lane. A part
 that leaves room to pass is not shown, so traffic passes it with at least that
-clearance instead of queueing.
+clearance instead of queueing. Each lane is judged by its own width (a network's
+lanes are as wide as its file says, 2.5-4 m in cities) and by the widest traffic
+that may drive in it (the widest vehicle type SUMO has loaded: a 2.5 m truck needs a
+lane 0.7 m wider than a 1.8 m car to pass with the same clearance).
 """
 
 from __future__ import annotations
@@ -44,7 +47,8 @@ def description() -> str:
     """The traffic model in one line, for the manifest and the report."""
     return ("on sumo, lane changes take traffic.lane_change_s (default 2 s; "
             "--lanechange.duration) and a body reaching into a neighbouring lane so far "
-            f"that a {TRAFFIC_WIDTH_M:g} m wide car at that lane's centre has under "
+            "that the widest traffic type (on the built-in roads a "
+            f"{TRAFFIC_WIDTH_M:g} m wide car) at that lane's centre has under "
             f"{PASS_CLEARANCE_M:g} m to pass is shown to SUMO in that lane too (the ego by its "
             "lateral position, an obstacle as a second stopped vehicle); traffic enters "
             "behind the ego only where it can stop; on highway, highway-env's IDM and MOBIL")
@@ -62,16 +66,22 @@ def blocks_neighbour(reach_m: float, lane_width_m: float, traffic_width_m: float
 
 
 def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float,
-                   body_width_m: float, traffic_width_m: float) -> float:
+                   body_width_m: float, traffic_width_m: float,
+                   beside_m: tuple[float | None, float | None] | None = None) -> float:
     """The lateral position [m, across the road, left positive] to give SUMO for a body
     spanning ``lo_m`` .. ``hi_m`` across the road whose centre is in the lane centred at
     ``lane_d_m``: a part over a lane line that leaves room to pass is not shown (the
     body is shown just inside its lane on that side), one that blocks is shown as far
-    as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane)."""
-    left_blocks = blocks_neighbour(hi_m - (lane_d_m + lane_width_m / 2), lane_width_m,
-                                   traffic_width_m)
-    right_blocks = blocks_neighbour((lane_d_m - lane_width_m / 2) - lo_m, lane_width_m,
-                                    traffic_width_m)
+    as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane).
+
+    ``beside_m``: the widths of the lanes on its right and on its left (None: no lane
+    there, so nothing to block); default, both as wide as its own.
+    ``traffic_width_m``: the widest traffic that may drive in them."""
+    right_m, left_m = beside_m or (lane_width_m, lane_width_m)
+    left_blocks = left_m is not None and blocks_neighbour(
+        hi_m - (lane_d_m + lane_width_m / 2), left_m, traffic_width_m)
+    right_blocks = right_m is not None and blocks_neighbour(
+        (lane_d_m - lane_width_m / 2) - lo_m, right_m, traffic_width_m)
     if left_blocks and not right_blocks:
         return hi_m - body_width_m / 2
     if right_blocks and not left_blocks:

@@ -13,6 +13,9 @@ import numpy as np
 
 from scenarios.bodies import PEDESTRIAN
 
+#: classes that never drive in a road's lanes beside a car: persons, trains, ships
+OFF_ROAD_CLASSES = frozenset({PEDESTRIAN, "rail", "rail_urban", "rail_electric", "rail_fast",
+                              "ship", "aircraft", "wheelchair"})
 #: the vehicle types SUMO always has (DEFAULT_VEHTYPE, DEFAULT_BIKETYPE, ...): no
 #: vehicle of them unless a demand names them (then they are read with the vehicle)
 SUMO_DEFAULT_PREFIX = "DEFAULT_"
@@ -21,22 +24,27 @@ SUMO_DEFAULT_PREFIX = "DEFAULT_"
 class VehicleTypes:
     """The vehicles, persons and types met so far: ``sizes`` (vehicle or person id ->
     (length, width, class index), as :func:`scenarios.road_kernels.traffic` reads it), ``classes``
-    (class index -> vClass) and ``longest_m``, the longest traffic type loaded or met."""
+    (class index -> vClass), ``longest_m``, the longest traffic type loaded or met, and
+    ``widest_m``, the widest of those that drive in a road's lanes (0 before any)."""
 
     def __init__(self):
         self.sizes: dict[str, tuple[float, float, float]] = {}
         self.classes = np.zeros(0, dtype=object)
         self.longest_m = 0.0
+        self.widest_m = 0.0
         self._types: dict[str, tuple[float, float, float]] = {}
         self._listed = 0  # how many types SUMO listed when last asked
 
     def _type(self, type_id: str, vehicletype) -> tuple[float, float, float]:
         """(length, width, class index) of type ``type_id``, from SUMO's first time."""
         if type_id not in self._types:
-            length_m = float(vehicletype.getLength(type_id))
-            self._types[type_id] = (length_m, float(vehicletype.getWidth(type_id)),
-                                    self._class_index(vehicletype.getVehicleClass(type_id)))
+            length_m, width_m = (float(vehicletype.getLength(type_id)),
+                                 float(vehicletype.getWidth(type_id)))
+            vclass = vehicletype.getVehicleClass(type_id)
+            self._types[type_id] = (length_m, width_m, self._class_index(vclass))
             self.longest_m = max(self.longest_m, length_m)
+            if vclass not in OFF_ROAD_CLASSES:
+                self.widest_m = max(self.widest_m, width_m)
         return self._types[type_id]
 
     def _class_index(self, vclass: str) -> float:

@@ -345,6 +345,18 @@ class NetworkRoad(RoadGeometry):
         pos_m = float(np.clip(piece.sumo_pos_m(s_m), 0.0, piece.lane.sumo_length_m))
         return piece.lane.edge, piece.lane.index, pos_m
 
+    def lane_widths_m(self, s_m: float, lane: int) -> tuple[float, tuple[float | None,
+                                                                     float | None]]:
+        """The width of the route's lane at ``s_m`` and of its edge's lanes on its
+        right and left (None: the edge has none there) [m]."""
+        own = self.piece_at(s_m).lane
+
+        def beside(step: int) -> float | None:
+            other = self.net.lanes.get(f"{own.edge}_{own.index + step}")
+            return None if other is None else other.width_m
+
+        return own.width_m, (beside(-1), beside(1))
+
     def route_edges(self, s_m: float) -> list[str]:
         """The route's SUMO edges from the lane at ``s_m`` on (junctions aside)."""
         edges = [p.lane.edge for p in self.pieces
