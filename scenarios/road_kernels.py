@@ -104,22 +104,40 @@ def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, size
     width]``, its yaw ``(90 - angle) * pi / 180`` and its centre half a length behind
     the front bumper; a vehicle's length, width and class index (``kinds``) are
     ``sizes[its id]``, an id not there a ``KeyError`` of it."""
-    position, angle, speed = keys
-    rows = np.array([(*values[position], values[angle], values[speed], *sizes[vid])
-                     for vid, values in nearby.items()
-                     if vid != ego_id and not vid.startswith(skip_prefix)],
-                    dtype=np.float64).reshape(-1, 7)
-    yaw = (90.0 - rows[:, 2]) * (math.pi / 180.0)
-    length_m = rows[:, 4]
-    centre_x = rows[:, 0] - length_m / 2 * np.cos(yaw)
-    centre_y = rows[:, 1] - length_m / 2 * np.sin(yaw)
-    dx, dy = centre_x - cx_m, centre_y - cy_m
-    keep = dx * dx + dy * dy <= radius_m * radius_m
+    ids, rows, keep = _nearby_rows(nearby, keys, ego_id, skip_prefix, sizes, cx_m, cy_m,
+                                   radius_m)
     count = int(np.count_nonzero(keep))
-    boxes[:count] = np.column_stack([centre_x, centre_y, yaw, length_m, rows[:, 5]])[keep]
-    speeds_mps[:count] = rows[keep, 3]
+    boxes[:count] = rows[keep, :5]
+    speeds_mps[:count] = rows[keep, 5]
     kinds[:count] = rows[keep, 6]
     return count
+
+
+def traffic_ids(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes: dict,
+                cx_m: float, cy_m: float, radius_m: float) -> list[str]:
+    """The ids of the vehicles :func:`traffic` reads from ``nearby``, in its order."""
+    ids, _, keep = _nearby_rows(nearby, keys, ego_id, skip_prefix, sizes, cx_m, cy_m,
+                                radius_m)
+    return [vid for vid, kept in zip(ids, keep, strict=True) if kept]
+
+
+def _nearby_rows(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes: dict,
+                 cx_m: float, cy_m: float, radius_m: float):
+    """:func:`traffic_numpy`'s reading: the ids looked at, their rows ``[cx, cy, yaw,
+    length, width, speed, class index]`` and which lie within the radius."""
+    position, angle, speed = keys
+    ids = [vid for vid in nearby if vid != ego_id and not vid.startswith(skip_prefix)]
+    values = np.array([(*nearby[vid][position], nearby[vid][angle], nearby[vid][speed],
+                        *sizes[vid]) for vid in ids], dtype=np.float64).reshape(-1, 7)
+    yaw = (90.0 - values[:, 2]) * (math.pi / 180.0)
+    length_m = values[:, 4]
+    centre_x = values[:, 0] - length_m / 2 * np.cos(yaw)
+    centre_y = values[:, 1] - length_m / 2 * np.sin(yaw)
+    dx, dy = centre_x - cx_m, centre_y - cy_m
+    keep = dx * dx + dy * dy <= radius_m * radius_m
+    rows = np.column_stack([centre_x, centre_y, yaw, length_m, values[:, 5], values[:, 3],
+                            values[:, 6]])
+    return ids, rows, keep
 
 
 _compiled = compiled_extension("scenarios._road_kernels")

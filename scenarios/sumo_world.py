@@ -23,9 +23,9 @@ import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
 from scenarios import road_kernels, traffic_model
-from scenarios.atomic_write import write_atomic
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.errors import SdcError
+from scenarios.lane_bodies import along_lane
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
@@ -53,6 +53,7 @@ from scenarios.warm_state import (
     warm_seed,
     warm_up_steps,
 )
+from scenarios.warm_up_process import computed_apart
 
 EGO_ID = "ego"
 EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
@@ -287,6 +288,10 @@ class SumoWorld:
         self._types = VehicleTypes()
         self._subscribed_m = 0.0  # the context subscription's radius
         self.people_subscribed = False  # the persons around the ego are read too
+        #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``), for
+        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
+        self.keep_ids = False
+        self.last_ids: list[str] = []
         # a sumo_config road's configuration (its files are written into the scratch folder)
         self._config = (load_bundle(spec.road.config_file) if spec.road.kind == "sumo_config"
                         else None)
@@ -294,6 +299,12 @@ class SumoWorld:
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
         self.warm_state_key: str | None = None  # the key of the warm state it started from
+
+    def twin(self) -> SumoWorld:
+        """An unstarted world of the same scenario, road, options and warm state: pushed
+        the same ego, it is the same world, step for step."""
+        return SumoWorld(self.spec, self.road, self.cache_dir, sumo_options=self.sumo_options,
+                         warm_state=self.warm_state_path)
 
     def net_path(self) -> Path:
         """The network file SUMO runs on."""
@@ -425,10 +436,8 @@ class SumoWorld:
         key = self.warm_key()
         path = self.warm_state_path or cached_path(key)
         if self.warm_state_path is None and not path.is_file():
-            state = self.compute_warm_state(key)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))
-            return state
+            # apart: SUMO's state would hold what ran before it in this process
+            return computed_apart(self.spec, key, self.cache_dir, self._scratch())
         state = WarmState.read(path)
         if state.key != key:
             raise SdcError(f"warm state {path}: made for other traffic (key "
@@ -621,7 +630,37 @@ class SumoWorld:
             self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
             self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
             count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
+        if self.keep_ids:
+            self.last_ids = road_kernels.traffic_ids(
+                nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX, self._types.sizes,
+                float(ego_box[0]), float(ego_box[1]), self._radius_m)
         return boxes[:count], speeds[:count], self._types.names(kinds[:count])
+
+    def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles) -> list[np.ndarray]:
+        """The bodies of the last snapshot's traffic ``rows`` (indices into its
+        ``traffic_boxes``; needs ``keep_ids``) and of the spec's ``obstacles`` (indices)
+        as SUMO's own lanes hold them: each (P, 5) boxes laid along its lane
+        (:func:`scenarios.lane_bodies.along_lane`), an obstacle with the vehicles it
+        stands as in lanes beside, a person on foot (no lane holds it) as its own box."""
+        vehicle, lane = self._sumo.vehicle, self._sumo.lane
+        standing = vehicle.getIDList()
+        people = frozenset(self._sumo.person.getIDList()) if self.people_subscribed else ()
+
+        def laid(vid: str) -> np.ndarray:
+            lane_id = vehicle.getLaneID(vid)
+            return along_lane(np.array(lane.getShape(lane_id)), lane.getLength(lane_id),
+                              vehicle.getLanePosition(vid), vehicle.getLateralLanePosition(vid),
+                              vehicle.getLength(vid), vehicle.getWidth(vid))
+
+        bodies = []
+        for row in rows:
+            vid = self.last_ids[row]
+            bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
+        for i in obstacles:
+            own = f"{OBSTACLE_PREFIX}{i}"
+            bodies.append(np.vstack([laid(vid) for vid in standing
+                                     if vid == own or vid.startswith(own + ".")]))
+        return bodies
 
     def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
         """The vehicles around the ego on a road that crosses its route without a

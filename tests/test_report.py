@@ -429,12 +429,31 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
     pq.write_table(table, bad / "results.parquet")
     plain = write_report(bad).summary
     lines = world_lines(plain["world"], plain["traffic_model"], plain["sumo_config"])
+    first = table.column("run_id")[0].as_py()
     assert lines[1].startswith("WARNING: in 1 run two bodies other than the ego overlapped "
-                               "(7 steps in all")
+                               "where SUMO's own lanes hold them apart (7 steps in all")
+    assert lines[1].endswith(f"see one with sdc replay DIR --run {first} and report it.")
+    assert not any(line.startswith("SUMO's own overlaps") for line in lines)
+    # SUMO's own overlaps are one line apart, never the warning
+    table = table.set_column(table.schema.get_field_index("world_overlaps"), "world_overlaps",
+                             pyarrow.array([0] * len(overlaps), pyarrow.int64()))
+    table = table.set_column(table.schema.get_field_index("sumo_overlaps"), "sumo_overlaps",
+                             pyarrow.array(overlaps, pyarrow.int64()))
+    pq.write_table(table, bad / "results.parquet")
+    plain = write_report(bad).summary
+    lines = world_lines(plain["world"], plain["traffic_model"], plain["sumo_config"])
+    assert not any(line.startswith("WARNING") for line in lines)
+    sumo_lines = [line for line in lines if line.startswith("SUMO's own overlaps")]
+    assert sumo_lines == [
+        "SUMO's own overlaps: in 1 run SUMO's own model held two bodies inside each other "
+        "(7 steps, column sumo_overlaps: vehicles waiting on a junction's crossing lanes, "
+        "bicycles through pedestrians); that is SUMO's world as it is, not sdc's coupling, "
+        f"and the ego's verdicts stand; to see one: sdc replay DIR --run {first}."]
     old = tmp_path / "old"
     shutil.copytree(small_sweep, old)
     pq.write_table(pq.read_table(old / "results.parquet").drop_columns(
-        ["world_overlaps", "collision_part", "collision_role"]), old / "results.parquet")
+        ["world_overlaps", "sumo_overlaps", "collision_part", "collision_role"]),
+        old / "results.parquet")
     manifest = json.loads((old / "manifest.json").read_text())
     manifest.pop("traffic_model")
     (old / "manifest.json").write_text(json.dumps(manifest))

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from analysis.report.settling_report import settling_figure
+from analysis.report.settling_report import settling_figure, settling_lines, settling_summary
 from analysis.stats.settling import (
     batch_length,
     batch_means,
@@ -264,3 +264,23 @@ def test_the_figure_is_a_png_for_one_or_several_series():
     ramp = suggest_warm_up_s(ramp_series(0))  # not settled: the lower bound is drawn
     assert settling_figure(several, ramp, "town A, 3 warm states",
                            current_warm_up_s=120.0)[:8] == PNG_SIGNATURE
+
+
+def test_a_configurations_warm_up_is_told_on_its_own_clock():
+    """On a SUMO configuration the ego enters at traffic.enter_s on the configuration's
+    clock (54000 s and more on a day's demand): the report speaks of that field, never of
+    a warm_up_s the configuration has not."""
+    start_s = 54_000.0
+    frames = []
+    for seed in range(2):
+        series = ramp_series(seed)
+        frames.append(series.assign(t_s=series.t_s + start_s))
+    on_config = settling_summary(frames, on_config_clock=True)
+    (line,) = settling_lines(on_config)
+    assert line.startswith("WARNING: Traffic warm-up: the configuration's own demand until "
+                           f"the ego entered at {on_config['warm_up_s']:.0f} s on its clock "
+                           "(traffic.enter_s; the mean of 2 warm-ups")
+    assert line.endswith("suggests a traffic.enter_s.") and "warm_up_s" not in line
+    assert on_config["warm_up_s"] > start_s
+    (built_in,) = settling_lines(settling_summary([ramp_series(0)]))
+    assert "(traffic.warm_up_s;" in built_in and built_in.endswith("a traffic.warm_up_s.")

@@ -42,13 +42,21 @@ def mean_series(frames: list[pd.DataFrame]) -> pd.DataFrame:
     return sum(same) / len(same)
 
 
-def settling_summary(frames: list[pd.DataFrame]) -> dict | None:
+#: the field that sets when the ego enters: after a warm-up of the built-in traffic, or
+#: at a time on a SUMO configuration's own clock
+WARM_UP_FIELD, ENTER_FIELD = "traffic.warm_up_s", "traffic.enter_s"
+
+
+def settling_summary(frames: list[pd.DataFrame], on_config_clock: bool = False) -> dict | None:
     """The rule's verdict on the mean warm-up: ``suggestion`` (or ``error`` when the
-    series is too short to judge), the warm-up length and how many warm-ups."""
+    series is too short to judge), the warm-up length and how many warm-ups;
+    ``on_config_clock``: the sweep's roads are SUMO configurations, whose warm-up is
+    their own demand up to ``traffic.enter_s`` on their clock (``field``)."""
     if not frames:
         return None
     mean = mean_series(frames)
-    summary = {"warm_ups": len(frames), "warm_up_s": round(float(mean.t_s.iloc[-1]), 1)}
+    summary = {"warm_ups": len(frames), "warm_up_s": round(float(mean.t_s.iloc[-1]), 1),
+               "field": ENTER_FIELD if on_config_clock else WARM_UP_FIELD}
     try:
         summary["suggestion"] = suggest_warm_up_s(mean)
     except ValueError as e:  # too few samples for the rule
@@ -61,19 +69,26 @@ def settling_lines(summary: dict | None) -> list[str]:
     within it."""
     if summary is None:
         return []
-    head = (f"Traffic warm-up: {summary['warm_up_s']:.0f} s (the mean of "
-            f"{summary['warm_ups']} warm-ups kept in {SETTLING_FILE})")
+    field = summary.get("field", WARM_UP_FIELD)
+    kept = f"the mean of {summary['warm_ups']} warm-ups kept in {SETTLING_FILE}"
+    if field == ENTER_FIELD:
+        head = (f"Traffic warm-up: the configuration's own demand until the ego entered at "
+                f"{summary['warm_up_s']:.0f} s on its clock ({field}; {kept})")
+        after = "by"
+    else:
+        head = f"Traffic warm-up: {summary['warm_up_s']:.0f} s ({field}; {kept})"
+        after = "after"
     if "error" in summary:
         return [f"WARNING: {head} is too short to tell whether the traffic had settled "
                 f"({summary['error']}); sdc settle SPEC.toml watches it longer."]
     rule = summary["suggestion"]
     if rule["settled"] and rule["warm_up_s"] <= summary["warm_up_s"]:
-        return [f"{head}: by {rule['rule']} the traffic had settled after "
+        return [f"{head}: by {rule['rule']} the traffic had settled {after} "
                 f"{rule['warm_up_s']:.0f} s, before the ego entered."]
     return [f"WARNING: {head}: by {rule['rule']} the traffic was still settling when the "
-            f"ego entered (settled after {rule['warm_up_at_least_s']:.0f} s at the "
+            f"ego entered (settled {after} {rule['warm_up_at_least_s']:.0f} s at the "
             "earliest), so the runs started in transient traffic; sdc settle SPEC.toml "
-            "suggests a warm_up_s."]
+            f"suggests a {field}."]
 
 
 def settling_image(frames: list[pd.DataFrame], summary: dict | None) -> list[tuple[str, bytes]]:
@@ -81,29 +96,32 @@ def settling_image(frames: list[pd.DataFrame], summary: dict | None) -> list[tup
     if summary is None or "suggestion" not in summary:
         return []
     png = settling_figure(frames, summary["suggestion"], "warm-ups of the sweep's warm states",
-                          current_warm_up_s=summary["warm_up_s"])
+                          current_warm_up_s=summary["warm_up_s"],
+                          field=summary.get("field", WARM_UP_FIELD))
     return [(TITLE, png)]
 
 
-def _suggestion_line(ax, suggestion: dict, label: bool) -> None:
-    """The suggested warm-up as a solid line, or, not settled, its lower bound dashed."""
+def _suggestion_line(ax, suggestion: dict, label: bool, field: str) -> None:
+    """The suggested warm-up (``field``'s value) as a solid line, or, not settled, its
+    lower bound dashed."""
     if suggestion["settled"]:
         name = suggestion["rule"].split(" ")[0].rstrip(",:")
-        text = f"{name} warm-up {suggestion['warm_up_s']:g} s"
+        text = f"{name}: {field} {suggestion['warm_up_s']:g} s"
         ax.axvline(suggestion["warm_up_s"], color="tab:red", linewidth=1.5,
                    label=text if label else None)
     else:
-        text = (f"not settled within {suggestion['observed_s']:.0f} s: "
-                f"warm-up >= {suggestion['warm_up_at_least_s']:g} s")
+        text = (f"not settled by {suggestion['observed_s']:.0f} s: "
+                f"{field} >= {suggestion['warm_up_at_least_s']:g} s")
         ax.axvline(suggestion["warm_up_at_least_s"], color="tab:red", linewidth=1.5,
                    linestyle="--", label=text if label else None)
 
 
 def settling_figure(series: pd.DataFrame | Sequence[pd.DataFrame], suggestion: dict,
-                    title: str, current_warm_up_s: float | None = None) -> bytes:
+                    title: str, current_warm_up_s: float | None = None,
+                    field: str = WARM_UP_FIELD) -> bytes:
     """The warm-up series as PNG bytes: vehicles, mean speed and halting over time in
-    three stacked panels, with the warm-up ``suggestion`` (of
-    :func:`suggest_warm_up_s`) as a vertical line, each measure's own truncation time
+    three stacked panels, with the warm-up ``suggestion`` (of :func:`suggest_warm_up_s`,
+    a value of ``field``) as a vertical line, each measure's own truncation time
     dotted in its panel, and ``current_warm_up_s`` (if given) as a grey line. Several
     series (a list, e.g. one per warm state) are drawn faintly over each other."""
     many = not isinstance(series, pd.DataFrame)
@@ -119,10 +137,11 @@ def settling_figure(series: pd.DataFrame | Sequence[pd.DataFrame], suggestion: d
         if truncation is not None:
             ax.axvline(truncation["truncation_s"], color="tab:red", linestyle=":",
                        linewidth=1.0, label="this measure's truncation" if i == 0 else None)
-        _suggestion_line(ax, suggestion, label=i == 0)
+        _suggestion_line(ax, suggestion, i == 0, field)
         if current_warm_up_s is not None:
             ax.axvline(current_warm_up_s, color="0.35", linewidth=1.5,
-                       label=f"current warm-up {current_warm_up_s:g} s" if i == 0 else None)
+                       label=f"the ego enters: {field} {current_warm_up_s:g} s"
+                       if i == 0 else None)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
     axes[0].legend(loc="best", fontsize=8)

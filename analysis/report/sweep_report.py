@@ -261,8 +261,13 @@ def world_summary(results: pd.DataFrame) -> dict:
     classes = (hits[hits.collision_vclass.notna() & (hits.collision_vclass != PEDESTRIAN)]
                if "collision_vclass" in hits.columns
                else hits.iloc[:0].assign(collision_vclass=None))
+    sumo = ok.sumo_overlaps.fillna(0) if "sumo_overlaps" in ok.columns else overlaps * 0
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
             "overlap_steps": int(overlaps.sum()),
+            "first_overlap_run": _first_run(ok, overlaps),
+            "runs_with_sumo_overlaps": int((sumo > 0).sum()),
+            "sumo_overlap_steps": int(sumo.sum()),
+            "first_sumo_overlap_run": _first_run(ok, sumo),
             "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
                                                  by_role.collision_part.value_counts().items()}
                                     for role, by_role in rows.groupby("collision_role")}
@@ -271,6 +276,11 @@ def world_summary(results: pd.DataFrame) -> dict:
                                          rows.collision_vclass.value_counts().items()}
                                 for c, rows in classes.groupby("controller", sort=False)},
             "red_lights": _red_lights(ok)}
+
+
+def _first_run(ok: pd.DataFrame, steps: pd.Series) -> str | None:
+    """The id of the first run with ``steps`` > 0 (None: none)."""
+    return str(ok.run_id[steps > 0].iloc[0]) if (steps > 0).any() else None
 
 
 def _red_lights(ok: pd.DataFrame) -> dict | None:
@@ -315,12 +325,21 @@ def world_lines(world: dict, traffic_model: str | None = None,
         return lines + ["World audit: not recorded (the sweep predates it)."]
     if world["runs_with_overlaps"]:
         lines.append(f"WARNING: in {_plural(world['runs_with_overlaps'], 'run')} two bodies "
-                     f"other than the ego overlapped ({world['overlap_steps']} steps in all, "
-                     "column world_overlaps): their world made something up, and their "
-                     "verdicts are suspect.")
+                     f"other than the ego overlapped where SUMO's own lanes hold them apart "
+                     f"({world['overlap_steps']} steps in all, column world_overlaps): sdc's "
+                     "world made something up, and their verdicts are suspect; see one with "
+                     f"sdc replay DIR --run {world.get('first_overlap_run')} and report it.")
     else:
         lines.append("World audit: no two bodies other than the ego overlapped in any run "
-                     "(world_overlaps 0).")
+                     "where SUMO's own lanes hold them apart (world_overlaps 0).")
+    if world.get("runs_with_sumo_overlaps"):
+        lines.append(f"SUMO's own overlaps: in {_plural(world['runs_with_sumo_overlaps'], 'run')}"
+                     " SUMO's own model held two bodies inside each other "
+                     f"({world['sumo_overlap_steps']} steps, column sumo_overlaps: vehicles "
+                     "waiting on a junction's crossing lanes, bicycles through pedestrians); "
+                     "that is SUMO's world as it is, not sdc's coupling, and the ego's verdicts "
+                     "stand; to see one: sdc replay DIR --run "
+                     f"{world['first_sumo_overlap_run']}.")
     for controller, roles in world["collisions"].items():
         parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
                  + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
@@ -845,7 +864,8 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     summary = build_summary(results, manifest, by, method, shared, fail_above, min_completed,
                             max_pedestrian_rate)
     warm_ups = read_settling(sweep_dir)
-    summary = dataclasses.replace(summary, settling=settling_summary(warm_ups))
+    summary = dataclasses.replace(summary, settling=settling_summary(
+        warm_ups, on_config_clock=bool(summary.sumo_config)))
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     images = figures(counted, by, method)

@@ -42,11 +42,12 @@ def pairs_overlap(a: np.ndarray, b: np.ndarray, tolerance_m: float = OVERLAP_TOL
     return np.all(gap < radius_a + radius_b - tolerance_m, axis=1)
 
 
-def _overlapping_steps(bodies: np.ndarray, traffic: int, people: np.ndarray) -> np.ndarray:
+def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Of (T, M, 5) bodies per step (NaN rows: none), the first ``traffic`` of each step
-    traffic and the rest obstacles, ``people`` (T, M) those that are persons: the steps
-    with an overlapping pair that holds a traffic vehicle or person, and not two
-    persons."""
+    traffic and the rest obstacles, ``people`` (T, M) those that are persons: the
+    overlapping pairs that hold a traffic vehicle or person, and not two persons, as
+    (step, body, body) index arrays."""
     reach = np.hypot(bodies[..., 3], bodies[..., 4]) / 2
     d = bodies[:, :traffic, None, :2] - bodies[:, None, :, :2]
     touch = reach[:, :traffic, None] + reach[:, None, :]
@@ -55,29 +56,29 @@ def _overlapping_steps(bodies: np.ndarray, traffic: int, people: np.ndarray) -> 
     near &= ~(people[:, :traffic, None] & people[:, None, :])
     t, i, j = np.nonzero(near)
     hits = pairs_overlap(bodies[t, i], bodies[t, j])
-    return np.unique(t[hits])
+    return t[hits], i[hits], j[hits]
 
 
 #: pairs looked at in one numpy pass (steps are taken in chunks of about this many)
 _PAIRS_PER_PASS = 1 << 20
 
 
-def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
-                   traffic_classes: list[list[str]] | None = None,
-                   obstacle_classes: tuple[str | None, ...] = ()) -> int:
-    """Steps of a trace (``traffic`` rows: N x 5 boxes, flattened; ``traffic_classes``
+def overlap_steps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
+                  traffic_classes: list[list[str]] | None = None,
+                  obstacle_classes: tuple[str | None, ...] = ()) -> np.ndarray:
+    """The steps of a trace (``traffic`` rows: N x 5 boxes, flattened; ``traffic_classes``
     their classes, row by row) in which a traffic vehicle or person overlaps another
     one or an obstacle (``obstacle_classes``: theirs, ``pedestrian`` for a standing
     person), two persons aside (two obstacles on one another are the spec's doing, not
-    the world's)."""
+    the world's): their indices, ascending."""
     rows = [np.asarray(row, float).reshape(-1, 5) for row in traffic_rows]
     most = max((len(r) for r in rows), default=0)
     if most == 0:
-        return 0
+        return np.zeros(0, np.intp)
     obstacles = as_boxes(obstacle_boxes)
     per_step = most * (most + len(obstacles))
     chunk = max(1, _PAIRS_PER_PASS // per_step)
-    steps = 0
+    steps = []
     for start in range(0, len(rows), chunk):
         part = rows[start : start + chunk]
         bodies = np.full((len(part), most + len(obstacles), 5), np.nan)
@@ -88,6 +89,24 @@ def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
                 people[k, : len(row)] = are_people(traffic_classes[start + k])
         bodies[:, most:] = obstacles
         people[:, most:] = are_people(obstacle_classes or [None] * len(obstacles))
-        steps += len(_overlapping_steps(bodies, most, people))
-    return steps
+        steps.append(start + np.unique(_overlapping_pairs(bodies, most, people)[0]))
+    return np.concatenate(steps)
 
+
+def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
+                   traffic_classes: list[list[str]] | None = None,
+                   obstacle_classes: tuple[str | None, ...] = ()) -> int:
+    """How many steps of a trace :func:`overlap_steps` finds."""
+    return len(overlap_steps(traffic_rows, obstacle_boxes, traffic_classes, obstacle_classes))
+
+
+def overlapping_pairs(traffic_boxes: np.ndarray, obstacle_boxes: np.ndarray,
+                      traffic_classes, obstacle_classes: tuple[str | None, ...] = ()
+                      ) -> list[tuple[int, int]]:
+    """One step's overlapping pairs, as :func:`overlap_steps` finds them: (traffic row,
+    traffic row or ``len(traffic_boxes)`` + obstacle index)."""
+    traffic, obstacles = as_boxes(traffic_boxes), as_boxes(obstacle_boxes)
+    bodies = np.vstack([traffic, obstacles])[None]
+    people = are_people([*traffic_classes, *(obstacle_classes or [None] * len(obstacles))])
+    _, i, j = _overlapping_pairs(bodies, len(traffic), people[None])
+    return list(zip(i.tolist(), j.tolist(), strict=True))

@@ -18,6 +18,7 @@ built-in roads; road edges come from the whole network
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -313,6 +314,7 @@ class NetworkRoad(RoadGeometry):
         starts = np.concatenate([[0.0], np.cumsum([lane.length_m for lane in route])[:-1]])
         self.pieces = [RoutePiece(lane, float(s), lane.length_m)
                        for lane, s in zip(route, starts, strict=True)]
+        self._piece_starts_m = [p.start_s_m for p in self.pieces]
         self._stops = _route_stops(net, self.pieces)
         self._beside = _lanes_beside(net, self.pieces)
         self._crossings = crossing_lanes(net, self.center_xy, {lane.id for lane in route})
@@ -320,8 +322,8 @@ class NetworkRoad(RoadGeometry):
 
     def piece_at(self, s_m: float) -> RoutePiece:
         """The route lane holding route position ``s_m``."""
-        index = np.searchsorted([p.start_s_m for p in self.pieces], s_m, side="right") - 1
-        return self.pieces[int(np.clip(index, 0, len(self.pieces) - 1))]
+        index = bisect.bisect_right(self._piece_starts_m, s_m) - 1
+        return self.pieces[min(max(index, 0), len(self.pieces) - 1)]
 
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` can stand: moved ahead

@@ -52,6 +52,9 @@ def summary_lines(name: str, row: dict) -> list[str]:
     if row.get("world_overlaps"):
         outcome += (f"; WARNING: bodies other than the ego overlapped in "
                     f"{row['world_overlaps']} steps (world_overlaps)")
+    if row.get("sumo_overlaps"):
+        outcome += (f"; SUMO's own model held bodies inside each other in "
+                    f"{row['sumo_overlaps']} steps (sumo_overlaps; SUMO's world, not sdc's)")
     if row.get("red_light_violations"):
         outcome += f"; crossed {row['red_light_violations']} red light(s)"
     maneuver = "not started"

@@ -79,7 +79,8 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
     current_s = getattr(spec.traffic, field)
     out = out or Path(f"{spec.scenario.name}-settling.png")
     out.write_bytes(settling_figure(frame, suggestion, f"{spec.scenario.name}: traffic "
-                                    "warming up", current_warm_up_s=current_s))
+                                    "warming up", current_warm_up_s=current_s,
+                                    field=f"traffic.{field}"))
     frame.to_csv(out.with_suffix(".csv"), index=False)
     for line in settle_lines(suggestion, current_s, f"traffic.{field}"):
         click.echo(line)

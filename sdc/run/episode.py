@@ -22,7 +22,7 @@ from analysis.run import run_outcome
 from analysis.run.metrics import trace_metrics
 from analysis.run.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
 from analysis.run.trace_file import Trace
-from analysis.run.world_audit import world_overlaps
+from analysis.run.world_audit import overlap_steps
 from scenarios.bodies import VEHICLE_MODELS
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
@@ -41,6 +41,7 @@ from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
+from sdc.run.world_witness import judge_overlaps
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
@@ -224,9 +225,20 @@ class Simulation:
             termination = self.control(controller)
         return termination
 
+    def _whose_overlaps(self, trace: Trace) -> tuple[int, int]:
+        """The steps in which bodies other than the ego overlap: (ours, SUMO's own)
+        (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
+        steps = overlap_steps(trace.traffic, self.snapshot.obstacle_boxes,
+                              trace.traffic_class, self.obstacle_classes)
+        if self.world.backend != "sumo" or not len(steps):
+            return len(steps), 0
+        return judge_overlaps(self.world.twin(), trace, self.vehicle, steps,
+                              self.obstacle_classes)
+
     def finish(self, termination: str, run_id: str | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
-        :func:`default_run_id`)."""
+        :func:`default_run_id`). Called once its world is closed (judging an overlap
+        runs the world's twin)."""
         spec, model, road = self.spec, self.model, self.road
         trace = self.recorder.finish()
         t_end = float(trace.floats["t_s"][-1])
@@ -239,6 +251,7 @@ class Simulation:
         passed = run_outcome.passed_every_obstacle(
             floats["s_m"], model.length_m, road.to_frenet(obstacles[:, :2])[0], obstacles[:, 3])
         progress_m = run_outcome.progress_m(floats["s_m"], lane_scale(spec, road))
+        ours, sumo = self._whose_overlaps(trace)
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
                                   spec.controller.detect_beams),
@@ -253,8 +266,8 @@ class Simulation:
             collision_part=self.collision.part if self.collision else None,
             collision_role=self.collision.role if self.collision else None,
             collision_vclass=self.collision.vehicle_class if self.collision else None,
-            world_overlaps=world_overlaps(trace.traffic, obstacles, trace.traffic_class,
-                                          self.obstacle_classes),
+            world_overlaps=ours,
+            sumo_overlaps=sumo,
             red_light_violations=self.stop_lines.red_light_violations,
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
                                             floats["speed_mps"]),
@@ -347,7 +360,8 @@ def run_as_far_as_it_goes(spec: ScenarioSpec, *, run_id: str | None = None, gui:
             controller = make_controller(spec.controller)
             with make_world(spec, make_road(spec), gui=gui) as world:
                 sim = Simulation(spec, world)
-                return sim.finish(sim.run(controller), run_id)
+                termination = sim.run(controller)
+            return sim.finish(termination, run_id)
     except _PastWallLimit:
         return _stopped(sim, f"ran past the run timeout of {wall_limit_s:.3g} s", None, run_id)
     except Exception as e:  # noqa: BLE001 - how the run stopped is the answer

@@ -76,7 +76,13 @@ COLUMNS: tuple[Column, ...] = (
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle or person overlapped another one or an "
            "obstacle within the sensing radius, two persons aside "
-           "(analysis.run.world_audit); 0 in a consistent world"),
+           "(analysis.run.world_audit), where SUMO's own placement of the two (along their "
+           "lanes) does not overlap: what the coupling made up (sdc.run.world_witness); 0 in "
+           "a consistent world"),
+    Column("sumo_overlaps", pa.int64(), OUTCOME,
+           "steps in which such an overlap is SUMO's own: its placement of the two along "
+           "their lanes overlaps too (vehicles waiting inside each other on a junction's "
+           "crossing lanes, a bicycle through a pedestrian); SUMO's world, not the coupling"),
     Column("red_light_violations", pa.int64(), OUTCOME,
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),

@@ -1,0 +1,59 @@
+"""Warm states computed in a Python process of their own.
+
+libsumo (SUMO 1.28) seeds its route parser's random number generator again at every
+start, so a simulation draws the same numbers whatever ran before it in the process,
+but it does not reset the generator's count of draws; a saved state records that
+count, and loading the state skips that many draws. A warm state computed after
+another simulation in the same process held another count (measured: 670 draws
+where a fresh process records 354), and every run loaded from it drew other numbers
+than the same run from the same warm state computed elsewhere. Computed in a fresh
+interpreter, a warm state depends on its inputs only, wherever and after whatever it
+is computed.
+
+Run as ``python -m scenarios.warm_up_process SPEC.json KEY [CACHE_DIR]``: computes the
+warm state of the spec (its plain JSON) with key ``KEY`` into the warm-state cache.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from scenarios.atomic_write import write_atomic
+from scenarios.errors import SdcError
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.warm_state import WarmState, cached_path
+
+
+def computed_apart(spec: ScenarioSpec, key: str, cache_dir: Path | None,
+                   scratch: Path) -> WarmState:
+    """Compute ``spec``'s warm state (key ``key``) in a fresh Python process into the
+    cache, and read it; ``scratch``: a folder for the spec's file."""
+    spec_file = scratch / "warm-spec.json"
+    spec_file.write_text(json.dumps(spec.to_plain()))
+    command = [sys.executable, "-m", __name__, str(spec_file), key,
+               *([str(cache_dir)] if cache_dir is not None else [])]
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        tail = "\n".join(done.stderr.strip().splitlines()[-5:])
+        raise SdcError(f"computing the warm state {key[:12]}... failed:\n{tail}")
+    return WarmState.read(cached_path(key))
+
+
+def main(argv: list[str]) -> None:
+    from scenarios.sumo_world import SumoWorld
+    from scenarios.world_backends import make_road
+
+    spec = ScenarioSpec.from_plain(json.loads(Path(argv[0]).read_text()))
+    key, cache_dir = argv[1], (Path(argv[2]) if len(argv) > 2 else None)
+    with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
+        state = world.compute_warm_state(key)
+    path = cached_path(key)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

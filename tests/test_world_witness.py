@@ -1,0 +1,113 @@
+"""Whose overlap is it: SUMO's own bodies, laid along their lanes, against the world
+audit; and SUMO without the ego as the oracle of what is SUMO's own."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from analysis.run.world_audit import overlap_steps, pairs_overlap
+from scenarios import CATALOG_DIR
+from scenarios.bodies import VEHICLE_MODELS
+from scenarios.lane_bodies import along_lane
+from scenarios.scenario_spec import ScenarioSpec
+from scenarios.sumo_net.build import input_path
+from scenarios.toml_io import read_toml
+from scenarios.world_backends import make_road, make_world
+from sdc.car.vehicle import Vehicle
+from sdc.run.episode import run_episode
+from sdc.run.world_witness import witness_overlaps
+
+
+def test_a_body_on_a_straight_lane_is_its_rigid_box():
+    lane = np.array([[0.0, 0.0], [100.0, 0.0]])
+    boxes = along_lane(lane, 100.0, 50.0, 0.4, 12.0, 2.5, pieces=4)
+    np.testing.assert_allclose(boxes[:, 0], [39.5, 42.5, 45.5, 48.5])
+    np.testing.assert_allclose(boxes[:, 1:], [[0.4, 0.0, 3.0, 2.5]] * 4)
+
+
+def test_a_body_laid_along_a_curve_follows_the_arc_and_sumos_length():
+    radius_m = 15.0
+    theta = np.linspace(0.0, math.pi / 2, 200)
+    arc = np.column_stack([radius_m * np.sin(theta), radius_m * (1 - np.cos(theta))])
+    shape_m = float(np.hypot(*np.diff(arc, axis=0).T).sum())
+    # SUMO's lane is 2% longer than its shape: positions scale onto the shape
+    boxes = along_lane(arc, shape_m * 1.02, 0.8 * shape_m * 1.02, 0.0, 16.0, 2.5)
+    centre = np.array([0.0, radius_m])
+    ends = np.vstack([boxes[:, :2] - boxes[:, 3:4] / 2 * np.column_stack(
+        [np.cos(boxes[:, 2]), np.sin(boxes[:, 2])]), boxes[-1:, :2] + boxes[-1, 3] / 2 * np.array(
+        [[math.cos(boxes[-1, 2]), math.sin(boxes[-1, 2])]])])
+    np.testing.assert_allclose(np.hypot(*(ends - centre).T), radius_m, atol=1e-3)
+    assert np.all(np.diff(boxes[:, 2]) > 0)  # turning left, piece by piece
+    # a rigid 16 m box along the chord would stand 2.1 m inside the arc at its middle
+    assert radius_m - np.hypot(*(boxes[:, :2] - centre).T).min() < 0.6
+
+
+INGOLSTADT = "sumo:tools/game/fkk_in.sumocfg"
+
+
+def ingolstadt_spec(enter_s: float, speed_mps: float) -> ScenarioSpec:
+    plain = read_toml(CATALOG_DIR / "real-traffic.toml")
+    plain["road"]["config_file"] = INGOLSTADT
+    plain["traffic"]["enter_s"] = enter_s
+    plain["ego"]["speed_mps"] = speed_mps
+    return ScenarioSpec.from_plain(plain)
+
+
+def bare_sumo_boxes(spec: ScenarioSpec, times_s: list[float], ids: set[str]) -> dict:
+    """SUMO alone on the spec's configuration (no ego, no obstacle: its own demand,
+    our options): the rigid boxes SUMO's position, angle and size give ``ids`` at each
+    of ``times_s``."""
+    import libsumo
+
+    from scenarios import traffic_model
+    libsumo.start(["sumo", "-c", str(input_path(spec.road.config_file)),
+                   "--step-length", repr(spec.scenario.step_s), "--seed",
+                   str(spec.scenario.seed), "--collision.action", "none",
+                   "--time-to-teleport", "-1",
+                   *traffic_model.sumo_options(spec.traffic.lane_change_s),
+                   "--no-step-log", "true", "--no-warnings", "true"])
+    found = {}
+    try:
+        for t_s in sorted(set(times_s)):
+            while libsumo.simulation.getTime() < t_s - 1e-6:
+                libsumo.simulationStep()
+            present = set(libsumo.vehicle.getIDList())
+            for vid in ids & present:
+                x, y = libsumo.vehicle.getPosition(vid)
+                yaw = math.radians(90.0 - libsumo.vehicle.getAngle(vid))
+                length_m = libsumo.vehicle.getLength(vid)
+                found[t_s, vid] = np.array([x - length_m / 2 * math.cos(yaw),
+                                            y - length_m / 2 * math.sin(yaw), yaw, length_m,
+                                            libsumo.vehicle.getWidth(vid)])
+    finally:
+        libsumo.close()
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("enter_s", "speed_mps"), [(123.061257, 11.134009),
+                                                   (142.963198, 11.798109)])
+def test_sumos_own_overlaps_on_ingolstadt_are_there_without_the_ego_too(enter_s, speed_mps):
+    """Two of SUMO's bicycles wait inside each other on Ingolstadt's junction, 60-145 m
+    from the ego: the run counts them as SUMO's (``sumo_overlaps``), none as ours, and
+    SUMO alone, without the ego, holds the same two inside each other at the same
+    times."""
+    spec = ingolstadt_spec(enter_s, speed_mps)
+    episode = run_episode(spec)
+    row = episode.row
+    assert row["world_overlaps"] == 0 and row["sumo_overlaps"] > 0, row
+    steps = overlap_steps(episode.trace.traffic, np.zeros((0, 5)), episode.trace.traffic_class)
+    vehicle = Vehicle(VEHICLE_MODELS[spec.vehicle.model], spec.vehicle.friction_mu)
+    witnessed = witness_overlaps(make_world(spec, make_road(spec)), episode.trace, vehicle,
+                                 steps, ())
+    assert {w.step for w in witnessed} == set(steps.tolist())  # every step judged
+    assert all(w.sumo_holds_both for w in witnessed)
+    sample = witnessed[:: max(1, len(witnessed) // 25)]
+    alone = bare_sumo_boxes(spec, [w.sumo_time_s for w in sample],
+                            {v for w in sample for v in (w.first, w.second)})
+    for w in sample:
+        a, b = alone[w.sumo_time_s, w.first], alone[w.sumo_time_s, w.second]
+        assert pairs_overlap(a[None], b[None])[0], w
