@@ -9,17 +9,20 @@ import numpy as np
 from sdc.car.controller_api import LanesBeside
 
 
-def ahead_m(stretches: np.ndarray, s_m: float) -> float:
-    """How far from ``s_m`` the stretch holding it runs on (0: none holds it)."""
-    inside = (stretches[:, 0] <= s_m) & (s_m <= stretches[:, 1])
-    return float(stretches[inside, 1].max() - s_m) if inside.any() else 0.0
+def ahead_m(stretches, s_m: float) -> float:
+    """How far from ``s_m`` the stretch holding it runs on (0: none holds it);
+    ``stretches``: (start, end) pairs [m]."""
+    end_m = max((end for start, end in stretches if start <= s_m <= end), default=None)
+    return 0.0 if end_m is None else float(end_m - s_m)
 
 
 class LanesBesideMap:
-    """The road's lanes beside the ego's lane, read at the car's place."""
+    """The road's lanes beside the ego's lane, read at the car's place (a road has a
+    few stretches: plain floats read them faster than numpy, every step)."""
 
     def __init__(self, stretches: tuple[np.ndarray, np.ndarray]):
-        self.left, self.right = stretches
+        self.left, self.right = (np.asarray(side, float).reshape(-1, 2).tolist()
+                                 for side in stretches)
 
     def at(self, s_m: float | None) -> LanesBeside | None:
         """At body centre ``s_m`` along the road (None: off the road, not known)."""
