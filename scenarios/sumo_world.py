@@ -647,10 +647,13 @@ class SumoWorld:
         people = frozenset(self._sumo.person.getIDList()) if self.people_subscribed else ()
 
         def laid(vid: str) -> np.ndarray:
-            lane_id = vehicle.getLaneID(vid)
+            lane_id, length_m = vehicle.getLaneID(vid), vehicle.getLength(vid)
+            pos_m = vehicle.getLanePosition(vid)
+            behind = self._lanes_behind(vid, lane_id) if pos_m < length_m else []
+            behind_xy = (np.vstack([lane.getShape(b) for b in behind]) if behind else None)
             return along_lane(np.array(lane.getShape(lane_id)), lane.getLength(lane_id),
-                              vehicle.getLanePosition(vid), vehicle.getLateralLanePosition(vid),
-                              vehicle.getLength(vid), vehicle.getWidth(vid))
+                              pos_m, vehicle.getLateralLanePosition(vid), length_m,
+                              vehicle.getWidth(vid), behind_xy=behind_xy)
 
         bodies = []
         for row in rows:
@@ -661,6 +664,27 @@ class SumoWorld:
             bodies.append(np.vstack([laid(vid) for vid in standing
                                      if vid == own or vid.startswith(own + ".")]))
         return bodies
+
+    def _lanes_behind(self, vid: str, lane_id: str) -> list[str]:
+        """The lanes a vehicle on ``lane_id`` came by, in driving order: the lane of
+        the edge before on its route that leads into ``lane_id`` and the junction's
+        lane between them (from SUMO's links; [] where none is found)."""
+        vehicle, lane = self._sumo.vehicle, self._sumo.lane
+        route, index = vehicle.getRoute(vid), vehicle.getRouteIndex(vid)
+        internal = lane_id.startswith(":")
+        before = index if internal else index - 1
+        if not 0 <= before < len(route):
+            return []
+        edge = route[before]
+        for k in range(self._sumo.edge.getLaneNumber(edge)):
+            from_id = f"{edge}_{k}"
+            for link in lane.getLinks(from_id):
+                to_id, via_id = link[0], link[4]
+                if internal and via_id == lane_id:
+                    return [from_id]
+                if not internal and to_id == lane_id:
+                    return [from_id, via_id] if via_id else [from_id]
+        return []
 
     def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
         """The vehicles around the ego on a road that crosses its route without a

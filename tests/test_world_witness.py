@@ -111,3 +111,20 @@ def test_sumos_own_overlaps_on_ingolstadt_are_there_without_the_ego_too(enter_s,
     for w in sample:
         a, b = alone[w.sumo_time_s, w.first], alone[w.sumo_time_s, w.second]
         assert pairs_overlap(a[None], b[None])[0], w
+
+
+def test_a_body_reaching_back_off_its_lane_lies_along_the_lanes_before_it():
+    # a 16 m truck 6 m into a lane heading +y, its back on the junction's quarter turn
+    # (radius 10 m, from +x) and the lane before it: as SUMO holds it, bent round
+    theta = np.linspace(0.0, math.pi / 2, 50)
+    turn = np.column_stack([10.0 * np.sin(theta), 10.0 * (1 - np.cos(theta))])
+    before = np.vstack([[[-30.0, 0.0]], turn])
+    lane = np.array([[10.0, 10.0], [10.0, 60.0]])
+    boxes = along_lane(lane, 50.0, 6.0, 0.0, 16.0, 2.5, pieces=4, behind_xy=before)
+    front = boxes[-1, :2] + boxes[-1, 3] / 2 * np.array([math.cos(boxes[-1, 2]),
+                                                          math.sin(boxes[-1, 2])])
+    np.testing.assert_allclose(front, [10.0, 16.0], atol=1e-9)
+    assert boxes[-1, 2] == pytest.approx(math.pi / 2)  # its cab along its lane
+    assert boxes[0, 2] < math.pi / 4  # its tail still turning in
+    alone = along_lane(lane, 50.0, 6.0, 0.0, 16.0, 2.5, pieces=4)
+    assert np.allclose(alone[:, 2], math.pi / 2)  # without them: straight back
