@@ -548,7 +548,9 @@ class SumoWorld:
             s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
             edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
             for step in lanes_blocked(road, box, 0, self._traffic_width_m()):
-                beside = road.net.lanes[f"{edge}_{own + step}"]
+                beside = road.net.lanes.get(f"{edge}_{own + step}")
+                if beside is None:  # its front is on an edge without that lane
+                    continue
                 own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
                 pos_m = front_m * beside.sumo_length_m / own_length_m
                 vid = f"{OBSTACLE_PREFIX}{i}.{beside.index}"
