@@ -145,15 +145,13 @@ def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
                   traffic_width_m: float) -> list[int]:
     """The lanes beside ``lane`` (-1 on its right, +1 on its left) that a body standing
     at ``box`` reaches into too far for traffic ``traffic_width_m`` wide to pass
-    (:func:`scenarios.traffic_model.blocks_neighbour`), each lane as wide as it is there."""
+    (:func:`scenarios.traffic_model.sides_blocked`), each lane as wide as it is there."""
     (s_m,), (d_m,) = road.to_frenet(box[None, :2])
     lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
-    width_m, (right_m, left_m) = road.lane_widths_m(s_m, lane)
-    centre_m = road.lane_center_d_m(lane)
-    reaches = ((-1, right_m, (centre_m - width_m / 2) - lo_m),
-               (1, left_m, hi_m - (centre_m + width_m / 2)))
-    return [step for step, beside_m, reach_m in reaches if beside_m is not None
-            and traffic_model.blocks_neighbour(reach_m, beside_m, traffic_width_m)]
+    width_m, beside_m = road.lane_widths_m(s_m, lane)
+    right, left = traffic_model.sides_blocked(lo_m, hi_m, road.lane_center_d_m(lane), width_m,
+                                              traffic_width_m, beside_m)
+    return [step for step, blocked in ((-1, right), (1, left)) if blocked]
 
 
 def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
@@ -547,11 +545,11 @@ class SumoWorld:
                                                 strict=True)):
             s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
             edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
+            own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
             for step in lanes_blocked(road, box, 0, self._traffic_width_m()):
                 beside = road.net.lanes.get(f"{edge}_{own + step}")
                 if beside is None:  # its front is on an edge without that lane
                     continue
-                own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
                 pos_m = front_m * beside.sumo_length_m / own_length_m
                 vid = f"{OBSTACLE_PREFIX}{i}.{beside.index}"
                 self._sumo.route.add(vid, [edge])

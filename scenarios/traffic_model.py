@@ -65,6 +65,22 @@ def blocks_neighbour(reach_m: float, lane_width_m: float, traffic_width_m: float
     return reach_m > 0 and reach_m > pass_slack_m(lane_width_m, traffic_width_m)
 
 
+def sides_blocked(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float,
+                  traffic_width_m: float,
+                  beside_m: tuple[float | None, float | None] | None = None
+                  ) -> tuple[bool, bool]:
+    """Does a body spanning ``lo_m`` .. ``hi_m`` across the road (left positive), in the
+    lane centred at ``lane_d_m``, block the lane on its right, and the one on its left,
+    for traffic ``traffic_width_m`` wide? ``beside_m``: the widths of those lanes
+    (None: no lane there, so nothing to block); default, both as wide as its own."""
+    right_m, left_m = beside_m or (lane_width_m, lane_width_m)
+    right = right_m is not None and blocks_neighbour(
+        (lane_d_m - lane_width_m / 2) - lo_m, right_m, traffic_width_m)
+    left = left_m is not None and blocks_neighbour(
+        hi_m - (lane_d_m + lane_width_m / 2), left_m, traffic_width_m)
+    return right, left
+
+
 def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float,
                    body_width_m: float, traffic_width_m: float,
                    beside_m: tuple[float | None, float | None] | None = None) -> float:
@@ -74,14 +90,9 @@ def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: floa
     body is shown just inside its lane on that side), one that blocks is shown as far
     as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane).
 
-    ``beside_m``: the widths of the lanes on its right and on its left (None: no lane
-    there, so nothing to block); default, both as wide as its own.
-    ``traffic_width_m``: the widest traffic that may drive in them."""
-    right_m, left_m = beside_m or (lane_width_m, lane_width_m)
-    left_blocks = left_m is not None and blocks_neighbour(
-        hi_m - (lane_d_m + lane_width_m / 2), left_m, traffic_width_m)
-    right_blocks = right_m is not None and blocks_neighbour(
-        (lane_d_m - lane_width_m / 2) - lo_m, right_m, traffic_width_m)
+    ``traffic_width_m`` and ``beside_m``: as for :func:`sides_blocked`."""
+    right_blocks, left_blocks = sides_blocked(lo_m, hi_m, lane_d_m, lane_width_m,
+                                              traffic_width_m, beside_m)
     if left_blocks and not right_blocks:
         return hi_m - body_width_m / 2
     if right_blocks and not left_blocks:
