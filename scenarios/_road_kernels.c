@@ -123,27 +123,143 @@ static int vehicle_size(PyObject *sizes, PyObject *vehicle_id, double *length, d
     return PyErr_Occurred() ? -1 : 0;
 }
 
-/* traffic(nearby, keys, ego_id, skip_prefix, sizes, cx, cy, radius, boxes, speeds,
- * kinds): writes the boxes [cx, cy, yaw, length, width], speeds and class indexes of
- * the vehicles in `nearby` (vehicle id -> {position key: front (x, y), angle key:
- * SUMO degrees, speed key: m/s}, keys = (position key, angle key, speed key)) other
- * than ego_id and ids starting with skip_prefix whose body centre lies within radius
- * of (cx, cy), in the dict's order; a vehicle's length, width and class index are
- * sizes[its id], an id not there a KeyError of it. Returns how many. */
+/* A lane's path as scenarios/lane_bodies.py hands it over (LanePath.flat): its shape
+ * metres per lane metre, its segment count S, then per segment its start (x, y),
+ * unit direction (ux, uy) and station. */
+typedef struct {
+    const double *seg;
+    double scale;
+    Py_ssize_t count;
+} LaneShape;
+
+/* the segment a station lies on (the last whose start is not past it; the first and
+ * last extended): Python's bisect_right, less one, clamped */
+static Py_ssize_t lane_segment(const LaneShape *lane, double station) {
+    Py_ssize_t lo = 0, hi = lane->count;
+    while (lo < hi) {
+        Py_ssize_t mid = (lo + hi) / 2;
+        if (station < lane->seg[5 * mid + 4]) hi = mid;
+        else lo = mid + 1;
+    }
+    lo -= 1;
+    return lo < 0 ? 0 : (lo > lane->count - 1 ? lane->count - 1 : lo);
+}
+
+static void lane_point(const LaneShape *lane, double station, double lateral, double *x,
+                       double *y) {
+    const double *seg = lane->seg + 5 * lane_segment(lane, station);
+    double t = station - seg[4];
+    *x = seg[0] + t * seg[2] - lateral * seg[3];
+    *y = seg[1] + t * seg[3] + lateral * seg[2];
+}
+
+/* The body of a vehicle whose front is at lane position pos, lateral left of the
+ * lane's centre, laid back along the lane as one box (LanePath.body, one piece): 1 and
+ * the box if one box keeps its centre line and corners within tolerance of the path
+ * (the first test of lane_bodies._fewest, the same arithmetic), 0 if it must be laid
+ * in pieces or reaches back off the lane (Python lays it). */
+static int lay_one_box(const LaneShape *lane, double pos, double lateral, double length,
+                       double width, double tolerance, double stretch_min, double *box) {
+    if (pos - length < 0.0 || lane->count == 0) return 0;
+    double front = 0.0 + (pos - 0.0) * lane->scale, back = 0.0 + (pos - length) * lane->scale;
+    Py_ssize_t first = lane_segment(lane, back), last = lane_segment(lane, front);
+    double ax, ay, bx, by;
+    lane_point(lane, back, lateral, &ax, &ay);
+    lane_point(lane, front, lateral, &bx, &by);
+    double dx = bx - ax, dy = by - ay, chord = sqrt(dx * dx + dy * dy);
+    double farthest = -1.0, turned = 0.0, half_width = width / 2;
+    double least = stretch_min * stretch_min;
+    int split = 0; /* a point far enough from both ends to split at */
+    double px_prev = ax, py_prev = ay;
+    for (Py_ssize_t k = first + 1; k <= last + 1; k++) {
+        double qx = bx, qy = by;
+        if (k <= last) {
+            lane_point(lane, lane->seg[5 * k + 4], lateral, &qx, &qy);
+            double px = qx - ax, py = qy - ay, rx = qx - bx, ry = qy - by;
+            if (!(px * px + py * py < least || rx * rx + ry * ry < least)) {
+                double off =
+                    chord > 0 ? fabs(dx * py - dy * px) / chord : sqrt(px * px + py * py);
+                if (off > farthest) {
+                    farthest = off;
+                    split = 1;
+                }
+            }
+        }
+        double ex = qx - px_prev, ey = qy - py_prev;
+        if (ex * ex + ey * ey >= least) {
+            double angle = fabs(atan2(dx * ey - dy * ex, dx * ex + dy * ey));
+            if (angle > turned) turned = angle;
+        }
+        px_prev = qx;
+        py_prev = qy;
+    }
+    if (split && !(farthest <= tolerance && turned * half_width <= tolerance)) return 0;
+    box[0] = (ax + bx) / 2;
+    box[1] = (ay + by) / 2;
+    box[2] = atan2(dy, dx);
+    box[3] = chord;
+    box[4] = width;
+    return 1;
+}
+
+/* A vehicle's box laid along its lane (lay_one_box) where the lane is among `lanes`
+ * (lane id -> LanePath.flat) and one box will do: 1 if laid into box, 0 if Python must
+ * lay it, -1 an error. A person (no lateral key among its values) keeps SUMO's box: 1. */
+static int lay_vehicle(PyObject *values, PyObject *key_lateral, PyObject *key_lane_position,
+                       PyObject *key_lane, PyObject *lanes, double tolerance,
+                       double stretch_min, double *box) {
+    PyObject *lateral = PyDict_GetItemWithError(values, key_lateral);
+    if (lateral == NULL) return PyErr_Occurred() ? -1 : 1;
+    double lateral_m = PyFloat_AsDouble(lateral), pos_m;
+    if ((lateral_m == -1.0 && PyErr_Occurred())
+        || read_double(values, key_lane_position, &pos_m) < 0)
+        return -1;
+    PyObject *lane = PyDict_GetItemWithError(values, key_lane);
+    if (lane == NULL) {
+        if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "a lane id is missing");
+        return -1;
+    }
+    PyObject *flat = PyDict_GetItemWithError(lanes, lane);
+    if (flat == NULL) return PyErr_Occurred() ? -1 : 0;
+    Py_buffer view;
+    Py_ssize_t n;
+    if (get_doubles(flat, &view, 0, 1, &n, "a lane's path") < 0) return -1;
+    const double *data = view.buf;
+    LaneShape shape = {data + 2, n >= 2 ? data[0] : 1.0, n >= 2 ? (Py_ssize_t)data[1] : 0};
+    int laid = n >= 2 + 5 * shape.count
+               && lay_one_box(&shape, pos_m, lateral_m, box[3], box[4], tolerance, stretch_min,
+                              box);
+    PyBuffer_Release(&view);
+    return laid;
+}
+
+/* traffic(nearby, keys, ego_id, skip_prefix, sizes, lanes, cx, cy, radius, tolerance,
+ * stretch_min, boxes, speeds, kinds, laid): writes the boxes [cx, cy, yaw, length,
+ * width], speeds and class indexes of the vehicles in `nearby` (vehicle id ->
+ * {position key: front (x, y), angle key: SUMO degrees, speed key: m/s, lateral key,
+ * lane position key, lane key}, keys = (position, angle, speed, lateral, lane
+ * position, lane)) other than ego_id and ids starting with skip_prefix whose body
+ * centre, by SUMO's angle, lies within radius of (cx, cy), in the dict's order; a
+ * vehicle's length, width and class index are sizes[its id], an id not there a
+ * KeyError of it. A vehicle's box is laid along its lane (lay_vehicle); into laid:
+ * the index in the dict of each one Python must lay, -1 for the others. Returns how
+ * many boxes and how many of them Python must lay. */
 static PyObject *traffic(PyObject *self, PyObject *args) {
-    PyObject *nearby, *key_position, *key_angle, *key_speed, *ego_id, *skip_prefix, *sizes,
-        *out_objs[3];
-    double cx, cy, radius;
-    if (!PyArg_ParseTuple(args, "O!(OOO)UUO!dddOOO", &PyDict_Type, &nearby, &key_position,
-                          &key_angle, &key_speed, &ego_id, &skip_prefix, &PyDict_Type, &sizes,
-                          &cx, &cy, &radius, &out_objs[0], &out_objs[1], &out_objs[2]))
+    PyObject *nearby, *key_position, *key_angle, *key_speed, *key_lateral, *key_lane_position,
+        *key_lane, *ego_id, *skip_prefix, *sizes, *lanes, *out_objs[4];
+    double cx, cy, radius, tolerance, stretch_min;
+    if (!PyArg_ParseTuple(args, "O!(OOOOOO)UUO!O!dddddOOOO", &PyDict_Type, &nearby,
+                          &key_position, &key_angle, &key_speed, &key_lateral,
+                          &key_lane_position, &key_lane, &ego_id, &skip_prefix, &PyDict_Type,
+                          &sizes, &PyDict_Type, &lanes, &cx, &cy, &radius, &tolerance,
+                          &stretch_min, &out_objs[0], &out_objs[1], &out_objs[2], &out_objs[3]))
         return NULL;
-    static const char *names[3] = {"boxes", "speeds", "kinds"};
-    static const Py_ssize_t widths[3] = {5, 1, 1};
+    static const char *names[4] = {"boxes", "speeds", "kinds", "laid"};
+    static const Py_ssize_t widths[4] = {5, 1, 1, 1};
     Py_ssize_t n = PyDict_Size(nearby), rows;
-    Py_buffer views[3];
+    Py_buffer views[4];
     int got = 0, failed = 0;
-    for (; got < 3; got++) {
+    for (; got < 4; got++) {
         if (get_doubles(out_objs[got], &views[got], 1, widths[got], &rows, names[got]) < 0) {
             failed = 1;
             break;
@@ -155,11 +271,12 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
             break;
         }
     }
-    Py_ssize_t pos = 0, count = 0;
+    Py_ssize_t pos = 0, count = 0, index = -1, laid_count = 0;
     PyObject *vid, *values;
     double *boxes = failed ? NULL : views[0].buf, *speeds = failed ? NULL : views[1].buf,
-           *kinds = failed ? NULL : views[2].buf;
+           *kinds = failed ? NULL : views[2].buf, *laid = failed ? NULL : views[3].buf;
     while (!failed && PyDict_Next(nearby, &pos, &vid, &values)) {
+        index++;
         if (!PyUnicode_Check(vid) || !PyDict_Check(values)) {
             PyErr_SetString(PyExc_TypeError, "nearby: vehicle id -> dict of variables");
             failed = 1;
@@ -189,11 +306,19 @@ static PyObject *traffic(PyObject *self, PyObject *args) {
         }
         if (!traffic_box(x, y, angle_deg, length, width, cx, cy, radius, boxes + 5 * count))
             continue;
+        int done = lay_vehicle(values, key_lateral, key_lane_position, key_lane, lanes, tolerance,
+                               stretch_min, boxes + 5 * count);
+        if (done < 0) {
+            failed = 1;
+            break;
+        }
+        laid[count] = done ? -1.0 : (double)index;
+        laid_count += !done;
         speeds[count] = speed;
         kinds[count++] = kind;
     }
     while (got-- > 0) PyBuffer_Release(&views[got]);
-    return failed ? NULL : PyLong_FromSsize_t(count);
+    return failed ? NULL : Py_BuildValue("nn", count, laid_count);
 }
 
 static PyMethodDef methods[] = {

@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from scenarios.compiled_kernels import COMPILED, NUMPY, compiled_extension
+from scenarios.lane_bodies import LanePath
 
 
 def _project(xy: np.ndarray, starts: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
@@ -94,23 +95,65 @@ def place_numpy(ego: np.ndarray, ego_speed_mps: float, obstacles: np.ndarray,
 
 
 def traffic_numpy(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes: dict,
-                  cx_m: float, cy_m: float, radius_m: float, boxes: np.ndarray,
-                  speeds_mps: np.ndarray, kinds: np.ndarray) -> int:
+                  lanes: dict, cx_m: float, cy_m: float, radius_m: float, tolerance_m: float,
+                  stretch_min_m: float, boxes: np.ndarray, speeds_mps: np.ndarray,
+                  kinds: np.ndarray, laid: np.ndarray) -> tuple[int, int]:
     """Into ``boxes``, ``speeds_mps`` and ``kinds``: the vehicles of ``nearby`` (id ->
     {position key: front bumper (x, y), angle key: SUMO degrees clockwise from north,
-    speed key: m/s}, ``keys`` = (position, angle, speed)) other than ``ego_id`` and the
-    ids starting with ``skip_prefix``, whose body centre lies within ``radius_m`` of
-    (cx, cy), in the dict's order; returns how many. A box is ``[cx, cy, yaw, length,
-    width]``, its yaw ``(90 - angle) * pi / 180`` and its centre half a length behind
-    the front bumper; a vehicle's length, width and class index (``kinds``) are
-    ``sizes[its id]``, an id not there a ``KeyError`` of it."""
+    speed key: m/s, lateral key: its offset from its lane's centre, lane position key,
+    lane key: its lane's id}, ``keys`` = (position, angle, speed, lateral, lane
+    position, lane)) other than ``ego_id`` and the ids starting with ``skip_prefix``,
+    whose body centre by SUMO's angle lies within ``radius_m`` of (cx, cy), in the
+    dict's order; a vehicle's length, width and class index (``kinds``) are
+    ``sizes[its id]``, an id not there a ``KeyError`` of it.
+
+    A box is ``[cx, cy, yaw, length, width]``: a person's by SUMO's angle (its yaw
+    ``(90 - angle) * pi / 180``, its centre half a length behind its front), a
+    vehicle's laid along its lane in one box where its lane is among ``lanes`` (lane
+    id -> :attr:`scenarios.lane_bodies.LanePath.flat`) and one box keeps it within
+    ``tolerance_m`` (:meth:`scenarios.lane_bodies.LanePath.body`). Into ``laid``: the
+    index in ``nearby`` of each vehicle left to lay (in pieces, reaching back off its
+    lane, or on a lane not among ``lanes``), -1 for the others. Returns how many boxes
+    and how many are left to lay."""
     ids, rows, keep = _nearby_rows(nearby, keys, ego_id, skip_prefix, sizes, cx_m, cy_m,
                                    radius_m)
     count = int(np.count_nonzero(keep))
     boxes[:count] = rows[keep, :5]
     speeds_mps[:count] = rows[keep, 5]
     kinds[:count] = rows[keep, 6]
-    return count
+    place = {vid: k for k, vid in enumerate(nearby)}
+    left = 0
+    for row, k in enumerate(np.flatnonzero(keep).tolist()):
+        box = _one_box(nearby[ids[k]], keys, lanes, float(rows[k, 3]), float(rows[k, 4]),
+                       tolerance_m, stretch_min_m)
+        if box is True:  # a person: SUMO's box
+            laid[row] = -1.0
+        elif box is None:
+            laid[row] = place[ids[k]]
+            left += 1
+        else:
+            boxes[row] = box
+            laid[row] = -1.0
+    return count, left
+
+
+def _one_box(values: dict, keys: tuple, lanes: dict, length_m: float, width_m: float,
+             tolerance_m: float, stretch_min_m: float):
+    """:func:`traffic_numpy`'s laying of one vehicle: its one box, None if it is left
+    to lay, True for a person (no lateral offset among its ``values``)."""
+    lateral, lane_position, lane = keys[3:]
+    if lateral not in values:
+        return True
+    flat = lanes.get(values[lane])
+    pos_m = values[lane_position]
+    if flat is None or pos_m - length_m < 0.0:
+        return None
+    path = LanePath.from_flat(flat)
+    if not path.segments:
+        return None
+    body = path.body(pos_m, values[lateral], length_m, width_m, tolerance_m=tolerance_m,
+                     stretch_min_m=stretch_min_m)
+    return body[0] if len(body) == 1 else None
 
 
 def traffic_ids(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes: dict,
@@ -125,7 +168,7 @@ def _nearby_rows(nearby: dict, keys: tuple, ego_id: str, skip_prefix: str, sizes
                  cx_m: float, cy_m: float, radius_m: float):
     """:func:`traffic_numpy`'s reading: the ids looked at, their rows ``[cx, cy, yaw,
     length, width, speed, class index]`` and which lie within the radius."""
-    position, angle, speed = keys
+    position, angle, speed = keys[:3]
     ids = [vid for vid in nearby if vid != ego_id and not vid.startswith(skip_prefix)]
     values = np.array([(*nearby[vid][position], nearby[vid][angle], nearby[vid][speed],
                         *sizes[vid]) for vid in ids], dtype=np.float64).reshape(-1, 7)

@@ -49,6 +49,10 @@ class Snapshot(NamedTuple):
     #: the traffic lights along the ego's route: each one's state string (SUMO's
     #: link states, one character per link: r red, y yellow, G/g green, ...)
     signals: Mapping[str, str] = MappingProxyType({})
+    #: (N,) which body each traffic box is of: a vehicle laid along its lane's bend
+    #: is several boxes (``scenarios.lane_bodies``), all of one body; None: each box
+    #: is a body of its own
+    traffic_bodies: np.ndarray | None = None
 
 
 #: the vehicle class of a car (SUMO's vClass), the only kind highway-env drives

@@ -25,7 +25,7 @@ import traci.constants as tc  # plain numbers, shared by libsumo and traci
 from scenarios import road_kernels, traffic_model
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.errors import SdcError
-from scenarios.lane_bodies import along_lane
+from scenarios.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
@@ -60,13 +60,16 @@ EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_PREFIX = "traffic."
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
-#: what is read of each nearby vehicle every step (each variable read costs, and a step
+#: what is read of each nearby body every step (each variable read costs, and a step
 #: may read dozens); its size and class are read once (scenarios.vehicle_types)
-_TRAFFIC_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
-#: and of each nearby person: the same (SUMO places a person by its front too, and
-#: angles it as a vehicle), and the vehicle it rides in ("" on foot: a person riding
-#: is inside that vehicle's body, not a body of its own)
-_PERSON_VARS = (*_TRAFFIC_VARS, tc.VAR_VEHICLE)
+_BODY_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+#: of a vehicle, also where SUMO holds it on its lane (its lateral offset, its lane
+#: position, its lane), to lay its body there (scenarios.lane_bodies)
+_TRAFFIC_VARS = (*_BODY_VARS, tc.VAR_LANEPOSITION_LAT, tc.VAR_LANEPOSITION, tc.VAR_LANE_ID)
+#: and of a person: the vehicle it rides in ("" on foot: a person riding is inside
+#: that vehicle's body, not a body of its own); SUMO places a person by its front
+#: too, and angles it as a vehicle
+_PERSON_VARS = (*_BODY_VARS, tc.VAR_VEHICLE)
 
 
 def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
@@ -296,6 +299,7 @@ class SumoWorld:
         self._config_paths: dict[str, Path] | None = None
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
+        self._paths: LanePaths | None = None  # the lanes' shapes, read as bodies are laid
         self.warm_state_key: str | None = None  # the key of the warm state it started from
 
     def twin(self) -> SumoWorld:
@@ -358,6 +362,7 @@ class SumoWorld:
             inputs = ["--net-file", str(self.net_path()), "--route-files", str(path)]
         sim.start([*command, *inputs, *ours])
         self._sumo = sim
+        self._paths = LanePaths(sim.lane, self._lanes_behind)
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
@@ -574,12 +579,12 @@ class SumoWorld:
 
     def _snapshot(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()) -> Snapshot:
         """The state after a step, without the vehicles ``taken`` off since."""
-        boxes, speeds, classes = self._traffic(ego_box, taken)
+        boxes, speeds, classes, bodies = self._traffic(ego_box, taken)
         self._watch_types()
         signals = {tl: values[tc.TL_RED_YELLOW_GREEN_STATE] for tl, values
                    in self._sumo.trafficlight.getAllSubscriptionResults().items()}
         return Snapshot(self._sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds,
-                        classes, signals)
+                        classes, signals, bodies)
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""
@@ -603,16 +608,21 @@ class SumoWorld:
                                    departSpeed="0")
 
     def _traffic(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """Boxes, speeds and vehicle classes of the vehicles and the persons on foot
         within the sensing radius, ego and obstacles aside, in SUMO's order; each one's
         size and class its type's, a person's class ``pedestrian``
-        (:mod:`scenarios.vehicle_types`).
+        (:mod:`scenarios.vehicle_types`); and which body each box is of (None: each
+        its own).
 
-        A vehicle's yaw is ``radians(90 - SUMO angle)`` and its body centre lies
-        half a length behind its front bumper, along the yaw. The read of the dict of
-        dicts libsumo and traci hand over is :func:`scenarios.road_kernels.traffic`
-        (compiled where built: in Python it cost more than the step's geometry).
+        A vehicle's body is laid along its lane where SUMO holds it (its lane
+        position, its lateral offset: :mod:`scenarios.lane_bodies`), in as many boxes
+        as its path bends under it; SUMO's angle, which swings with a lane change,
+        only says which vehicles are near (a body centre half a length behind the front
+        bumper, within the sensing radius) and how a person on foot stands. The read
+        of the dict of dicts libsumo and traci hand over, with the one-box bodies, is
+        :func:`scenarios.road_kernels.traffic` (compiled where built: in Python it cost
+        more than the step's geometry); the rest are laid here (:meth:`_lay`).
         """
         nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
         # the results are the step's, from before they were taken off
@@ -622,38 +632,76 @@ class SumoWorld:
         if hidden:
             nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
         n = len(nearby)
-        boxes, speeds, kinds = np.empty((n, 5)), np.empty(n), np.empty(n)
+        boxes, speeds, kinds, laid = np.empty((n, 5)), np.empty(n), np.empty(n), np.empty(n)
         try:
-            count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
+            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
         except KeyError:  # vehicles or persons met for the first time
             new = [v for v in nearby if v not in self._types.sizes and _is_traffic(v)]
             self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
             self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
-            count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds)
+            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
+        boxes, speeds, kinds = boxes[:count], speeds[:count], kinds[:count]
+        bodies = None
+        if laid_count:
+            boxes, bodies = self._lay(nearby, boxes, laid[:count])
+            if bodies is not None:
+                speeds, kinds = speeds[bodies], kinds[bodies]
         if self.keep_ids:
-            self.last_ids = road_kernels.traffic_ids(
+            ids = road_kernels.traffic_ids(
                 nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX, self._types.sizes,
                 float(ego_box[0]), float(ego_box[1]), self._radius_m)
-        return boxes[:count], speeds[:count], self._types.names(kinds[:count])
+            self.last_ids = ids if bodies is None else [ids[b] for b in bodies]
+        return boxes, speeds, self._types.names(kinds), bodies
+
+    def _lay(self, nearby: dict, boxes: np.ndarray, laid: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``boxes`` with each vehicle whose ``laid`` entry names it (its index in
+        ``nearby``: one on a lane met for the first time, reaching back off its lane or
+        in several boxes) laid along its lane where SUMO holds it
+        (:class:`scenarios.lane_bodies.LanePath`); and which body each box is of, None
+        if every one is still one box."""
+        ids = list(nearby)
+        pieces: dict[int, list] = {}
+        for row in np.flatnonzero(laid >= 0).tolist():
+            vid = ids[int(laid[row])]
+            values = nearby[vid]
+            length_m, width_m = float(boxes[row, 3]), float(boxes[row, 4])
+            pos_m = values[tc.VAR_LANEPOSITION]
+            path = self._paths.path(vid, values[tc.VAR_LANE_ID], length_m - pos_m)
+            if path.segments:
+                pieces[row] = path.body(pos_m, values[tc.VAR_LANEPOSITION_LAT], length_m,
+                                        width_m)
+        if all(len(body) == 1 for body in pieces.values()):
+            for row, body in pieces.items():
+                boxes[row] = body[0]
+            return boxes, None
+        counts = np.ones(len(boxes), np.intp)
+        for row, body in pieces.items():
+            counts[row] = len(body)
+        bodies = np.repeat(np.arange(len(boxes)), counts)
+        out = boxes[bodies]
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        for row, body in pieces.items():
+            out[first[row]:first[row] + len(body)] = body
+        return out, bodies
 
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles) -> list[np.ndarray]:
         """The bodies of the last snapshot's traffic ``rows`` (indices into its
         ``traffic_boxes``; needs ``keep_ids``) and of the spec's ``obstacles`` (indices)
-        as SUMO's own lanes hold them: each (P, 5) boxes laid along its lane
-        (:func:`scenarios.lane_bodies.along_lane`), an obstacle with the vehicles it
-        stands as in lanes beside, a person on foot (no lane holds it) as its own box."""
-        vehicle, lane = self._sumo.vehicle, self._sumo.lane
+        as SUMO's own lanes hold them: each (P, 5) boxes laid along its lane in
+        :data:`scenarios.lane_bodies.BODY_PIECES` boxes, an obstacle with the vehicles
+        it stands as in lanes beside, a person on foot (no lane holds it) as its own
+        box."""
+        vehicle = self._sumo.vehicle
         standing = vehicle.getIDList()
         people = frozenset(self._sumo.person.getIDList()) if self.people_subscribed else ()
 
         def laid(vid: str) -> np.ndarray:
             lane_id, length_m = vehicle.getLaneID(vid), vehicle.getLength(vid)
             pos_m = vehicle.getLanePosition(vid)
-            behind = self._lanes_behind(vid, lane_id) if pos_m < length_m else []
-            behind_xy = (np.vstack([lane.getShape(b) for b in behind]) if behind else None)
-            return along_lane(np.array(lane.getShape(lane_id)), lane.getLength(lane_id),
-                              pos_m, vehicle.getLateralLanePosition(vid), length_m,
-                              vehicle.getWidth(vid), behind_xy=behind_xy)
+            path = self._paths.path(vid, lane_id, length_m - pos_m)
+            return np.array(path.body(pos_m, vehicle.getLateralLanePosition(vid), length_m,
+                                      vehicle.getWidth(vid), BODY_PIECES))
 
         bodies = []
         for row in rows:
@@ -665,25 +713,38 @@ class SumoWorld:
                                      if vid == own or vid.startswith(own + ".")]))
         return bodies
 
-    def _lanes_behind(self, vid: str, lane_id: str) -> list[str]:
-        """The lanes a vehicle on ``lane_id`` came by, in driving order: the lane of
-        the edge before on its route that leads into ``lane_id`` and the junction's
-        lane between them (from SUMO's links; [] where none is found)."""
+    def _lanes_behind(self, vid: str, lane_id: str, reach_m: float) -> list[str]:
+        """The lanes a vehicle on ``lane_id`` came by, in driving order, as far back as
+        ``reach_m`` behind the lane's start: the lanes of the edges before on its
+        route that lead into it and the junctions' lanes between (from SUMO's links;
+        as many as are found)."""
         vehicle, lane = self._sumo.vehicle, self._sumo.lane
         route, index = vehicle.getRoute(vid), vehicle.getRouteIndex(vid)
-        internal = lane_id.startswith(":")
-        before = index if internal else index - 1
-        if not 0 <= before < len(route):
-            return []
-        edge = route[before]
+        before = index if lane_id.startswith(":") else index - 1
+        lanes: list[str] = []
+        while reach_m > 0 and 0 <= before < len(route):
+            chain = self._lanes_into(route[before], lane_id)
+            if not chain:
+                break
+            lanes[:0] = chain
+            reach_m -= sum(lane.getLength(k) for k in chain)
+            lane_id, before = chain[0], before - 1
+        return lanes
+
+    def _lanes_into(self, edge: str, lane_id: str) -> list[str]:
+        """The lane of ``edge`` that leads into ``lane_id`` and the junction's lanes
+        between them (SUMO may split one in two), in driving order; [] if none."""
+        lane = self._sumo.lane
         for k in range(self._sumo.edge.getLaneNumber(edge)):
             from_id = f"{edge}_{k}"
             for link in lane.getLinks(from_id):
-                to_id, via_id = link[0], link[4]
-                if internal and via_id == lane_id:
-                    return [from_id]
-                if not internal and to_id == lane_id:
-                    return [from_id, via_id] if via_id else [from_id]
+                chain, via = [from_id], link[4]
+                while via and via != lane_id:
+                    chain.append(via)
+                    onward = lane.getLinks(via)
+                    via = onward[0][0] if onward and onward[0][0].startswith(":") else ""
+                if via == lane_id or link[0] == lane_id:
+                    return chain
         return []
 
     def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
@@ -705,10 +766,12 @@ class SumoWorld:
         return frozenset(hidden)
 
     def _read_traffic(self, nearby: dict, ego_box: np.ndarray, boxes: np.ndarray,
-                      speeds: np.ndarray, kinds: np.ndarray) -> int:
+                      speeds: np.ndarray, kinds: np.ndarray, laid: np.ndarray
+                      ) -> tuple[int, int]:
         return road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                    self._types.sizes, float(ego_box[0]), float(ego_box[1]),
-                                    self._radius_m, boxes, speeds, kinds)
+                                    self._types.sizes, self._paths.flat, float(ego_box[0]),
+                                    float(ego_box[1]), self._radius_m, PIECE_TOLERANCE_M,
+                                    STRETCH_MIN_M, boxes, speeds, kinds, laid)
 
     def hand_ego_to_sumo(self, max_speed_mps: float) -> None:
         """From now on SUMO's own driver models drive the ego (its safe speeds and

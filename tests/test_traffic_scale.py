@@ -7,6 +7,7 @@ import pytest
 import traci.constants as tc
 
 from scenarios import road_kernels
+from scenarios.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M
 from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.snapshot import in_start_zone, sensing_radius_m
@@ -44,15 +45,18 @@ def every_vehicle_within(world, ego_box, radius_m) -> int:
 
 
 def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, ...]:
-    """The traffic boxes, speeds and class indexes of the subscription's results, read
-    by one implementation of the kernel."""
+    """The traffic boxes, speeds and class indexes of the subscription's results (and
+    which must be laid along their lanes), read by one implementation of the kernel."""
     nearby = world._sumo.vehicle.getContextSubscriptionResults("ego")
     n = len(nearby)
     boxes, speeds, kinds = np.full((n, 5), np.nan), np.full(n, np.nan), np.full(n, np.nan)
-    count = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED), "ego",
-                    "obstacle.", world._types.sizes, float(ego_box[0]), float(ego_box[1]),
-                    radius_m, boxes, speeds, kinds)
-    return boxes[:count], speeds[:count], kinds[:count]
+    laid = np.full(n, np.nan)
+    count, _ = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED,
+                                tc.VAR_LANEPOSITION_LAT, tc.VAR_LANEPOSITION, tc.VAR_LANE_ID),
+                       "ego", "obstacle.", world._types.sizes, dict(world._paths.flat),
+                       float(ego_box[0]), float(ego_box[1]), radius_m, PIECE_TOLERANCE_M,
+                       STRETCH_MIN_M, boxes, speeds, kinds, laid)
+    return boxes[:count], speeds[:count], kinds[:count], laid[:count]
 
 
 @pytest.mark.parametrize("backend", ["sumo", "highway"])
@@ -69,17 +73,26 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
         assert not in_start_zone(spec, road, first[ego_lane, :2], first[ego_lane, 3]).any()
         radius = sensing_radius_m(spec)
         for _ in range(60):
-            distances = np.hypot(*(sim.snapshot.traffic_boxes[:, :2] - sim.box[:2]).T)
-            assert np.all(distances <= radius)
+            snapshot = sim.snapshot
+            bodies = (np.arange(len(snapshot.traffic_boxes)) if snapshot.traffic_bodies is None
+                      else snapshot.traffic_bodies)
+            # chosen by the body centre SUMO's angle gives; one laid along its lane
+            # lies within its length of that
+            distances = np.hypot(*(snapshot.traffic_boxes[:, :2] - sim.box[:2]).T)
+            assert np.all(distances <= radius + snapshot.traffic_boxes[:, 3])
             if backend == "sumo":  # the subscription misses nothing within the radius
-                assert len(sim.snapshot.traffic_boxes) == every_vehicle_within(world, sim.box,
-                                                                                radius)
+                assert len(np.unique(bodies)) == every_vehicle_within(world, sim.box, radius)
                 # and the read of its results is the numpy twin's, bit for bit
-                boxes, speeds, kinds = traffic_read_by(road_kernels.traffic_numpy, world,
-                                                       sim.box, radius)
-                assert sim.snapshot.traffic_boxes.tobytes() == boxes.tobytes()
-                assert sim.snapshot.traffic_speeds_mps.tobytes() == speeds.tobytes()
-                assert list(sim.snapshot.traffic_classes) == list(world._types.names(kinds))
+                boxes, speeds, kinds, laid = traffic_read_by(road_kernels.traffic_numpy, world,
+                                                             sim.box, radius)
+                fast = traffic_read_by(road_kernels.traffic, world, sim.box, radius)
+                for mine, theirs in zip((boxes, speeds, kinds, laid), fast, strict=True):
+                    assert mine.tobytes() == theirs.tobytes()
+                first = np.flatnonzero(np.diff(bodies, prepend=-1))  # each body's first box
+                read = laid < 0  # laid by the read itself (the rest in Python)
+                assert snapshot.traffic_boxes[first][read].tobytes() == boxes[read].tobytes()
+                assert snapshot.traffic_speeds_mps[first].tobytes() == speeds.tobytes()
+                assert list(snapshot.traffic_classes[first]) == list(world._types.names(kinds))
             sim.advance(Command(0.0))
         assert world.vehicle_count() > 2 * len(sim.snapshot.traffic_boxes)  # the rest unread
 

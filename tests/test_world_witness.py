@@ -11,7 +11,7 @@ import pytest
 from analysis.run.world_audit import overlap_steps, pairs_overlap
 from scenarios import CATALOG_DIR
 from scenarios.bodies import VEHICLE_MODELS
-from scenarios.lane_bodies import along_lane
+from scenarios.lane_bodies import BODY_PIECES, LanePath
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_net.build import input_path
 from scenarios.toml_io import read_toml
@@ -19,6 +19,16 @@ from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import run_episode
 from sdc.run.world_witness import witness_overlaps
+
+
+def along_lane(shape_xy, lane_length_m, front_pos_m, lateral_m, length_m, width_m,
+               pieces=BODY_PIECES, behind_xy=None) -> np.ndarray:
+    """A body laid as the witness lays it, in ``pieces`` boxes, along one lane (and
+    ``behind_xy``, the lanes before it, as long as drawn)."""
+    lanes = [(shape_xy, lane_length_m)]
+    if behind_xy is not None:
+        lanes.insert(0, (behind_xy, float(np.hypot(*np.diff(behind_xy, axis=0).T).sum())))
+    return np.array(LanePath(lanes).body(front_pos_m, lateral_m, length_m, width_m, pieces))
 
 
 def test_a_body_on_a_straight_lane_is_its_rigid_box():
@@ -99,7 +109,8 @@ def test_sumos_own_overlaps_on_ingolstadt_are_there_without_the_ego_too(enter_s,
     episode = run_episode(spec)
     row = episode.row
     assert row["world_overlaps"] == 0 and row["sumo_overlaps"] > 0, row
-    steps = overlap_steps(episode.trace.traffic, np.zeros((0, 5)), episode.trace.traffic_class)
+    steps = overlap_steps(episode.trace.traffic, np.zeros((0, 5)), episode.trace.traffic_class,
+                          traffic_bodies=episode.trace.traffic_body)
     vehicle = Vehicle(VEHICLE_MODELS[spec.vehicle.model], spec.vehicle.friction_mu)
     witnessed = witness_overlaps(make_world(spec, make_road(spec)), episode.trace, vehicle,
                                  steps, ())

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +32,9 @@ LIST_COLUMNS = ("lidar", "traffic")
 #: list-of-string column: each traffic box's vehicle class; a trace written before it
 #: had only cars (SUMO's vClass "passenger")
 CLASS_COLUMN = "traffic_class"
+#: list-of-int column: which body each traffic box is of, at steps where a vehicle is
+#: several boxes (laid along its lane's bend); empty where each box is its own
+BODY_COLUMN = "traffic_body"
 METADATA_KEY = b"sdc"
 
 
@@ -41,13 +44,16 @@ class Trace:
     controller's phase; ``lidar`` the range image (``inf`` = no return);
     ``traffic`` the other vehicles' boxes ``[cx, cy, yaw, length, width]``,
     ``traffic_class`` their SUMO vehicle classes (passenger, truck, bus, ...), box by
-    box."""
+    box; ``traffic_body`` which body each box is of, at the steps where some vehicle
+    is several boxes (other steps, and a trace without the column: none, each box its
+    own)."""
 
     floats: dict[str, np.ndarray]
     phase: list[str]
     lidar: list[np.ndarray]
     traffic: list[np.ndarray]
     traffic_class: list[list[str]]
+    traffic_body: list[list[int]] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.phase)
@@ -67,7 +73,16 @@ class Trace:
         h.update(CLASS_COLUMN.encode())
         for classes in self.traffic_class:
             h.update((" ".join(classes) + "\n").encode())
+        if any(self.traffic_body):  # a trace without bodies of several boxes: as before
+            h.update(BODY_COLUMN.encode())
+            for bodies in self.traffic_body:
+                h.update((" ".join(map(str, bodies)) + "\n").encode())
         return h.hexdigest()
+
+    def bodies(self, step: int) -> np.ndarray | None:
+        """Which body each traffic box of ``step`` is of, or None: each its own."""
+        labels = self.traffic_body[step] if step < len(self.traffic_body) else []
+        return np.asarray(labels, np.intp) if labels else None
 
     def body_boxes(self, ahead_m: float, length_m: float, width_m: float) -> np.ndarray:
         """The ego's body box ``[cx, cy, yaw, length, width]`` at every step, (N, 5);
@@ -84,6 +99,8 @@ class Trace:
             columns[name] = pa.array([np.asarray(r, np.float32) for r in rows],
                                      pa.list_(pa.float32()))
         columns[CLASS_COLUMN] = pa.array(self.traffic_class, pa.list_(pa.string()))
+        columns[BODY_COLUMN] = pa.array(self.traffic_body or [[] for _ in self.phase],
+                                        pa.list_(pa.int32()))
         table = pa.table(columns)
         return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
 
@@ -126,7 +143,7 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
     is not one of this sdc version is a :class:`FileError`."""
     path = Path(path)
     table = read_parquet(path, "the trace", schema=TRACE_SCHEMA, optional=pa.schema(
-        [(CLASS_COLUMN, pa.list_(pa.string()))]))
+        [(CLASS_COLUMN, pa.list_(pa.string())), (BODY_COLUMN, pa.list_(pa.int32()))]))
     metadata = _metadata(table, path)
     floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
     lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]
@@ -135,8 +152,10 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
         classes = table.column(CLASS_COLUMN).to_pylist()
     else:
         classes = [["passenger"] * (len(row) // 5) for row in lists["traffic"]]
+    bodies = (table.column(BODY_COLUMN).to_pylist() if BODY_COLUMN in table.column_names
+              else [])
     return Trace(floats, table.column("phase").to_pylist(), **lists,
-                 traffic_class=classes), metadata
+                 traffic_class=classes, traffic_body=bodies), metadata
 
 
 def replay_command(sweep_dir: Path, run_id: str) -> str:

@@ -42,18 +42,20 @@ def pairs_overlap(a: np.ndarray, b: np.ndarray, tolerance_m: float = OVERLAP_TOL
     return np.all(gap < radius_a + radius_b - tolerance_m, axis=1)
 
 
-def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Of (T, M, 5) bodies per step (NaN rows: none), the first ``traffic`` of each step
-    traffic and the rest obstacles, ``people`` (T, M) those that are persons: the
-    overlapping pairs that hold a traffic vehicle or person, and not two persons, as
-    (step, body, body) index arrays."""
+def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray,
+                       owners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Of (T, M, 5) boxes per step (NaN rows: none), the first ``traffic`` of each step
+    traffic and the rest obstacles, ``people`` (T, M) those that are persons, ``owners``
+    (T, M) which body each is of: the overlapping pairs of boxes of two bodies that
+    hold a traffic vehicle or person, and not two persons, as (step, box, box) index
+    arrays."""
     reach = np.hypot(bodies[..., 3], bodies[..., 4]) / 2
     d = bodies[:, :traffic, None, :2] - bodies[:, None, :, :2]
     touch = reach[:, :traffic, None] + reach[:, None, :]
     near = (d[..., 0] ** 2 + d[..., 1] ** 2) < touch**2  # NaN: False
     near &= np.triu(np.ones(near.shape[1:], bool), k=1)  # each pair once
     near &= ~(people[:, :traffic, None] & people[:, None, :])
+    near &= owners[:, :traffic, None] != owners[:, None, :]  # a body's own pieces touch
     t, i, j = np.nonzero(near)
     hits = pairs_overlap(bodies[t, i], bodies[t, j])
     return t[hits], i[hits], j[hits]
@@ -63,14 +65,24 @@ def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray
 _PAIRS_PER_PASS = 1 << 20
 
 
+def _owners(count: int, bodies, obstacles: int) -> np.ndarray:
+    """Which body each of ``count`` traffic boxes (``bodies``: their labels, or
+    None/empty: each its own) and then ``obstacles`` obstacle boxes is of."""
+    own = (np.arange(count) if bodies is None or len(bodies) == 0
+           else np.asarray(bodies, np.intp))
+    return np.concatenate([own, count + np.arange(obstacles)])
+
+
 def overlap_steps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
                   traffic_classes: list[list[str]] | None = None,
-                  obstacle_classes: tuple[str | None, ...] = ()) -> np.ndarray:
+                  obstacle_classes: tuple[str | None, ...] = (),
+                  traffic_bodies: list[list[int]] | None = None) -> np.ndarray:
     """The steps of a trace (``traffic`` rows: N x 5 boxes, flattened; ``traffic_classes``
-    their classes, row by row) in which a traffic vehicle or person overlaps another
-    one or an obstacle (``obstacle_classes``: theirs, ``pedestrian`` for a standing
-    person), two persons aside (two obstacles on one another are the spec's doing, not
-    the world's): their indices, ascending."""
+    their classes, row by row; ``traffic_bodies`` which body each box is of, as
+    :class:`analysis.run.trace_file.Trace` holds them) in which a traffic vehicle or
+    person overlaps another one or an obstacle (``obstacle_classes``: theirs,
+    ``pedestrian`` for a standing person), two persons aside (two obstacles on one
+    another are the spec's doing, not the world's): their indices, ascending."""
     rows = [np.asarray(row, float).reshape(-1, 5) for row in traffic_rows]
     most = max((len(r) for r in rows), default=0)
     if most == 0:
@@ -83,30 +95,36 @@ def overlap_steps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
         part = rows[start : start + chunk]
         bodies = np.full((len(part), most + len(obstacles), 5), np.nan)
         people = np.zeros(bodies.shape[:2], bool)
+        owners = np.tile(np.arange(bodies.shape[1]), (len(part), 1))
         for k, row in enumerate(part):
             bodies[k, : len(row)] = row
             if traffic_classes is not None:
                 people[k, : len(row)] = are_people(traffic_classes[start + k])
+            if traffic_bodies and traffic_bodies[start + k]:
+                owners[k, : len(row)] = traffic_bodies[start + k]
         bodies[:, most:] = obstacles
         people[:, most:] = are_people(obstacle_classes or [None] * len(obstacles))
-        steps.append(start + np.unique(_overlapping_pairs(bodies, most, people)[0]))
+        steps.append(start + np.unique(_overlapping_pairs(bodies, most, people, owners)[0]))
     return np.concatenate(steps)
 
 
 def world_overlaps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
                    traffic_classes: list[list[str]] | None = None,
-                   obstacle_classes: tuple[str | None, ...] = ()) -> int:
+                   obstacle_classes: tuple[str | None, ...] = (),
+                   traffic_bodies: list[list[int]] | None = None) -> int:
     """How many steps of a trace :func:`overlap_steps` finds."""
-    return len(overlap_steps(traffic_rows, obstacle_boxes, traffic_classes, obstacle_classes))
+    return len(overlap_steps(traffic_rows, obstacle_boxes, traffic_classes, obstacle_classes,
+                             traffic_bodies))
 
 
 def overlapping_pairs(traffic_boxes: np.ndarray, obstacle_boxes: np.ndarray,
-                      traffic_classes, obstacle_classes: tuple[str | None, ...] = ()
-                      ) -> list[tuple[int, int]]:
+                      traffic_classes, obstacle_classes: tuple[str | None, ...] = (),
+                      traffic_bodies: np.ndarray | None = None) -> list[tuple[int, int]]:
     """One step's overlapping pairs, as :func:`overlap_steps` finds them: (traffic row,
     traffic row or ``len(traffic_boxes)`` + obstacle index)."""
     traffic, obstacles = as_boxes(traffic_boxes), as_boxes(obstacle_boxes)
     bodies = np.vstack([traffic, obstacles])[None]
     people = are_people([*traffic_classes, *(obstacle_classes or [None] * len(obstacles))])
-    _, i, j = _overlapping_pairs(bodies, len(traffic), people[None])
+    owners = _owners(len(traffic), traffic_bodies, len(obstacles))
+    _, i, j = _overlapping_pairs(bodies, len(traffic), people[None], owners[None])
     return list(zip(i.tolist(), j.tolist(), strict=True))

@@ -120,6 +120,11 @@ def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
         k = next((k for k in range(n) if rows_a[k] != rows_b[k]), None)
         if k is not None:
             found.append(Divergence(k, name, str(rows_a[k]), str(rows_b[k])))
+    k = next((k for k in range(n)
+              if not np.array_equal(recorded.bodies(k), replayed.bodies(k))), None)
+    if k is not None:
+        found.append(Divergence(k, "traffic_body", str(recorded.bodies(k)),
+                                str(replayed.bodies(k))))
     for name in ("lidar", "traffic"):
         rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
         for k in range(n):

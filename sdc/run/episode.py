@@ -163,7 +163,8 @@ class Simulation:
             lane.heading_error_rad if lane else math.nan,
             lane.s_m if lane else math.nan,
             contacts.obstacle_gap_m, conflicts.ttc_s, conflicts.drac_mps2, conflicts.headway_s,
-        ), phase, self.ranges, self.snapshot.traffic_boxes, self.snapshot.traffic_classes)
+        ), phase, self.ranges, self.snapshot.traffic_boxes, self.snapshot.traffic_classes,
+            self.snapshot.traffic_bodies)
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
@@ -229,7 +230,7 @@ class Simulation:
         """The steps in which bodies other than the ego overlap: (ours, SUMO's own)
         (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
         steps = overlap_steps(trace.traffic, self.snapshot.obstacle_boxes,
-                              trace.traffic_class, self.obstacle_classes)
+                              trace.traffic_class, self.obstacle_classes, trace.traffic_body)
         if self.world.backend != "sumo" or not len(steps):
             return len(steps), 0
         return judge_overlaps(self.world.twin(), trace, self.vehicle, steps,

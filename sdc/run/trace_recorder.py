@@ -16,11 +16,14 @@ class TraceRecorder:
         self._lidar: list[np.ndarray] = []
         self._traffic: list[np.ndarray] = []
         self._classes: list[list[str]] = []
+        self._bodies: list[list[int]] = []
 
     def add(self, floats: tuple[float, ...], phase: str, lidar: np.ndarray,
-            traffic: np.ndarray, traffic_classes: np.ndarray) -> None:
+            traffic: np.ndarray, traffic_classes: np.ndarray,
+            traffic_bodies: np.ndarray | None = None) -> None:
         """One step's row; ``floats`` holds the values of ``FLOAT_COLUMNS``, in order;
-        ``traffic_classes`` the vehicle class of each traffic box."""
+        ``traffic_classes`` the vehicle class of each traffic box, ``traffic_bodies``
+        which body each is of (None: each its own)."""
         if len(floats) != len(FLOAT_COLUMNS):
             raise ValueError(f"a row has {len(FLOAT_COLUMNS)} floats, not {len(floats)}")
         self._floats.append(floats)
@@ -28,10 +31,11 @@ class TraceRecorder:
         self._lidar.append(np.asarray(lidar, np.float32))
         self._traffic.append(np.asarray(traffic, np.float32).ravel())
         self._classes.append(list(traffic_classes))
+        self._bodies.append([] if traffic_bodies is None else np.asarray(traffic_bodies).tolist())
 
     def finish(self) -> Trace:
         columns = np.array(self._floats, dtype=float).reshape(-1, len(FLOAT_COLUMNS)).T
         floats = {name: np.ascontiguousarray(column)
                   for name, column in zip(FLOAT_COLUMNS, columns, strict=True)}
         return Trace(floats, list(self._phase), list(self._lidar), list(self._traffic),
-                     list(self._classes))
+                     list(self._classes), list(self._bodies))

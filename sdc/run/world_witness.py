@@ -69,7 +69,7 @@ def _judged(world, snapshot, step: int, obstacle_classes) -> list[Witnessed]:
     traffic = snapshot.traffic_boxes
     n = len(traffic)
     pairs = overlapping_pairs(traffic, snapshot.obstacle_boxes, snapshot.traffic_classes,
-                              obstacle_classes)
+                              obstacle_classes, snapshot.traffic_bodies)
     rows = sorted({i for pair in pairs for i in pair if i < n})
     standing = sorted({j - n for _, j in pairs if j >= n})
     placed = world.placed_by_sumo(traffic, rows, standing)
