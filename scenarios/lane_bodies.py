@@ -5,7 +5,8 @@ front bumper), its lateral offset from the lane's centre (during a continuous la
 change) and its length: its car following, its lane changes and its junctions work
 on that body, laid back from the front along the lane. The angle it reports is
 drawn from the back to the front, plus a lane-change angle that grows without bound
-at a crawl (``MSAbstractLaneChangeModel::calcAngleOffset``, SUMO 1.2x): a rigid box
+at a crawl and fades only as the vehicle drives on after the change
+(``MSAbstractLaneChangeModel::calcAngleOffset``, SUMO 1.2x): a rigid box
 at that angle spins about its front bumper, which no vehicle can, and a long one
 through a junction's curve is one chord across it.
 
