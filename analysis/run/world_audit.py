@@ -100,8 +100,8 @@ def overlap_steps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
             bodies[k, : len(row)] = row
             if traffic_classes is not None:
                 people[k, : len(row)] = are_people(traffic_classes[start + k])
-            if traffic_bodies and traffic_bodies[start + k]:
-                owners[k, : len(row)] = traffic_bodies[start + k]
+            if traffic_bodies:
+                owners[k, : len(row)] = _owners(len(row), traffic_bodies[start + k], 0)
         bodies[:, most:] = obstacles
         people[:, most:] = are_people(obstacle_classes or [None] * len(obstacles))
         steps.append(start + np.unique(_overlapping_pairs(bodies, most, people, owners)[0]))
