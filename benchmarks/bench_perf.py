@@ -12,7 +12,11 @@ machine's speed swings between seconds), then the raw timings:
   subscribed to. Traffic changing lanes around that slow car is half of SUMO's
   step, so taking the ego out (``raw.overhead_vs_sumo_without_ego``) measures
   another scenario; ``raw.overhead_vs_sumo_in_loop`` divides by SUMO's step
-  inside our loop instead (``libsumo.simulationStep`` alone).
+  inside our loop instead (``libsumo.simulationStep`` alone), and
+  ``raw.sumo_in_loop_vs_bare_sumo`` is that step over the bare one: what the context
+  subscription and the pushed ego add to SUMO's own step. ``raw.added_ms_100`` is the
+  step less the bare step [ms]: the cost the car adds, whatever SUMO's own step costs
+  (a traffic model that makes SUMO's step cheaper raises the ratio, not this).
 - ``agent_cost_ratio_2000_vs_100``: the agent's own cost per step (everything
   but ``libsumo.simulationStep``) on a 6-lane road
   18 km long holding about 2000 vehicles over its cost on one 900 m long holding
@@ -316,6 +320,10 @@ def main() -> None:
     print(f"raw.overhead_vs_sumo_without_ego {paired(alone):.2f}")
     in_loop = paired(r["step_ms"] / r["sumo_ms"] for r in hundred)
     print(f"raw.overhead_vs_sumo_in_loop {in_loop:.2f}")
+    sumo_share = paired(r["sumo_ms"] / b for r, b in zip(hundred, bare, strict=True))
+    print(f"raw.sumo_in_loop_vs_bare_sumo {sumo_share:.2f}")
+    added_ms = paired(r["step_ms"] - b for r, b in zip(hundred, bare, strict=True))
+    print(f"raw.added_ms_100 {added_ms:.3f}")
     print(f"raw.libsumo_only_ms_100 {statistics.median(floor):.3f}")
     floors = [f / b for f, b in zip(floor, bare, strict=True)]
     print(f"raw.libsumo_only_vs_bare_sumo {paired(floors):.2f}")

@@ -214,6 +214,16 @@ class RoadGeometry:
         """Which points lie beyond a road edge, alongside the road (a bool mask)."""
         return self.edge_gaps_m(points) < 0
 
+    def any_off_road(self, points: np.ndarray) -> bool:
+        """Whether any of a few ``points`` lies beyond a road edge, alongside the road
+        before its end (past a route's end there is no kerb): a step asks it of the
+        ego's corners, so it reads them one by one, in plain floats."""
+        for x_m, y_m in points.tolist():
+            s_m, d_m = self.frame.locate(x_m, y_m)
+            if 0.0 <= s_m < self.length_m and self.half_width_m - abs(d_m) < 0:
+                return True
+        return False
+
     def drawn_edge_segments(self) -> np.ndarray | None:
         """Road edges to draw as segments; ``None``: the two edges of this road."""
         return None

@@ -170,8 +170,9 @@ def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
 def _across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:
     """How far across the road (lowest, highest ``d``) a box centred at ``d_m`` reaches,
     the road heading ``heading_rad`` there."""
-    psi = float(box[2]) - heading_rad
-    half_m = abs(box[3] / 2 * math.sin(psi)) + abs(box[4] / 2 * math.cos(psi))
+    _, _, yaw_rad, length_m, width_m = box.tolist()
+    psi = yaw_rad - heading_rad
+    half_m = abs(length_m / 2 * math.sin(psi)) + abs(width_m / 2 * math.cos(psi))
     return d_m - half_m, d_m + half_m
 
 

@@ -164,7 +164,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
         people=[people_xy(snapshot.traffic_boxes, snapshot.traffic_classes)],
         obstacles=snapshot.obstacle_boxes,
         standing_people=standing_people_xy(spec, snapshot.obstacle_boxes),
-        mount_xy=sim.vehicle.point_ahead(state, spec.lidar.mount_ahead_m)[None],
+        mount_xy=np.array([sim.vehicle.point_ahead(state, spec.lidar.mount_ahead_m)]),
         beam_yaw_rad=(state.yaw_rad + angles)[None], ranges_m=sim.ranges[None],
         max_range_m=spec.lidar.max_range_m, phase=["agent"],
         speed_mps=np.array([state.speed_mps]),

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, RoadSpec, ScenarioSpec, SpecError
+from scenarios.boxes import box_corners
 from scenarios.road_geometry import RoadGeometry
 from scenarios.sumo_net.build import build_network
 from scenarios.sumo_net.drivable_area import DrivableArea
@@ -90,6 +91,18 @@ def test_collision_finds_a_kerb_but_not_the_opposite_lanes_or_a_junction(town):
     assert hit(150.0, 150.0, 0.7) is None  # diagonally in a junction
     assert hit(75.0, 150.0 - 6.0, 0.0) == ROAD_EDGE  # over the kerb
     assert hit(75.0, 75.0, 0.0) == ROAD_EDGE  # inside a block
+    rng = np.random.default_rng(1)
+    centres = road.xy_at(rng.uniform(-10.0, road.length_m + 10.0, 500),
+                         rng.uniform(-8.0, 8.0, 500))
+    corners = box_corners(np.column_stack([centres, rng.uniform(-math.pi, math.pi, 500),
+                                           np.full(500, 4.85), np.full(500, 1.93)]))
+    answers = set()
+    for points in corners:  # the step's question, against the area's mask
+        s_m, _ = road.to_frenet(points)
+        expected = bool((road.off_road(points) & (s_m < road.length_m)).any())
+        assert road.any_off_road(points) is expected
+        answers.add(expected)
+    assert answers == {True, False}
 
 
 def test_routes_are_connected_long_enough_seeded_and_without_u_turns(town):

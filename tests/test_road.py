@@ -144,6 +144,18 @@ def test_the_road_frame_places_bodies_along_the_lane(line, points, curvature, la
                                atol=1e-12)
 
 
+@settings(max_examples=300, deadline=None)
+@given(line=polyline_st, points=points_st)
+def test_any_off_road_is_some_point_beyond_an_edge_before_the_end(line, points):
+    """The step's road-edge question, read point by point in plain floats, answers as
+    the edge gaps of all the points at once do: some point beyond an edge, alongside
+    the road before its end."""
+    road = RoadGeometry(line, 2, 3.5)
+    s_m, _ = road.to_frenet(points)
+    expected = bool((road.off_road(points) & (s_m < road.length_m)).any())
+    assert road.any_off_road(points) is expected
+
+
 def test_the_projection_takes_the_nearest_segment():
     """A right angle: each point on the leg it is nearest to, s and d exact."""
     road = RoadGeometry(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]), 2, 3.5)

@@ -388,6 +388,10 @@ class NetworkRoad(RoadGeometry):
     def off_road(self, points: np.ndarray) -> np.ndarray:
         return self.area.off_road(points)
 
+    def any_off_road(self, points: np.ndarray) -> bool:
+        off = points[self.area.off_road(points)]
+        return bool(len(off)) and bool((self.to_frenet(off)[0] < self.length_m).any())
+
     def drawn_edge_segments(self) -> np.ndarray:
         """The network's road edges within ``DRAW_MARGIN_M`` of the route."""
         lo = self.center_xy.min(axis=0) - DRAW_MARGIN_M

@@ -64,9 +64,7 @@ def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry,
                                                    obstacle_classes) is not None:
             return PEDESTRIAN
         return OBSTACLE if contacts.obstacle >= 0 else VEHICLE
-    corners = one_box_corners(ego_box)
-    off = corners[road.off_road(corners)]
-    if len(off) and (road.to_frenet(off)[0] < road.length_m).any():
+    if road.any_off_road(one_box_corners(ego_box)):
         return ROAD_EDGE
     return None
 

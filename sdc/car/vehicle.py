@@ -90,10 +90,10 @@ class Vehicle:
         return np.array([state.x_m + ahead * c, state.y_m + ahead * s, state.yaw_rad,
                          self.model.length_m, self.model.width_m])
 
-    def point_ahead(self, state: VehicleState, ahead_m: float) -> np.ndarray:
+    def point_ahead(self, state: VehicleState, ahead_m: float) -> tuple[float, float]:
         """World x, y of the point ``ahead_m`` in front of the rear axle [m]."""
-        return np.array([state.x_m + ahead_m * math.cos(state.yaw_rad),
-                         state.y_m + ahead_m * math.sin(state.yaw_rad)])
+        return (state.x_m + ahead_m * math.cos(state.yaw_rad),
+                state.y_m + ahead_m * math.sin(state.yaw_rad))
 
 
 def _wrap(angle_rad: float) -> float:

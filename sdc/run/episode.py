@@ -177,9 +177,9 @@ class Simulation:
                                       self.snapshot, self.road, self.road.heading_at_s(s_m),
                                       self.obstacle_classes)
             return COLLISION
-        front = self.vehicle.point_ahead(self.state, self.model.front_ahead_of_rear_axle_m)
-        front_s_m, _ = self.road.locate_near(float(front[0]), float(front[1]),
-                                             self.lane_sensor.s_m)
+        front_x_m, front_y_m = self.vehicle.point_ahead(self.state,
+                                                        self.model.front_ahead_of_rear_axle_m)
+        front_s_m, _ = self.road.locate_near(front_x_m, front_y_m, self.lane_sensor.s_m)
         if front_s_m >= self.road.length_m:
             return ROUTE_END
         if self.k == self.n_steps:

@@ -12,7 +12,10 @@ from sdc.car.controller_api import LanesBeside
 def ahead_m(stretches, s_m: float) -> float:
     """How far from ``s_m`` the stretch holding it runs on (0: none holds it);
     ``stretches``: (start, end) pairs [m]."""
-    end_m = max((end for start, end in stretches if start <= s_m <= end), default=None)
+    end_m = None
+    for start, end in stretches:  # a plain loop: a step asks this twice
+        if start <= s_m <= end and (end_m is None or end > end_m):
+            end_m = end
     return 0.0 if end_m is None else float(end_m - s_m)
 
 
