@@ -433,15 +433,16 @@ class SumoWorld:
                                                     radius_m, _PERSON_VARS)
             self._subscribed_m, self.people_subscribed = radius_m, people
 
-    def warm_state(self) -> WarmState:
+    def warm_state(self, on_sample: Callable[[float], None] | None = None) -> WarmState:
         """The spec's warm state: the one given, else the cached one, else computed
-        now (and cached). A given or cached file made for other traffic is an
-        :class:`SdcError`, never a run on it."""
+        now (and cached; ``on_sample`` is called with SUMO's clock as it goes). A given
+        or cached file made for other traffic is an :class:`SdcError`, never a run on
+        it."""
         key = self.warm_key()
         path = self.warm_state_path or cached_path(key)
         if self.warm_state_path is None and not path.is_file():
             # apart: SUMO's state would hold what ran before it in this process
-            return computed_apart(self.spec, key, self.cache_dir, self._scratch())
+            return computed_apart(self.spec, key, self.cache_dir, self._scratch(), on_sample)
         state = WarmState.read(path)
         if state.key != key:
             raise SdcError(f"warm state {path}: made for other traffic (key "

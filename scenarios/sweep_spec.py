@@ -20,6 +20,7 @@ import json
 import math
 import re
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from statistics import NormalDist
 from typing import Any, Literal
@@ -42,7 +43,12 @@ from scenarios.toml_io import load_spec, read_toml
 
 #: a swept parameter's result column: p.<path>, e.g. p.ego.speed_mps
 PARAM_PREFIX = "p."
-MAX_SAMPLES = 10_000_000  # samples of a sweep, drawn or on a grid
+#: runs of one sweep (samples x controllers): its plan holds every run's scenario in
+#: memory (5-14 KB a run) and is built (1-2 ms a run) and written to plan.parquet
+#: before the first run starts; 100,000 runs are hours of runs on a few cores
+MAX_RUNS = 100_000
+#: how often planning says how far it got [runs]
+PLAN_PROGRESS_RUNS = 1000
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
 
 
@@ -229,11 +235,11 @@ def parse_param(path: str, table: Any, field: str) -> Param:
 class _SweepTable(Spec):
     name: str
     base: str
-    samples: int | None = num(None, gt=0, le=MAX_SAMPLES)
+    samples: int | None = num(None, gt=0)
     sampler: Literal["grid", "random", "sobol", "lhs"] = "random"
     seed: int = num(0, ge=0, lt=SEED_LIMIT)
     levels: int | None = num(None, ge=2, le=1000)
-    warm_states: int | None = num(None, ge=1, le=MAX_SAMPLES)
+    warm_states: int | None = num(None, ge=1, le=MAX_RUNS)
     controllers: tuple = ("seed",)
     params: tuple = ()
 
@@ -320,14 +326,15 @@ class SweepSpec:
                     raise SpecError(f'sweep.params."{p.path}".normal',
                                     "has no grid: use uniform or choice with the grid sampler")
             size = math.prod(p.grid_size(meta.levels or 5) for p in parsed)
-            if size > MAX_SAMPLES:
-                raise SpecError("sweep.params", f"the grid has {size} points, more than "
-                                f"{MAX_SAMPLES:,} (fewer levels or values)")
+            check_runs("sweep.params", f"the grid has {size} points", size, len(controllers),
+                       "fewer levels or values")
         else:
             if meta.samples is None:
                 raise SpecError("sweep.samples", f"is required for the {meta.sampler} sampler")
             if meta.levels is not None:
                 raise SpecError("sweep.levels", "only applies to the grid sampler")
+            check_runs("sweep.samples", f"{meta.samples} samples", meta.samples,
+                       len(controllers), "fewer samples")
         _check_warm_states(meta.warm_states, base, parsed)
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
                    meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states)
@@ -339,9 +346,11 @@ class SweepSpec:
 
     def with_samples(self, samples: int) -> SweepSpec:
         if self.sampler == "grid":
-            raise SpecError("samples", "the grid sampler takes its size from the parameters")
+            raise SpecError("--samples", "the grid sampler takes its size from the parameters")
         if samples <= 0:
-            raise SpecError("samples", f"must be > 0, got {samples}")
+            raise SpecError("--samples", f"must be > 0, got {samples}")
+        check_runs("--samples", f"{samples} samples", samples, len(self.controllers),
+                   "fewer samples")
         return dataclasses.replace(self, samples=samples)
 
     def to_plain(self) -> dict:
@@ -357,6 +366,20 @@ class SweepSpec:
             table["warm_states"] = self.warm_states
         table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
         return {"sweep": table}
+
+
+def check_runs(field: str, what: str, samples: int, controllers: int, fewer: str) -> None:
+    """Refuse a sweep of more than :data:`MAX_RUNS` runs, before anything is planned,
+    saying why and what to do instead."""
+    runs = samples * controllers
+    if runs > MAX_RUNS:
+        each = f"{controllers} controller" + ("s" if controllers != 1 else "")
+        raise SpecError(field, f"{what} x {each} = {runs:,} runs, more than "
+                        f"the {MAX_RUNS:,} a sweep plans: its plan holds every run's scenario "
+                        "in memory (5-14 KB a run) and is built (1-2 ms a run) before the "
+                        f"first run; use {fewer}, several sweeps with other sweep.seed "
+                        "values, or sdc estimate or sdc search, which draw their runs in "
+                        "batches")
 
 
 def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
@@ -436,30 +459,39 @@ def sample_values(sweep: SweepSpec) -> list[dict[str, Any]]:
             for row in _unit_points(sweep, point_rng)]
 
 
-def expand(sweep: SweepSpec) -> list[PlannedRun]:
-    """The plan: every sample under every controller, each sample with its own seed.
+def expand(sweep: SweepSpec, progress: Callable[[int, int], None] | None = None
+           ) -> list[PlannedRun]:
+    """The plan: every sample under every controller, each sample with its own seed;
+    ``progress(runs planned, runs in all)`` is called as it goes (every
+    :data:`PLAN_PROGRESS_RUNS` runs, and at the end).
 
     A sample's seed is ``scenario.seed`` for all its controllers (a paired
     comparison), unless ``scenario.seed`` is itself a swept parameter.
     """
     samples = sample_values(sweep)
     return plan_samples(sweep, samples,
-                        draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples)))
+                        draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples)),
+                        progress=progress)
 
 
 def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[int], *,
                  first_sample: int = 0, index_width: int | None = None,
-                 controllers: tuple[str, ...] | None = None) -> list[PlannedRun]:
+                 controllers: tuple[str, ...] | None = None,
+                 progress: Callable[[int, int], None] | None = None) -> list[PlannedRun]:
     """The runs of ``samples`` (parameter values, one dict each) under ``controllers``
     (default: the sweep's), sample ``i`` numbered ``first_sample + i`` and seeded
-    ``seeds[i]``. Run IDs are ``<sample, zero-padded to index_width>-<controller>``."""
+    ``seeds[i]``. Run IDs are ``<sample, zero-padded to index_width>-<controller>``;
+    ``progress``: as for :func:`expand`."""
     controllers = sweep.controllers if controllers is None else controllers
     last = first_sample + len(samples) - 1
     width = index_width or max(5, len(str(last)))
     base_plain = sweep.base.to_plain()
     warm = warm_seeds(sweep)
     plan = []
+    total = len(samples) * len(controllers)
     for i, (values, seed) in enumerate(zip(samples, seeds, strict=True), start=first_sample):
+        if progress is not None and len(plan) % PLAN_PROGRESS_RUNS < len(controllers):
+            progress(len(plan), total)
         plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
         if warm is not None:  # the sample's warm state: one of the sweep's, by its seed
@@ -493,6 +525,8 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
                 backend=str(plain["scenario"].get("backend", "sumo")), params=values,
                 spec=run_spec, error=run_error,
             ))
+    if progress is not None:
+        progress(len(plan), total)
     return plan
 
 

@@ -11,7 +11,8 @@ interpreter, a warm state depends on its inputs only, wherever and after whateve
 is computed.
 
 Run as ``python -m scenarios.warm_up_process SPEC.json KEY [CACHE_DIR]``: computes the
-warm state of the spec (its plain JSON) with key ``KEY`` into the warm-state cache.
+warm state of the spec (its plain JSON) with key ``KEY`` into the warm-state cache,
+printing ``t_s T`` (SUMO's clock) on stdout as it goes.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from scenarios.atomic_write import write_atomic
@@ -26,19 +28,35 @@ from scenarios.errors import SdcError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.warm_state import WarmState, cached_path
 
+#: how the process says how far its warm-up got: this, then SUMO's clock [s]
+PROGRESS_PREFIX = "t_s "
 
-def computed_apart(spec: ScenarioSpec, key: str, cache_dir: Path | None,
-                   scratch: Path) -> WarmState:
+
+def computed_apart(spec: ScenarioSpec, key: str, cache_dir: Path | None, scratch: Path,
+                   on_sample: Callable[[float], None] | None = None) -> WarmState:
     """Compute ``spec``'s warm state (key ``key``) in a fresh Python process into the
-    cache, and read it; ``scratch``: a folder for the spec's file."""
+    cache, and read it; ``scratch``: a folder for the spec's file and the process's
+    errors; ``on_sample``: called with SUMO's clock [s] as the warm-up goes on."""
     spec_file = scratch / "warm-spec.json"
     spec_file.write_text(json.dumps(spec.to_plain()))
     command = [sys.executable, "-m", __name__, str(spec_file), key,
                *([str(cache_dir)] if cache_dir is not None else [])]
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
-    if done.returncode != 0:
-        tail = "\n".join(done.stderr.strip().splitlines()[-5:])
-        raise SdcError(f"computing the warm state {key[:12]}... failed:\n{tail}")
+    with open(scratch / "warm-up-errors.txt", "w+") as errors:
+        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=errors, text=True)
+        try:
+            for line in child.stdout:
+                if on_sample is not None and line.startswith(PROGRESS_PREFIX):
+                    on_sample(float(line.removeprefix(PROGRESS_PREFIX)))
+            code = child.wait()
+        finally:  # an interrupt leaves no SUMO behind
+            if child.poll() is None:
+                child.kill()
+                child.wait()
+            child.stdout.close()
+        if code != 0:
+            errors.seek(0)
+            tail = "\n".join(errors.read().strip().splitlines()[-5:])
+            raise SdcError(f"computing the warm state {key[:12]}... failed:\n{tail}")
     return WarmState.read(cached_path(key))
 
 
@@ -49,7 +67,8 @@ def main(argv: list[str]) -> None:
     spec = ScenarioSpec.from_plain(json.loads(Path(argv[0]).read_text()))
     key, cache_dir = argv[1], (Path(argv[2]) if len(argv) > 2 else None)
     with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
-        state = world.compute_warm_state(key)
+        state = world.compute_warm_state(
+            key, lambda t_s: print(f"{PROGRESS_PREFIX}{t_s!r}", flush=True))
     path = cached_path(key)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))

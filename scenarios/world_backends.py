@@ -92,13 +92,15 @@ def warm_state_path(spec: ScenarioSpec, cache_dir: Path | None = None) -> Path |
     return cached_path(warm_key(spec, source_sha256(spec.road, cache_dir)))
 
 
-def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None) -> bytes:
+def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None,
+                    on_sample: Callable[[float], None] | None = None) -> bytes:
     """The file of ``spec``'s warm state (``scenarios/warm_state.py``), from this
-    machine's cache or computed into it."""
+    machine's cache or computed into it (``on_sample``: called with SUMO's clock [s]
+    as the warm-up goes on)."""
     from scenarios.sumo_world import SumoWorld
 
     with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
-        return world.warm_state().to_bytes()
+        return world.warm_state(on_sample).to_bytes()
 
 
 def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | None = None,

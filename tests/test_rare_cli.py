@@ -20,6 +20,7 @@ import pytest
 
 from analysis.rare.rare_events import estimate_from_rows
 from analysis.report.rare_report import estimate_lines
+from analysis.run.commands import replay_command
 from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
 from scenarios.sweep_spec import load_sweep
@@ -128,7 +129,7 @@ def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     # each mode names an example run of its own and the command that replays it
     for mode in modes:
         assert mode["example_run"] in mode["run_ids"]
-        assert mode["replay"] == f"sdc replay {out} --run {mode['example_run']}"
+        assert mode["replay"] == replay_command(out, mode["example_run"])
     # a failed run replays to the same trace
     run_id = results[collided].run_id.iloc[0]
     replay = sdc("replay", out, "--run", run_id, "--verify")

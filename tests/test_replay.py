@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -328,14 +329,16 @@ def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_pat
     done = sdc("sweep", sweep, "--out", out, "--workers", "2", "--run-timeout", "2", "--quiet")
     assert done.returncode in (0, 1), done.stderr
     assert sdc("report", out).returncode in (0, 1)
-    commands = sorted(set(re.findall(r"sdc replay \S+ --run [\w-]+",
+    # each command as printed: the interpreter that ran the report, -m sdc, replay ...
+    commands = sorted(set(re.findall(r"`([^`]*-m sdc replay \S+ --run [\w-]+)`",
                                      (out / "report.md").read_text())))
     assert {c.rsplit(" ", 1)[1] for c in commands} == {
         "00000-RaisesFirst", "00000-RaisesAtStep3", "00000-Sleepy", "00000-lane-keep"}
     for command in commands:
         run_id = command.rsplit(" ", 1)[1]
         for extra in ((), ("--out", tmp_path / f"{run_id}.png")):
-            replay = sdc(*command.split()[1:], *extra)
+            replay = subprocess.run([*shlex.split(command), *map(str, extra)],
+                                    capture_output=True, text=True, timeout=300)
             assert "Traceback" not in replay.stdout + replay.stderr, command
             assert replay.returncode in (0, 1), replay.stderr
             if run_id == "00000-lane-keep":

@@ -26,6 +26,7 @@ from analysis.report.sweep_report import (
     world_summary,
     write_report,
 )
+from analysis.run.commands import replay_command
 from analysis.stats.rates import wilson_interval
 from analysis.stats.verdicts import completed_runs
 from scenarios import CATALOG_DIR, traffic_model
@@ -90,7 +91,7 @@ def test_report_files_count_errors_apart(small_sweep, tmp_path):
         assert matplotlib.image.imread(io.BytesIO(base64.b64decode(data))).ndim == 3
     bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
     for run_id in bad.run_id:
-        assert f"sdc replay {small_sweep} --run {run_id}" in page
+        assert html.escape(replay_command(small_sweep, run_id)) in page
         assert f"--run {run_id}" in (small_sweep / "report.md").read_text()
     assert "invalid scenario from sample" in page
 
@@ -432,7 +433,7 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
     first = table.column("run_id")[0].as_py()
     assert lines[1].startswith("WARNING: in 1 run two bodies other than the ego overlapped "
                                "where SUMO's own lanes hold them apart (7 steps in all")
-    assert lines[1].endswith(f"see one with sdc replay DIR --run {first} and report it.")
+    assert lines[1].endswith(f"see one with {replay_command(Path('DIR'), first)} and report it.")
     assert not any(line.startswith("SUMO's own overlaps") for line in lines)
     # SUMO's own overlaps are one line apart, never the warning
     table = table.set_column(table.schema.get_field_index("world_overlaps"), "world_overlaps",
@@ -448,7 +449,7 @@ def test_a_world_that_overlapped_is_a_warning_and_old_sweeps_say_not_recorded(sm
         "SUMO's own overlaps: in 1 run SUMO's own model held two bodies inside each other "
         "(7 steps, column sumo_overlaps: vehicles waiting on a junction's crossing lanes, "
         "bicycles through pedestrians); that is SUMO's world as it is, not sdc's coupling, "
-        f"and the ego's verdicts stand; to see one: sdc replay DIR --run {first}."]
+        f"and the ego's verdicts stand; to see one: {replay_command(Path('DIR'), first)}."]
     old = tmp_path / "old"
     shutil.copytree(small_sweep, old)
     pq.write_table(pq.read_table(old / "results.parquet").drop_columns(

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from analysis.rare.grid_probability import box_probability, grid_probability
+from analysis.run.commands import replay_command
 from scenarios import CATALOG_DIR
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sweep_spec import expand, load_sweep, set_path
@@ -183,4 +184,4 @@ def test_a_real_search_finds_every_mode_and_lists_each_with_its_replay(tmp_path)
     assert sum(m["outcome"] != OTHER for m in modes) == len(regions - {"low_speed"})
     assert sorted(r for m in modes for r in m["run_ids"]) == sorted(failed.run_id)
     for mode in modes:
-        assert mode["replay"] == f"sdc replay {tmp_path} --run {mode['example_run']}"
+        assert mode["replay"] == replay_command(tmp_path, mode["example_run"])

@@ -117,6 +117,46 @@ def test_bad_configurations_are_bad_input_naming_the_file_or_field(tmp_path, pro
     assert not (tmp_path / "t.parquet").exists()
 
 
+STANDING = """<routes>
+    <vType id="truck" vClass="truck" length="7.1"/>
+    <route id="across" edges="left0A0 A0B0 B0right0"/>
+    <route id="up" edges="bottom0A0 A0A1 A1top0"/>
+    <vehicle id="parked" type="truck" route="across" depart="0">{stop}</vehicle>
+    <vehicle id="car" route="up" depart="10"/>
+</routes>
+"""
+
+
+@pytest.mark.parametrize("stop, stands_s", [
+    ('<stop lane="A0B0_0" endPos="60" until="500"/>', 500.0),
+    ('<stop lane="A0B0_0" endPos="60" duration="400"/>', 400.0),  # from its depart at 0
+    ('<stop lane="A0B0_0" endPos="60" duration="1" triggered="true"/>', float("inf")),
+])
+def test_enter_after_the_last_departure_is_allowed_where_a_vehicle_surely_stands(
+        tmp_path, stop, stands_s):
+    """Past the demand's last departure a run may enter while a stop surely holds a
+    vehicle (to its until, or its duration after the depart: the vehicle reaches
+    it later; for good where it waits for a person); SUMO itself has it there."""
+    import libsumo
+
+    shutil.copy(GAME_DIR / "square" / "square.net.xml", tmp_path / "n.net.xml")
+    (tmp_path / "r.rou.xml").write_text(STANDING.format(stop=stop))
+    config = write_config(tmp_path, "<net-file value='n.net.xml'/><route-files value='r.rou.xml'/>",
+                          "<begin value='0'/>")
+    assert last_departure_s(load_bundle(config)) == max(10.0, stands_s)
+    check_config(config, 350.0)
+    if stands_s < float("inf"):
+        with pytest.raises(SpecError, match="past the end of the configuration's demand"):
+            check_config(config, stands_s + 1.0)
+    libsumo.start(["sumo", "-c", str(config), "--no-step-log", "true", "--no-warnings", "true"])
+    try:
+        libsumo.simulationStep(350.0)
+        assert "parked" in libsumo.vehicle.getIDList() and "car" not in libsumo.vehicle.getIDList()
+        assert libsumo.vehicle.getSpeed("parked") == 0.0
+    finally:
+        libsumo.close()
+
+
 def test_a_configuration_takes_no_flows_random_trips_or_warm_up():
     for traffic, field in (({"flow_vph_per_lane": 100.0}, "traffic.flow_vph_per_lane"),
                            ({"vehicles": 10}, "traffic.vehicles"),

@@ -16,6 +16,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from analysis.run.commands import program_words
 from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
@@ -310,9 +311,11 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how)
     again = sweep_cli(path, "--out", out, "--workers", "2")
     assert again.returncode == 2 and "--resume" in again.stderr  # no silent overwrite
     if how == "ctrl-c":  # the command it printed, as printed
-        words = shlex.split(hint)
-        assert words[:2] == ["sdc", "sweep"] and words[-1] == "--resume"
-        resumed = sweep_cli(*words[2:])
+        words = shlex.split(hint)  # the interpreter that ran it, then -m sdc
+        assert words[:3] == program_words()
+        assert words[3] == "sweep" and words[-1] == "--resume"
+        resumed = subprocess.run([*words, "--quiet"], capture_output=True, text=True,
+                                 timeout=600)
     else:
         resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
     assert resumed.returncode == 0, resumed.stderr
@@ -356,7 +359,7 @@ def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
                           traces="all", executor="ray", workers=4, ray_address="10.0.0.1:6379",
                           run_timeout=30.0, batch_runs=None)
     assert shlex.split(hint) == [
-        "sdc", "sweep", str(tmp_path / "my sweep.toml"), "--out", str(tmp_path / "out"),
+        *program_words(), "sweep", str(tmp_path / "my sweep.toml"), "--out", str(tmp_path / "out"),
         "--samples", "200", "--traces", "all", "--executor", "ray", "--workers", "4",
         "--ray-address", "10.0.0.1:6379", "--run-timeout", "30.0", "--resume"]
 

@@ -16,8 +16,8 @@ import pandas as pd
 
 from analysis.rare.failure_modes import failure_modes, weighed_rows
 from analysis.rare.rare_events import Estimate, estimate_from_rows
+from analysis.run.commands import replay_command
 from analysis.run.run_outcome import OUTCOMES, STUCK
-from analysis.run.trace_file import replay_command
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import Param, parse_param
 

@@ -32,9 +32,9 @@ from analysis.report.settling_report import (
     settling_lines,
     settling_summary,
 )
+from analysis.run.commands import replay_command
 from analysis.run.run_outcome import collided
 from analysis.run.safety import REACTION_TIME_S
-from analysis.run.trace_file import replay_command
 from analysis.run.world_audit import ROLE_TEXT
 from analysis.stats.gate import Gate, gate, gate_bounds_line
 from analysis.stats.rates import (
@@ -176,6 +176,7 @@ class SweepSummary:
     sumo_config: list | None
     world: dict  # the world audit and who hit whom
     settling: dict | None = None  # the warm-up's word
+    sweep_dir: str | None = None  # where its runs are (the replay commands name it)
 
     def to_plain(self) -> dict:
         plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
@@ -300,7 +301,8 @@ WORLD_TITLE = "## World"
 
 
 def _world_lines(summary: SweepSummary) -> list[str]:
-    return world_lines(summary.world, summary.traffic_model, summary.sumo_config)
+    return world_lines(summary.world, summary.traffic_model, summary.sumo_config,
+                       summary.sweep_dir)
 
 
 def world_warnings(summary: SweepSummary) -> list[str]:
@@ -309,11 +311,15 @@ def world_warnings(summary: SweepSummary) -> list[str]:
 
 
 def world_lines(world: dict, traffic_model: str | None = None,
-                sumo_config: list | None = None) -> list[str]:
+                sumo_config: list | None = None, sweep_dir: str | None = None) -> list[str]:
     """The traffic model, the world audit (``world``: a :func:`world_summary`; a WARNING
     when bodies other than the ego overlapped: a world that made something up), and
     each controller's collisions split into those it ran into and those in which it
-    was hit."""
+    was hit. Its replay commands name ``sweep_dir`` (``DIR`` when not given)."""
+
+    def replay(run_id: str) -> str:
+        return replay_command(Path(sweep_dir) if sweep_dir else Path("DIR"), run_id)
+
     lines = [f"Traffic model: {traffic_model or 'not recorded'}."]
     for config in sumo_config or []:
         overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
@@ -328,7 +334,7 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      f"other than the ego overlapped where SUMO's own lanes hold them apart "
                      f"({world['overlap_steps']} steps in all, column world_overlaps): sdc's "
                      "world made something up, and their verdicts are suspect; see one with "
-                     f"sdc replay DIR --run {world.get('first_overlap_run')} and report it.")
+                     f"{replay(world.get('first_overlap_run'))} and report it.")
     else:
         lines.append("World audit: no two bodies other than the ego overlapped in any run "
                      "where SUMO's own lanes hold them apart (world_overlaps 0).")
@@ -338,8 +344,7 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      f"({world['sumo_overlap_steps']} steps, column sumo_overlaps: vehicles "
                      "waiting on a junction's crossing lanes, bicycles through pedestrians); "
                      "that is SUMO's world as it is, not sdc's coupling, and the ego's verdicts "
-                     "stand; to see one: sdc replay DIR --run "
-                     f"{world['first_sumo_overlap_run']}.")
+                     f"stand; to see one: {replay(world['first_sumo_overlap_run'])}.")
     for controller, roles in world["collisions"].items():
         parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
                  + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
@@ -627,7 +632,7 @@ def _row_outcome(row: dict) -> str:
 def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str:
     """The ranked runs, a table per controller, thumbnails beside its first runs that
     kept a trace."""
-    head = ["#", "run", "class", "what happened", "parameters", "decisive moment", "replay"]
+    head = ["#", "run", "class", "what happened", "parameters", "decisive moment"]
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     parts = []
     for controller, rows in bad.groupby("controller", sort=False):
@@ -643,8 +648,10 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> st
             cells = [str(rank), row["run_id"], row["rank_class"], row["why"],
                      params_text(row, params)]
             body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
-                        + f"<td>{picture}</td><td><code>"
-                        f"{html.escape(replay_command(sweep_dir, row['run_id']))}</code></td></tr>")
+                        + f"<td>{picture}</td></tr>")
+            body.append(f'<tr><td></td><td colspan="{len(head) - 1}">replay: <code class='
+                        f'"command">{html.escape(replay_command(sweep_dir, row["run_id"]))}'
+                        "</code></td></tr>")
         more = (f"<p>... {len(rows) - len(listed)} more in results.parquet</p>"
                 if len(rows) > len(listed) else "")
         parts.append(f"<h3>{html.escape(str(controller))} ({len(rows)})</h3>"
@@ -726,6 +733,7 @@ table { border-collapse: collapse; margin: 1em 0; }
 th, td { border: 1px solid #ccc; padding: 4px 8px; text-align: left; font-size: 14px; }
 th { background: #f2f2f2; }
 code { background: #f6f6f6; padding: 1px 4px; }
+code.command { white-space: nowrap; }  /* a command to copy: one line */
 figure { margin: 1.5em 0; }
 img { max-width: 100%; }
 img.thumb { width: 320px; max-width: none; }
@@ -865,7 +873,7 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
                             max_pedestrian_rate)
     warm_ups = read_settling(sweep_dir)
     summary = dataclasses.replace(summary, settling=settling_summary(
-        warm_ups, on_config_clock=bool(summary.sumo_config)))
+        warm_ups, on_config_clock=bool(summary.sumo_config)), sweep_dir=str(sweep_dir))
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     images = figures(counted, by, method)

@@ -156,9 +156,3 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
               else [])
     return Trace(floats, table.column("phase").to_pylist(), **lists,
                  traffic_class=classes, traffic_body=bodies), metadata
-
-
-def replay_command(sweep_dir: Path, run_id: str) -> str:
-    """The command that re-simulates run ``run_id`` of a sweep directory and compares its
-    trace with the recorded one (``sdc replay``)."""
-    return f"sdc replay {sweep_dir} --run {run_id}"

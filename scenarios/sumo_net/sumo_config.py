@@ -299,11 +299,17 @@ _FLOWS = ("flow", "personFlow", "containerFlow")
 
 
 def _last_of(element: ET.Element) -> float | None:
-    """When a demand element last sends something off (None: not one, or triggered
-    by another); a flow with neither an end nor a number and a fixed period never
+    """When a demand element last sends something off or surely holds something
+    standing on the road (None: not one, or triggered by another): a vehicle's or a
+    trip's stops hold it at least to their ``until``, or their ``duration`` after its
+    depart (it reaches them later), and for good where a person or a container
+    triggers them; a flow with neither an end nor a number and a fixed period never
     stops (inf)."""
     if element.tag in _SENT_AT:
-        return seconds(element.get("depart", ""))
+        depart = seconds(element.get("depart", ""))
+        if depart is None:
+            return None
+        return max([depart, *(_stands_until(stop, depart) for stop in element.iter("stop"))])
     if element.tag not in _FLOWS:
         return None
     begin = seconds(element.get("begin", "0")) or 0.0
@@ -315,14 +321,28 @@ def _last_of(element: ET.Element) -> float | None:
     return math.inf
 
 
+def _stands_until(stop: ET.Element, depart_s: float) -> float:
+    """How long a stop surely holds a vehicle that departed at ``depart_s`` [s]."""
+    if stop.get("triggered", "false") not in ("false", "0") or \
+            stop.get("containerTriggered", "false") not in ("false", "0"):
+        return math.inf
+    until = seconds(stop.get("until", ""))
+    duration = seconds(stop.get("duration", ""))
+    return max(until if until is not None else -math.inf,
+               depart_s + duration if duration is not None else -math.inf)
+
+
 def last_departure_s(bundle: ConfigBundle) -> float | None:
-    """When the configuration's demand last sends something off (a vehicle's or a
-    trip's depart, a flow's end; departures triggered by others aside), None when
+    """When the configuration's demand last sends something off or surely holds
+    something standing (a vehicle's or a trip's depart or the end of its stops, a
+    flow's end; departures triggered by others aside: :func:`_last_of`), None when
     nothing departs."""
     latest = None
     for name in (*bundle.description["routes"], *bundle.description["additional"]):
         data = unzipped(Path(name), bundle.files[name], "a route file")
         for _, element in ET.iterparse(io.BytesIO(data)):
+            if element.tag == "stop":  # read with its vehicle, which clears it
+                continue
             last = _last_of(element)
             if last is not None:
                 latest = last if latest is None else max(latest, last)
@@ -344,7 +364,9 @@ def check_config(path: str | Path, enter_s: float) -> None:
         raise SpecError(FIELD, f"{path}: the configuration's demand sends no vehicle off")
     if enter_s > latest:
         raise SpecError("traffic.enter_s", f"{enter_s} is past the end of the configuration's "
-                        f"demand (its last departure is at {latest:g} s)")
+                        f"demand (its last departure, or the end of the last stop that surely "
+                        f"holds a vehicle, is at {latest:g} s): past it nothing of the demand is "
+                        "sure to be on the road (what departed last may have arrived)")
     problem = _sumo_load_error(bundle)
     if problem is not None:
         raise SpecError(FIELD, f"{path}: SUMO cannot load the configuration: {problem}")

@@ -18,6 +18,9 @@ from rich.progress import (
 
 from analysis.run.run_outcome import outcomes_text
 
+#: plans that take under a few seconds to build show no bar [runs]
+PLANNING_SHOWN_RUNS = 5000
+
 
 class RichReporter:
     """A rich progress bar; runs/s counts only the runs of this session."""
@@ -25,7 +28,23 @@ class RichReporter:
     def __init__(self, console: Console | None = None, label: str = "sweep"):
         self.console, self.label = console or Console(stderr=True), label
         self._progress: Progress | None = None
+        self._planning: Progress | None = None
         self._warm = None
+
+    def planning(self, done: int, total: int) -> None:
+        """Runs planned so far, before the runs start: a bar that goes when it is done,
+        shown for plans of more than :data:`PLANNING_SHOWN_RUNS` runs."""
+        if total <= PLANNING_SHOWN_RUNS:
+            return
+        if self._planning is None:
+            self._planning = Progress(TextColumn("planning the runs"), BarColumn(),
+                                      MofNCompleteColumn(), TimeElapsedColumn(),
+                                      console=self.console, transient=True)
+            self._planning_task = self._planning.add_task("plan", total=total)
+            self._planning.start()
+        self._planning.update(self._planning_task, completed=done)
+        if done >= total:
+            self._planning.stop()
 
     def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None:
         self._progress = Progress(
@@ -70,6 +89,9 @@ class RichReporter:
 
 class QuietReporter:
     """No progress output (logs, CI)."""
+
+    def planning(self, done: int, total: int) -> None:
+        pass
 
     def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None:
         pass

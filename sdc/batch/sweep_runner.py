@@ -50,6 +50,7 @@ from sdc.run.result_row import SweepColumns, invalid_sample_row, result_schema
 class Reporter(Protocol):
     """What a sweep tells about its progress (see :mod:`sdc.batch.progress`)."""
 
+    def planning(self, done: int, total: int) -> None: ...  # runs planned so far
     def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None: ...
     def advance(self, row: dict) -> None: ...
     def set_total(self, total: int) -> None: ...  # the runs now planned (an estimate's change)
@@ -213,7 +214,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     """
     wall_start = time.perf_counter()
     out_dir = Path(out_dir)
-    plan = expand(sweep)
+    plan = expand(sweep, reporter.planning)
     manifest = prepare_dir(out_dir, sweep, plan, resume)
     store = ResultStore(out_dir, result_schema(sweep.param_types))
     stored = store.read()

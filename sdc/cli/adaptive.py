@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from analysis.run.commands import sdc_command
 from scenarios.controller_ref import resolve_file
 from scenarios.errors import SdcError, SpecError
 from sdc.cli.common import (
@@ -59,7 +60,7 @@ def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout; {outcomes_text(outcome.outcomes)} "
                f"({outcome.wall_time_s:.1f} s)")
-    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: sdc report {out_dir}")
+    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: {sdc_command('report', out_dir)}")
     if outcome.interrupted:
         exit_interrupted("interrupted; to finish, run the same command with --resume")
     exit_after_runs(counts)

@@ -7,14 +7,18 @@ import contextlib
 import math
 import os
 import sys
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NoReturn
 
 import click
 
-from scenarios.errors import SpecError
+from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import ScenarioSpec
+
+#: a warm-up's progress off a terminal (a log): a line at most this often [s]
+PROGRESS_EVERY_S = 10.0
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -60,14 +64,45 @@ def check_at(at_s: float | None, end_s: float) -> None:
         bad_input(f"--at: {at_s:g} s is past the run's end at {end_s:.3f} s")
 
 
-def say_warm_up(spec: ScenarioSpec) -> None:
-    """Tell the user (on stderr) when the run first warms its traffic up: minutes, once."""
-    from scenarios.world_backends import warm_state_path
+def warm_up_first(spec: ScenarioSpec) -> None:
+    """Warm the run's traffic up before the run when its warm state is not cached yet
+    (minutes, once), saying so on stderr and how far SUMO's clock got as it goes."""
+    from scenarios.world_backends import warm_state_file, warm_state_path
 
     path = warm_state_path(spec)
-    if path is not None and not path.is_file():
-        click.echo(f"warming the traffic up: {spec.traffic.warm_up_s:g} s of SUMO, once "
-                   f"(the warm state is cached in {path.parent})", err=True)
+    if path is None or path.is_file():
+        return
+    if spec.road.kind == "sumo_config":
+        end_s, what = spec.traffic.enter_s, ("the configuration's demand up to "
+                                             f"traffic.enter_s = {spec.traffic.enter_s:g} s")
+    else:
+        end_s, what = spec.traffic.warm_up_s, f"{spec.traffic.warm_up_s:g} s of SUMO"
+    click.echo(f"warming the traffic up: {what}, once (the warm state is cached in "
+               f"{path.parent})", err=True)
+    # a warm-up that fails here fails again in the run, which tells how (an error row)
+    with contextlib.suppress(SdcError):
+        warm_state_file(spec, on_sample=WarmUpProgress(end_s))
+
+
+class WarmUpProgress:
+    """SUMO's clock during a warm-up, on stderr: in place on a terminal, else a line
+    every :data:`PROGRESS_EVERY_S` of wall time."""
+
+    def __init__(self, end_s: float):
+        self.end_s, self.shown_at = end_s, -math.inf
+        self.terminal = sys.stderr.isatty()
+
+    def __call__(self, t_s: float) -> None:
+        now = time.monotonic()
+        last = t_s >= self.end_s
+        if now - self.shown_at < (0.2 if self.terminal else PROGRESS_EVERY_S) and not last:
+            return
+        self.shown_at = now
+        text = f"warm-up: SUMO at {t_s:,.0f} s of {self.end_s:,.0f} s"
+        if self.terminal:
+            click.echo(f"\r{text}", err=True, nl=last)
+        else:
+            click.echo(text, err=True)
 
 
 def check_controllers(sweep, sweep_file: Path) -> None:

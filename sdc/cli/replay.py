@@ -16,7 +16,7 @@ from sdc.cli.common import (
     check_at,
     exit_interrupted,
     progress_bar,
-    say_warm_up,
+    warm_up_first,
 )
 from sdc.cli.run import summary_lines
 
@@ -126,7 +126,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
         click.echo(line, err=True)
     if recorded.row is not None and recorded.row["status"] == "ok":
         check_at(at_s, recorded.row["sim_time_s"])
-    say_warm_up(recorded.spec)
+    warm_up_first(recorded.spec)
     if recorded.row is not None and recorded.row["status"] != "ok":
         return _replay_failed_run(recorded, out, every, gui, at_s)
     episode = run_episode(recorded.spec, run_id=run_id, gui=gui)

@@ -14,7 +14,7 @@ from scenarios.errors import SdcError, SpecError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.seeding import SEED_LIMIT
 from scenarios.toml_io import load_spec
-from sdc.cli.common import EXIT_RUN_ERROR, bad_input, exit_interrupted, say_warm_up
+from sdc.cli.common import EXIT_RUN_ERROR, bad_input, exit_interrupted, warm_up_first
 
 
 def check_trace_path(trace: Path | None) -> None:
@@ -31,7 +31,7 @@ def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     from sdc.batch.run_task import RunTask, execute
     from sdc.run.episode import default_run_id
 
-    say_warm_up(spec)
+    warm_up_first(spec)
     return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from analysis.run.commands import program_words
 from scenarios.errors import SdcError
 from sdc.cli.common import (
     bad_input,
@@ -84,7 +85,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
         check_inputs(spec.base)
         check_controllers(spec, sweep_file)
         if dry_run:
-            for line in _plan_lines(spec, expand(spec)):
+            for line in _plan_lines(spec, expand(spec, make_reporter(options).planning)):
                 click.echo(line)
             return
         if out_dir is None:
@@ -112,7 +113,7 @@ def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, trac
                    run_timeout: float | None, batch_runs: int | None) -> str:
     """The command that finishes an interrupted sweep: every option that shaped its plan
     (--samples; another plan is refused) and how it ran, then --resume; shell-quoted."""
-    words = ["sdc", "sweep", str(sweep_file), "--out", str(out_dir)]
+    words = [*program_words(), "sweep", str(sweep_file), "--out", str(out_dir)]
     optional = [("--samples", samples), ("--traces", None if traces == "failures" else traces),
                 ("--executor", None if executor == "local" else executor),
                 ("--workers", workers), ("--ray-address", ray_address),

@@ -1,0 +1,55 @@
+"""The commands sdc prints for a user to run next (replay a run, finish a sweep, read
+a report), spelled with the executable this process was started as, so that each
+runs as printed: ``.venv/bin/sdc`` after ``make demo``, ``sdc`` where that is on
+PATH, ``python -m sdc`` (with the interpreter that ran it) for a module run or a
+call from Python."""
+
+from __future__ import annotations
+
+import os
+import shlex
+import shutil
+import sys
+from pathlib import Path
+
+#: the console script pyproject.toml installs
+SCRIPT = "sdc"
+
+
+def program_words(argv0: str | None = None, executable: str | None = None) -> list[str]:
+    """How to start sdc the way this process was started (``argv0``, ``executable``:
+    default ``sys.argv[0]`` and ``sys.executable``): the console script as it was
+    typed (bare ``sdc`` when PATH finds that very file), else ``python -m sdc`` with
+    the interpreter (bare ``python`` or ``python3`` when PATH finds it)."""
+    argv0 = sys.argv[0] if argv0 is None else argv0
+    executable = sys.executable if executable is None else executable
+    if Path(argv0).name == SCRIPT:
+        return [_shortest(argv0, SCRIPT)]
+    python = executable or "python3"
+    for name in ("python", "python3"):
+        if _same_file(shutil.which(name), python):
+            python = name
+            break
+    return [python, "-m", SCRIPT]
+
+
+def _shortest(path: str, name: str) -> str:
+    """``name`` where PATH finds ``path`` by it, else ``path`` as given."""
+    return name if _same_file(shutil.which(name), path) else path
+
+
+def _same_file(found: str | None, path: str) -> bool:
+    """The same path, symbolic links left as they are (a virtual environment's
+    python links to the system's, and is not it)."""
+    return found is not None and os.path.abspath(found) == os.path.abspath(path)
+
+
+def sdc_command(*args: object) -> str:
+    """A whole sdc command line, shell-quoted, on one line."""
+    return shlex.join([*program_words(), *(str(a) for a in args)])
+
+
+def replay_command(sweep_dir: Path, run_id: str) -> str:
+    """The command that re-simulates run ``run_id`` of a sweep directory and compares its
+    trace with the recorded one (``sdc replay``)."""
+    return sdc_command("replay", sweep_dir, "--run", run_id)
