@@ -395,7 +395,9 @@ def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
     if "traffic.warm_seed" in swept:
         raise SpecError("sweep.warm_states", "and a swept traffic.warm_seed both choose the "
                         "warm-ups' seeds: keep one")
-    if base.traffic.warm_up_s == 0 and "traffic.warm_up_s" not in swept:
+    # a configuration's demand up to traffic.enter_s is its warm-up
+    if (base.traffic.warm_up_s == 0 and "traffic.warm_up_s" not in swept
+            and base.road.kind != "sumo_config"):
         raise SpecError("sweep.warm_states", "the base scenario has no traffic warm-up "
                         "(traffic.warm_up_s = 0), so there is no warm state to share")
 

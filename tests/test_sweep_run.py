@@ -96,7 +96,11 @@ def _workers(driver_pid: int) -> list[int]:
     """The worker processes of a local sweep: its driver's spawned children."""
     pids = []
     for thread in Path(f"/proc/{driver_pid}/task").iterdir():
-        for pid in (thread / "children").read_text().split():
+        try:
+            children = (thread / "children").read_text().split()
+        except FileNotFoundError:  # a thread that ended since the listing
+            continue
+        for pid in children:
             with contextlib.suppress(FileNotFoundError):
                 if b"spawn_main" in Path(f"/proc/{pid}/cmdline").read_bytes():
                     pids.append(int(pid))

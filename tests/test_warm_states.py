@@ -207,6 +207,33 @@ def test_warm_states_need_a_warm_up(tmp_path):
         load_sweep(path)
 
 
+@pytest.mark.slow
+def test_a_configuration_sweep_shares_its_warm_states(tmp_path, monkeypatch):
+    """On a sumo_config base the demand up to traffic.enter_s is the warm-up: N warm
+    states are N shared entries of it, each from its own seed; the plan says so."""
+    fresh_cache(tmp_path / "cache", monkeypatch)
+    base = (CATALOG_DIR / "real-traffic.toml").read_text()
+    base = (base.replace("A10KW.sumocfg", "square.sumocfg").replace("enter_s = 120.0",
+                                                                    "enter_s = 30.0")
+            .replace("duration_s = 40.0", "duration_s = 2.0"))
+    (tmp_path / "base.toml").write_text(base)
+    (tmp_path / "sweep.toml").write_text(
+        '[sweep]\nname = "shared"\nbase = "base.toml"\nsamples = 4\nseed = 5\n'
+        'warm_states = 2\ncontrollers = ["lane-keep"]\n\n[sweep.params]\n'
+        '"ego.speed_mps" = { uniform = [5.0, 9.0] }\n')
+    sweep = load_sweep(tmp_path / "sweep.toml")
+    plan = expand(sweep)
+    assert {r.spec.traffic.warm_seed for r in plan} == set(warm_seeds(sweep))
+    dry = CliRunner().invoke(main, ["sweep", str(tmp_path / "sweep.toml"), "--dry-run"])
+    assert "the samples draw their traffic from 2 warm states" in dry.output, dry.output
+    out = run_sweep(sweep, tmp_path / "out", LocalExecutor(2), QuietReporter())
+    assert out.counts == {"ok": 4, "error": 0, "timeout": 0, "missing": 0}
+    rows = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert rows.warm_state.nunique() == 2
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert manifest["sessions"][-1]["warm_states"]["distinct"] == 2
+
+
 def test_warm_states_on_the_highway_backend_alone_are_refused(tmp_path):
     """highway-env has no saved traffic to share: asking for warm states there was
     silently ignored ("0 warm states")."""

@@ -9,6 +9,7 @@ import click
 
 from analysis.run.commands import program_words
 from scenarios.errors import SdcError
+from scenarios.warm_state import uses_warm_state
 from sdc.cli.common import (
     bad_input,
     check_controllers,
@@ -27,8 +28,8 @@ def _plan_lines(sweep, plan) -> list[str]:
     lines = [f"sweep {sweep.name}: {samples} samples x {len(sweep.controllers)} controllers = "
              f"{len(plan)} runs ({sweep.sampler} sampler, seed {sweep.seed}); "
              f"{invalid} runs with an invalid scenario"]
-    warm = {run.spec.traffic.warm_seed for run in plan if run.spec is not None
-            and run.spec.traffic.warm_up_s > 0 and run.spec.scenario.backend == "sumo"}
+    warm = {(repr(run.spec.road), run.spec.traffic.warm_seed) for run in plan
+            if run.spec is not None and uses_warm_state(run.spec)}
     if sweep.warm_states is not None:
         lines.append(f"the samples draw their traffic from {len(warm)} warm states "
                      f"(sweep.warm_states = {sweep.warm_states})")
