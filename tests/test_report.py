@@ -6,6 +6,7 @@ import base64
 import html
 import io
 import json
+import os
 import re
 import shutil
 import xml.etree.ElementTree as ElementTree
@@ -18,6 +19,7 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from analysis.report.look_at import LIST_FILE, SHOWN_PER_CLASS, ranked_runs, shown_runs
 from analysis.report.sweep_report import (
     COLLISION_TITLE,
     NOT_RECORDED,
@@ -89,10 +91,19 @@ def test_report_files_count_errors_apart(small_sweep, tmp_path):
     assert len(images) >= 5
     for data in images:
         assert matplotlib.image.imread(io.BytesIO(base64.b64decode(data))).ndim == 3
+    # the first runs of each class on the page and in report.md, every one in the list
     bad = results[(results.status != "ok") | results.collision.fillna(False).astype(bool)]
+    shown = set(shown_runs(ranked_runs(results)).run_id)
+    listed = pd.read_csv(small_sweep / LIST_FILE).set_index("run_id").replay
+    assert 0 < len(shown & set(bad.run_id)) < len(bad)
     for run_id in bad.run_id:
-        assert html.escape(replay_command(small_sweep, run_id)) in page
-        assert f"--run {run_id}" in (small_sweep / "report.md").read_text()
+        command = replay_command(small_sweep, run_id)
+        assert listed[run_id] == command
+        assert (html.escape(command) in page) == (run_id in shown)
+        assert (f"--run {run_id}`" in (small_sweep / "report.md").read_text()) == (
+            run_id in shown)
+    # the page is written elsewhere (--out): its link to the list is relative to it
+    assert f'<a href="{os.path.relpath(small_sweep / LIST_FILE, tmp_path)}">' in page
     assert "invalid scenario from sample" in page
 
     suite = ElementTree.parse(tmp_path / "runs.xml").getroot()
@@ -178,8 +189,20 @@ def test_report_page_in_headless_chromium_shows_verdicts_map_and_thumbnails(
     assert [w > 300 for w in decoded('img[alt^="Failure map over"]')] == [True]
     assert [w > 300 for w in decoded('img[alt="How the runs ended"]')] == [True]
     thumbs = decoded(".look-at img.thumb")
-    per_controller = results[results.run_id.isin(kept)].groupby("controller").size()
-    assert len(thumbs) == sum(min(n, 4) for n in per_controller) and all(w > 300 for w in thumbs)
+    # of each controller's class, the first three, each with its picture where kept
+    looked = results[~completed_runs(results)]
+    per_class = ranked_runs(results).groupby(["controller", "rank_class"]).size()
+    assert page.locator(".look-at tr:has(td:nth-child(6))").count() == sum(
+        min(n, SHOWN_PER_CLASS) for n in per_class)
+    shown = shown_runs(ranked_runs(results))
+    assert len(thumbs) == shown.run_id.isin(kept).sum() > 0 and all(w > 300 for w in thumbs)
+    more = page.locator(".look-at tr.more").all_inner_texts()
+    assert more  # lane-keep has four runs without an outcome
+    assert sum(int(line.split()[0]) for line in more) == len(looked) - len(shown)
+    listed = pd.read_csv(small_sweep / LIST_FILE)
+    assert sorted(listed.run_id) == sorted(looked.run_id)
+    assert all(replay_command(small_sweep, r) == c for r, c in zip(listed.run_id, listed.replay,
+                                                                strict=True))
     # a table per controller, the lesson's seed before the lane-keep control group
     looked_at = results[~completed_runs(results)].groupby("controller").size()
     assert page.locator("h2:has-text('Runs to look at') ~ h3").all_inner_texts()[:2] == [

@@ -23,8 +23,30 @@ RANKING = ("Per controller, the controllers under test first, the lesson's seed 
            "first, then the smallest gap to an obstacle.")
 #: the lesson's maneuver and the control group: listed after the controllers under test
 REFERENCE_CONTROLLERS = ("seed", "lane-keep")
-#: thumbnails drawn per controller, for its first runs with a kept trace
-THUMBNAILS_PER_CONTROLLER = 4
+#: runs shown per controller and class, each with its thumbnail where its trace was
+#: kept; the whole ranked list is a CSV beside the report
+SHOWN_PER_CLASS = 3
+#: that list's file, in the sweep directory
+LIST_FILE = "runs-to-look-at.csv"
+
+
+def shown_runs(ranked: pd.DataFrame) -> pd.DataFrame:
+    """Of :func:`ranked_runs`, the first :data:`SHOWN_PER_CLASS` of each controller
+    and class, in the ranking's order."""
+    return ranked.groupby(["controller", "rank_class"], sort=False).head(SHOWN_PER_CLASS)
+
+
+def look_at_list(ranked: pd.DataFrame, params: list[str], replay) -> pd.DataFrame:
+    """The whole ranked list as a table to write beside the report: controller, rank
+    within it, run, class, what happened, parameters and ``replay(run_id)``."""
+    rank = ranked.groupby("controller", sort=False).cumcount() + 1
+    records = ranked.to_dict("records")
+    return pd.DataFrame({
+        "controller": ranked.controller.to_numpy(), "rank": rank.to_numpy(),
+        "run_id": ranked.run_id.to_numpy(), "class": ranked.rank_class.to_numpy(),
+        "what_happened": ranked.why.to_numpy(),
+        "parameters": [params_text(r, params) for r in records],
+        "replay": [replay(r["run_id"]) for r in records]})
 
 
 def _rank_class(results: pd.DataFrame) -> pd.Series:

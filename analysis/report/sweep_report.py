@@ -13,6 +13,7 @@ import html
 import itertools
 import json
 import math
+import os
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -20,8 +21,10 @@ import pandas as pd
 
 from analysis.report import plots
 from analysis.report.look_at import (
+    LIST_FILE,
     RANKING,
-    THUMBNAILS_PER_CONTROLLER,
+    SHOWN_PER_CLASS,
+    look_at_list,
     params_text,
     ranked_runs,
     thumbnail,
@@ -70,7 +73,9 @@ from scenarios.plain_json import json_plain, json_scalar
 from scenarios.sweep_spec import PARAM_PREFIX
 
 SPEED = f"{PARAM_PREFIX}ego.speed_mps"
-MAX_LISTED_FAILURES = 500
+#: what the runs-to-look-at tables hold
+SHOWN_WORDS = (f"Of each controller's runs of a class the first {SHOWN_PER_CLASS} are "
+               "shown; the rest are counted, and listed in full beside the report.")
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
@@ -478,16 +483,23 @@ def collision_notes(summary: SweepSummary) -> str:
             + "The tables by parameter add failed: the group's errors and timeouts.")
 
 
+def _in_verdict_order(summary: SweepSummary, controllers) -> list[str]:
+    """``controllers`` in the verdict table's order (the highest completed rate first),
+    where it is recorded."""
+    order = list(summary.verdicts.by_controller) if summary.verdicts else []
+    return sorted(controllers, key=lambda c: order.index(c) if c in order else len(order))
+
+
 def headline_rows(summary: SweepSummary) -> list[list[str]]:
-    """The collision table: per controller, or per controller and backend side by side
-    when the sweep ran on several backends."""
+    """The collision table: per controller (in the verdict table's order), or per
+    controller and backend side by side when the sweep ran on several backends."""
     by_backend = summary.by_backend
+    controllers = _in_verdict_order(summary, summary.by_controller)
     if by_backend:
-        controllers = list(summary.by_controller)
         groups = [([c, b], by_backend[b][c]) for c in controllers for b in by_backend
                   if c in by_backend[b]]
     else:
-        groups = [([c], rate) for c, rate in summary.by_controller.items()]
+        groups = [([c], summary.by_controller[c]) for c in controllers]
     deff = shares_traffic(summary)
     rows = [["controller", *(["backend"] if by_backend else []), "ok runs", "collisions",
              "rate", "95% interval", *(HIT_HEADS[kind] for kind in HIT_ORDER), "errors",
@@ -512,8 +524,9 @@ def stop_rows(summary: SweepSummary) -> list[list[str]]:
     headline's columns (backend: all), no rows when it was not recorded."""
     stop = summary.stop_possible
     backend = ["all"] if summary.by_backend else []
-    return [_rate_row([c, *backend], rate, summary.interval, shares_traffic(summary))
-            for c, rate in (stop.by_controller if stop else {}).items()]
+    rates = stop.by_controller if stop else {}
+    return [_rate_row([c, *backend], rates[c], summary.interval, shares_traffic(summary))
+            for c in _in_verdict_order(summary, rates)]
 
 
 COMPARISONS_TITLE = ("Pair by pair, on the scenarios both controllers ran (McNemar's exact "
@@ -629,34 +642,39 @@ def _row_outcome(row: dict) -> str:
     return outcome
 
 
-def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str]) -> str:
-    """The ranked runs, a table per controller, thumbnails beside its first runs that
-    kept a trace."""
+def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
+                    list_href: str) -> str:
+    """The ranked runs, a table per controller: of each class its first
+    :data:`SHOWN_PER_CLASS`, each with the decisive moment where its trace was kept and
+    its replay command, then how many more the list at ``list_href`` holds."""
     head = ["#", "run", "class", "what happened", "parameters", "decisive moment"]
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     parts = []
     for controller, rows in bad.groupby("controller", sort=False):
-        body, drawn = [], 0
-        listed = rows.head(MAX_LISTED_FAILURES)
-        for rank, row in enumerate(listed.to_dict("records"), start=1):
-            png = (thumbnail(sweep_dir, row["run_id"]) if drawn < THUMBNAILS_PER_CONTROLLER
-                   else None)
-            drawn += png is not None
-            picture = ("" if png is None else
-                       f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
-                       f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
-            cells = [str(rank), row["run_id"], row["rank_class"], row["why"],
-                     params_text(row, params)]
-            body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
-                        + f"<td>{picture}</td></tr>")
-            body.append(f'<tr><td></td><td colspan="{len(head) - 1}">replay: <code class='
-                        f'"command">{html.escape(replay_command(sweep_dir, row["run_id"]))}'
-                        "</code></td></tr>")
-        more = (f"<p>... {len(rows) - len(listed)} more in results.parquet</p>"
-                if len(rows) > len(listed) else "")
+        rows = rows.assign(_rank=range(1, len(rows) + 1))
+        body = []
+        for rank_class, of_class in rows.groupby("rank_class", sort=False):
+            for row in of_class.head(SHOWN_PER_CLASS).to_dict("records"):
+                png = thumbnail(sweep_dir, row["run_id"])
+                picture = ("" if png is None else
+                           f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
+                           f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
+                cells = [str(row["_rank"]), row["run_id"], row["rank_class"], row["why"],
+                         params_text(row, params)]
+                body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
+                            + f"<td>{picture}</td></tr>")
+                body.append(f'<tr><td></td><td colspan="{len(head) - 1}">replay: <code '
+                            f'class="command">'
+                            f'{html.escape(replay_command(sweep_dir, row["run_id"]))}'
+                            "</code></td></tr>")
+            more = len(of_class) - SHOWN_PER_CLASS
+            if more > 0:
+                body.append(f'<tr class="more"><td></td><td colspan="{len(head) - 1}">'
+                            f"{more} more {html.escape(str(rank_class))} in "
+                            f'<a href="{html.escape(list_href)}">{LIST_FILE}</a></td></tr>')
         parts.append(f"<h3>{html.escape(str(controller))} ({len(rows)})</h3>"
                      f'<table class="look-at" id="look-at-{html.escape(str(controller))}">'
-                     f'<tr>{header}</tr>{"".join(body)}</table>{more}')
+                     f'<tr>{header}</tr>{"".join(body)}</table>')
     return "".join(parts)
 
 
@@ -690,17 +708,20 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> s
         lines += ["", "## Comparisons", "", COMPARISONS_TITLE]
         for title, sentences in groups:
             lines += ["", f"### {title}", "", *(f"- {s}" for s in sentences)]
-    lines += ["", "## Runs to look at", "", RANKING, ""]
+    lines += ["", "## Runs to look at", "", f"{RANKING} {SHOWN_WORDS}", ""]
     bad = ranked_runs(results)
     params = varying_parameters(results)
     for controller, rows in bad.groupby("controller", sort=False):
         lines += ["", f"### {controller} ({len(rows)})", ""]
-        for rank, row in enumerate(rows.head(MAX_LISTED_FAILURES).to_dict("records"), start=1):
-            lines.append(f"{rank}. `{row['run_id']}`: {row['why']}; "
-                         f"{params_text(row, params)} — "
-                         f"`{replay_command(sweep_dir, row['run_id'])}`")
-        if len(rows) > MAX_LISTED_FAILURES:
-            lines.append(f"- ... {len(rows) - MAX_LISTED_FAILURES} more in results.parquet")
+        rows = rows.assign(_rank=range(1, len(rows) + 1))
+        for rank_class, of_class in rows.groupby("rank_class", sort=False):
+            for row in of_class.head(SHOWN_PER_CLASS).to_dict("records"):
+                lines.append(f"{row['_rank']}. `{row['run_id']}`: {row['why']}; "
+                             f"{params_text(row, params)} — "
+                             f"`{replay_command(sweep_dir, row['run_id'])}`")
+            if len(of_class) > SHOWN_PER_CLASS:
+                lines.append(f"- {len(of_class) - SHOWN_PER_CLASS} more {rank_class} in "
+                             f"[{LIST_FILE}]({LIST_FILE})")
     return "\n".join(lines) + "\n"
 
 
@@ -761,8 +782,9 @@ def _figure_html(title: str, png: bytes) -> str:
 
 def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
               images: list[tuple[str, bytes]],
-              warm_up_images: list[tuple[str, bytes]] = ()) -> str:
-    """The report page; ``warm_up_images`` beside the warm-state lines they show."""
+              warm_up_images: list[tuple[str, bytes]] = (), list_href: str = LIST_FILE) -> str:
+    """The report page; ``warm_up_images`` beside the warm-state lines they show;
+    ``list_href``: where the page finds the whole list of runs to look at."""
     verdicts = verdict_rows(summary)
     parts = [f"<h1>Collision report: {html.escape(summary.sweep)}</h1>",
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
@@ -803,11 +825,11 @@ def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
         parts.append(f"<details><summary>By {html.escape(column)}</summary>"
                      f"{_table_html(table)}</details>")
     bad = ranked_runs(results)
-    parts += [f"<h2>Runs to look at ({len(bad)})</h2>", f"<p>{html.escape(RANKING)} The "
-              f"pictures show the moment that decided each controller's first "
-              f"{THUMBNAILS_PER_CONTROLLER} runs with a kept trace (top-down; lidar returns "
-              "in orange).</p>",
-              _look_at_tables(bad, sweep_dir, varying_parameters(results))]
+    parts += [f"<h2>Runs to look at ({len(bad)})</h2>",
+              f"<p>{html.escape(RANKING)} {html.escape(SHOWN_WORDS)} The pictures show the "
+              "moment that decided each run whose trace was kept (top-down; lidar returns in "
+              f'orange). All of them: <a href="{html.escape(list_href)}">{LIST_FILE}</a>.</p>',
+              _look_at_tables(bad, sweep_dir, varying_parameters(results), list_href)]
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>sdc report: {html.escape(summary.sweep)}</title>"
             f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>\n")
@@ -877,8 +899,12 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     images = figures(counted, by, method)
-    html_path.write_text(html_page(summary, results, sweep_dir, images,
-                                   settling_image(warm_ups, summary.settling)))
+    list_path = sweep_dir / LIST_FILE
+    look_at_list(ranked_runs(results), varying_parameters(results),
+                 lambda run_id: replay_command(sweep_dir, run_id)).to_csv(list_path, index=False)
+    html_path.write_text(html_page(
+        summary, results, sweep_dir, images, settling_image(warm_ups, summary.settling),
+        os.path.relpath(list_path, html_path.parent)))
     summary_path = sweep_dir / "summary.json"
     plain = summary.to_plain()
     summary_path.write_text(json.dumps(json_plain(plain), indent=2) + "\n")
