@@ -275,3 +275,52 @@ def test_a_sample_invalid_for_one_controller_leaves_the_others_running(tmp_path)
     assert all(run.spec is not None for run in plan if run.controller == "seed")
     invalid = [run for run in plan if run.controller == "avoid"]
     assert all(run.spec is None and "controller.detect_ttc_s" in run.error for run in invalid)
+
+
+def test_a_sweep_too_big_to_plan_is_refused_before_anything_is_planned(tmp_path, monkeypatch):
+    """10,000,000 samples x 2 controllers: exit 2 as the file is read, naming the field,
+    the limit and what to do instead; nothing is planned (a plan of that size held
+    the terminal silent for minutes, then ran out of memory)."""
+    import scenarios.sweep_spec as sweep_spec
+
+    def no_plan(*args, **kwargs):
+        raise AssertionError("planned a sweep it should have refused")
+
+    monkeypatch.setattr(sweep_spec, "expand", no_plan)
+    path = write_sweep(tmp_path, 'samples = 10_000_000\ncontrollers = ["seed", "avoid"]\n')
+    result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run"])
+    assert result.exit_code == 2, result.output
+    assert ("sweep.samples: 10000000 samples x 2 controllers = 20,000,000 runs, more than "
+            f"the {sweep_spec.MAX_RUNS:,} a sweep plans") in result.output
+    assert "sdc estimate" in result.output and "Traceback" not in result.output
+    small = write_sweep(tmp_path, 'samples = 3\ncontrollers = ["seed", "avoid"]\n')
+    result = CliRunner().invoke(main, ["sweep", str(small), "--samples", "50001", "--dry-run"])
+    assert result.exit_code == 2 and "--samples: 50001 samples x 2 controllers" in result.output
+    with pytest.raises(SpecError, match="the grid has 300000 points x 1 controller = 300,000"):
+        make(sampler="grid", samples=None, levels=None,
+             params={"scenario.seed": {"int_range": [1, 300_000]}})
+    assert make(samples=sweep_spec.MAX_RUNS).samples == sweep_spec.MAX_RUNS  # at the limit
+
+
+def test_planning_says_how_far_it_got():
+    sweep = make(samples=2500, controllers=["seed", "lane-keep"])
+    seen = []
+    plan = expand(sweep, lambda done, total: seen.append((done, total)))
+    assert seen[0] == (0, 5000) and seen[-1] == (5000, 5000) == (len(plan), 5000)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen) and len(seen) >= 6
+
+
+def test_the_planning_bar_shows_on_a_terminal_for_big_plans():
+    import io
+
+    from rich.console import Console
+
+    from sdc.batch.progress import PLANNING_SHOWN_RUNS, RichReporter
+
+    out = io.StringIO()
+    reporter = RichReporter(Console(file=out, force_terminal=True, width=100))
+    reporter.planning(0, PLANNING_SHOWN_RUNS)  # small: no bar
+    assert out.getvalue() == ""
+    for done in (0, 3000, 2 * PLANNING_SHOWN_RUNS):
+        reporter.planning(done, 2 * PLANNING_SHOWN_RUNS)
+    assert "planning the runs" in out.getvalue()

@@ -29,6 +29,7 @@ class RichReporter:
         self.console, self.label = console or Console(stderr=True), label
         self._progress: Progress | None = None
         self._planning: Progress | None = None
+        self._planning_task = None
         self._warm = None
 
     def planning(self, done: int, total: int) -> None:
