@@ -30,10 +30,14 @@ SHOWN_PER_CLASS = 3
 LIST_FILE = "runs-to-look-at.csv"
 
 
-def shown_runs(ranked: pd.DataFrame) -> pd.DataFrame:
-    """Of :func:`ranked_runs`, the first :data:`SHOWN_PER_CLASS` of each controller
-    and class, in the ranking's order."""
-    return ranked.groupby(["controller", "rank_class"], sort=False).head(SHOWN_PER_CLASS)
+def classes_shown(rows: pd.DataFrame) -> list[tuple[str, list[dict], int]]:
+    """One controller's ranked runs (:func:`ranked_runs`) class by class: the class,
+    its first :data:`SHOWN_PER_CLASS` runs (records, each with its ``rank`` among the
+    controller's runs) and how many more it holds."""
+    rows = rows.assign(rank=range(1, len(rows) + 1))
+    return [(rank_class, of_class.head(SHOWN_PER_CLASS).to_dict("records"),
+             max(len(of_class) - SHOWN_PER_CLASS, 0))
+            for rank_class, of_class in rows.groupby("rank_class", sort=False)]
 
 
 def look_at_list(ranked: pd.DataFrame, params: list[str], replay) -> pd.DataFrame:

@@ -24,6 +24,7 @@ from analysis.report.look_at import (
     LIST_FILE,
     RANKING,
     SHOWN_PER_CLASS,
+    classes_shown,
     look_at_list,
     params_text,
     ranked_runs,
@@ -651,15 +652,14 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     parts = []
     for controller, rows in bad.groupby("controller", sort=False):
-        rows = rows.assign(_rank=range(1, len(rows) + 1))
         body = []
-        for rank_class, of_class in rows.groupby("rank_class", sort=False):
-            for row in of_class.head(SHOWN_PER_CLASS).to_dict("records"):
+        for rank_class, shown, more in classes_shown(rows):
+            for row in shown:
                 png = thumbnail(sweep_dir, row["run_id"])
                 picture = ("" if png is None else
                            f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
                            f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
-                cells = [str(row["_rank"]), row["run_id"], row["rank_class"], row["why"],
+                cells = [str(row["rank"]), row["run_id"], row["rank_class"], row["why"],
                          params_text(row, params)]
                 body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
                             + f"<td>{picture}</td></tr>")
@@ -667,8 +667,7 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
                             f'class="command">'
                             f'{html.escape(replay_command(sweep_dir, row["run_id"]))}'
                             "</code></td></tr>")
-            more = len(of_class) - SHOWN_PER_CLASS
-            if more > 0:
+            if more:
                 body.append(f'<tr class="more"><td></td><td colspan="{len(head) - 1}">'
                             f"{more} more {html.escape(str(rank_class))} in "
                             f'<a href="{html.escape(list_href)}">{LIST_FILE}</a></td></tr>')
@@ -713,15 +712,12 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> s
     params = varying_parameters(results)
     for controller, rows in bad.groupby("controller", sort=False):
         lines += ["", f"### {controller} ({len(rows)})", ""]
-        rows = rows.assign(_rank=range(1, len(rows) + 1))
-        for rank_class, of_class in rows.groupby("rank_class", sort=False):
-            for row in of_class.head(SHOWN_PER_CLASS).to_dict("records"):
-                lines.append(f"{row['_rank']}. `{row['run_id']}`: {row['why']}; "
-                             f"{params_text(row, params)} — "
-                             f"`{replay_command(sweep_dir, row['run_id'])}`")
-            if len(of_class) > SHOWN_PER_CLASS:
-                lines.append(f"- {len(of_class) - SHOWN_PER_CLASS} more {rank_class} in "
-                             f"[{LIST_FILE}]({LIST_FILE})")
+        for rank_class, shown, more in classes_shown(rows):
+            lines += [f"{row['rank']}. `{row['run_id']}`: {row['why']}; "
+                      f"{params_text(row, params)} — "
+                      f"`{replay_command(sweep_dir, row['run_id'])}`" for row in shown]
+            if more:
+                lines.append(f"- {more} more {rank_class} in [{LIST_FILE}]({LIST_FILE})")
     return "\n".join(lines) + "\n"
 
 
