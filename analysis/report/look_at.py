@@ -32,21 +32,19 @@ LIST_FILE = "runs-to-look-at.csv"
 
 def classes_shown(rows: pd.DataFrame) -> list[tuple[str, list[dict], int]]:
     """One controller's ranked runs (:func:`ranked_runs`) class by class: the class,
-    its first :data:`SHOWN_PER_CLASS` runs (records, each with its ``rank`` among the
-    controller's runs) and how many more it holds."""
-    rows = rows.assign(rank=range(1, len(rows) + 1))
+    its first :data:`SHOWN_PER_CLASS` runs (records) and how many more it holds."""
     return [(rank_class, of_class.head(SHOWN_PER_CLASS).to_dict("records"),
              max(len(of_class) - SHOWN_PER_CLASS, 0))
             for rank_class, of_class in rows.groupby("rank_class", sort=False)]
 
 
 def look_at_list(ranked: pd.DataFrame, params: list[str], replay) -> pd.DataFrame:
-    """The whole ranked list as a table to write beside the report: controller, rank
-    within it, run, class, what happened, parameters and ``replay(run_id)``."""
-    rank = ranked.groupby("controller", sort=False).cumcount() + 1
+    """The whole ranked list (:func:`ranked_runs`) as a table to write beside the
+    report: controller, rank within it, run, class, what happened, parameters and
+    ``replay(run_id)``."""
     records = ranked.to_dict("records")
     return pd.DataFrame({
-        "controller": ranked.controller.to_numpy(), "rank": rank.to_numpy(),
+        "controller": ranked.controller.to_numpy(), "rank": ranked["rank"].to_numpy(),
         "run_id": ranked.run_id.to_numpy(), "class": ranked.rank_class.to_numpy(),
         "what_happened": ranked.why.to_numpy(),
         "parameters": [params_text(r, params) for r in records],
@@ -77,7 +75,8 @@ def ranked_runs(results: pd.DataFrame) -> pd.DataFrame:
     """The runs that did not complete without a collision, per controller
     (:func:`controller_order`) and ranked (:data:`RANKING`), with ``rank_class``
     (their class in :data:`RANK_CLASSES`), ``why`` (:func:`what_happened`) and
-    ``others_completed`` (how many other controllers completed the same sample)."""
+    ``others_completed`` (how many other controllers completed the same sample) and
+    ``rank`` (its place among its controller's runs, from 1)."""
     done = completed_runs(results)
     completed_per_sample = done.groupby(results["sample"]).transform("sum")
     ranked = results.assign(_class=_rank_class(results),
@@ -89,8 +88,9 @@ def ranked_runs(results: pd.DataFrame) -> pd.DataFrame:
                            _controller=ranked.controller.map(order),
                            _gap=ranked.min_gap_obstacle_m.fillna(np.inf),
                            _others=-ranked.others_completed)
-    return (ranked.sort_values(["_controller", "_class", "_others", "_gap", "run_index"])
-            .drop(columns=["_controller", "_class", "_others", "_gap"]))
+    ranked = (ranked.sort_values(["_controller", "_class", "_others", "_gap", "run_index"])
+              .drop(columns=["_controller", "_class", "_others", "_gap"]))
+    return ranked.assign(rank=ranked.groupby("controller", sort=False).cumcount() + 1)
 
 
 def what_happened(row: Mapping[str, Any]) -> str:

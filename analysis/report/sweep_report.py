@@ -688,7 +688,9 @@ def _count_line(summary: SweepSummary) -> str:
             f"{counts['timeout']} timeout); intervals: {summary.interval} 95%.")
 
 
-def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> str:
+def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
+             bad: pd.DataFrame) -> str:
+    """``report.md``; ``bad``: the runs to look at (:func:`ranked_runs` of ``results``)."""
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
     lines = [f"# Collision report: {summary.sweep}", "", _count_line(summary), "",
              *(f"**{line}**" for line in coverage_lines(summary)), ""]
@@ -708,7 +710,6 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path) -> s
         for title, sentences in groups:
             lines += ["", f"### {title}", "", *(f"- {s}" for s in sentences)]
     lines += ["", "## Runs to look at", "", f"{RANKING} {SHOWN_WORDS}", ""]
-    bad = ranked_runs(results)
     params = varying_parameters(results)
     for controller, rows in bad.groupby("controller", sort=False):
         lines += ["", f"### {controller} ({len(rows)})", ""]
@@ -777,10 +778,11 @@ def _figure_html(title: str, png: bytes) -> str:
 
 
 def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
-              images: list[tuple[str, bytes]],
+              bad: pd.DataFrame, images: list[tuple[str, bytes]],
               warm_up_images: list[tuple[str, bytes]] = (), list_href: str = LIST_FILE) -> str:
-    """The report page; ``warm_up_images`` beside the warm-state lines they show;
-    ``list_href``: where the page finds the whole list of runs to look at."""
+    """The report page; ``bad``: the runs to look at (:func:`ranked_runs` of
+    ``results``); ``warm_up_images`` beside the warm-state lines they show;
+    ``list_href``: where the page finds the whole list of them."""
     verdicts = verdict_rows(summary)
     parts = [f"<h1>Collision report: {html.escape(summary.sweep)}</h1>",
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
@@ -820,7 +822,6 @@ def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
                   for r in rows]
         parts.append(f"<details><summary>By {html.escape(column)}</summary>"
                      f"{_table_html(table)}</details>")
-    bad = ranked_runs(results)
     parts += [f"<h2>Runs to look at ({len(bad)})</h2>",
               f"<p>{html.escape(RANKING)} {html.escape(SHOWN_WORDS)} The pictures show the "
               "moment that decided each run whose trace was kept (top-down; lidar returns in "
@@ -895,17 +896,17 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     counted = results[results["sample"].isin(shared)]
     html_path = Path(html_path) if html_path else sweep_dir / "report.html"
     images = figures(counted, by, method)
-    list_path = sweep_dir / LIST_FILE
-    look_at_list(ranked_runs(results), varying_parameters(results),
+    list_path, bad = sweep_dir / LIST_FILE, ranked_runs(results)
+    look_at_list(bad, varying_parameters(results),
                  lambda run_id: replay_command(sweep_dir, run_id)).to_csv(list_path, index=False)
     html_path.write_text(html_page(
-        summary, results, sweep_dir, images, settling_image(warm_ups, summary.settling),
+        summary, results, sweep_dir, bad, images, settling_image(warm_ups, summary.settling),
         os.path.relpath(list_path, html_path.parent)))
     summary_path = sweep_dir / "summary.json"
     plain = summary.to_plain()
     summary_path.write_text(json.dumps(json_plain(plain), indent=2) + "\n")
     markdown_path = sweep_dir / "report.md"
-    markdown_path.write_text(markdown(summary, results, sweep_dir))
+    markdown_path.write_text(markdown(summary, results, sweep_dir, bad))
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary.sweep))
     terminal = terminal_table(summary) + findings(summary) + comparison_lines(summary)
