@@ -251,7 +251,8 @@ def test_the_report_says_how_few_warm_states_and_widens(tmp_path):
 
     markdown = (tmp_path / "warm" / "report.md").read_text()
     warning = ("WARNING: the traffic's variety is only 3 warm states: the intervals cannot "
-               "speak for traffic beyond them.")
+               f"speak for traffic beyond them; raise [sweep] warm_states to {FEW_WARM_STATES} "
+               "or more.")
     assert FEW_WARM_STATES > 3
     assert "the 120 runs drew their background traffic from 3 distinct warm states" in markdown
     assert "every interval is widened by its design effect" in markdown

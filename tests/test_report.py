@@ -23,6 +23,7 @@ from analysis.report.look_at import LIST_FILE, SHOWN_PER_CLASS, ranked_runs
 from analysis.report.sweep_report import (
     COLLISION_TITLE,
     NOT_RECORDED,
+    SECTIONS,
     VERDICT_TITLE,
     world_lines,
     world_summary,
@@ -30,7 +31,7 @@ from analysis.report.sweep_report import (
 )
 from analysis.run.commands import replay_command
 from analysis.stats.rates import wilson_interval
-from analysis.stats.verdicts import completed_runs
+from analysis.stats.verdicts import completed_runs, outcomes_by
 from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
@@ -331,8 +332,14 @@ def test_the_report_leads_with_how_the_runs_ended(small_sweep, tmp_path):
     lane_keep = verdicts["by_controller"]["lane-keep"]["outcomes"]
     assert lane_keep["collided"]["runs"] == 4 and lane_keep["completed"]["runs"] == 0
     assert list(verdicts["by_controller"])[-1] == "lane-keep"  # ranked: least completed last
-    sentence = next(line for line in report.terminal if line.startswith("lane-keep: completed"))
-    assert "0 of 8 runs" in sentence and "not a safe controller" in sentence
+    # a sentence per controller right under the verdict table, in its order
+    table_end = 1 + len(verdicts["by_controller"]) + 1
+    sentences = report.terminal[table_end:table_end + len(verdicts["by_controller"])]
+    assert [line.split(":")[0] for line in sentences] == list(verdicts["by_controller"])
+    low, high = wilson_interval(0, 8)
+    assert sentences[-1] == (f"lane-keep: completed 0.0% [0.0%, {100 * high:.1f}%], collided "
+                             "50.0%, no outcome 50.0%: not safe to ship, it completes fewer "
+                             "than 50% of its runs")
     assert any("completed without collision, on 8 shared" in line for line in report.terminal)
     page = report.html_path.read_text()
     assert '<table id="verdicts">' in page and VERDICT_TITLE in page
@@ -366,9 +373,14 @@ def test_a_partial_sweep_says_so_and_compares_only_shared_samples(small_sweep, t
     cov = report.summary["coverage"]
     assert (cov["runs_planned"], cov["runs"], cov["runs_missing"]) == (16, 14, 2)
     assert (cov["samples"], cov["samples_compared"], cov["runs_left_out"]) == (8, 6, 2)
-    assert report.terminal[0] == \
-        "PARTIAL sweep: 14 of 16 planned runs, 2 missing (sweep status: interrupted)."
-    assert report.terminal[1].startswith("Controllers are compared on the 6 samples every one")
+    warning = ("WARNING: PARTIAL sweep: 14 of 16 planned runs, 2 missing (sweep status: "
+               "interrupted); to finish it, run the sweep's command again with --resume.")
+    # the first warning, once, right after the verdict table and its sentences
+    controllers = len(report.summary["verdicts"]["by_controller"])
+    lead = 1 + (1 + controllers) + controllers  # title, table, a sentence per controller
+    assert report.terminal[lead] == warning and report.terminal.count(warning) == 1
+    assert any(line.startswith("Controllers are compared on the 6 samples every one")
+               for line in report.terminal)
     # every table counts the 6 shared samples only: seed's 2 extra runs are left out
     assert report.summary["by_controller"]["seed"]["n_ok"] == 2
     assert report.summary["verdicts"]["by_controller"]["seed"]["runs"] == 6
@@ -506,3 +518,60 @@ def test_collisions_with_vehicles_are_counted_by_the_class_of_what_was_hit():
     assert "avoid's collisions with vehicles by vehicle class: passenger 1, truck 2." in lines
     older = world_summary(rows.drop(columns="collision_vclass"))
     assert older["vehicle_classes"] == {}
+
+
+def test_the_page_leads_then_warns_once_then_follows_its_contents(small_sweep, tmp_path,
+                                                                  chromium_page):
+    """A partial sweep whose world overlapped: the verdict table and a sentence per
+    controller fill the first screen; then each warning once, saying what to do; then
+    the sections in the order the table of contents names them."""
+    def partial_and_overlapping(frame):
+        ok_samples = frame[frame.status == "ok"]["sample"].unique()[:1]
+        frame = frame[~((frame.controller == "lane-keep") & frame["sample"].isin(ok_samples))]
+        first_ok = ((frame.status == "ok") & (frame.controller == "lane-keep")).to_numpy().argmax()
+        return frame.assign(world_overlaps=[7 * (i == first_ok) for i in range(len(frame))])
+
+    bad = _copy_with(small_sweep, tmp_path / "bad", partial_and_overlapping)
+    manifest = json.loads((bad / "manifest.json").read_text())
+    (bad / "manifest.json").write_text(json.dumps({**manifest, "status": "interrupted"}))
+    report = write_report(bad)
+    page, problems = chromium_page
+    page.set_viewport_size({"width": 1400, "height": 1000})
+    page.goto(report.html_path.as_uri())
+    anchors = page.eval_on_selector_all("h2", "els => els.map(e => e.id)")
+    assert anchors == [a for a, _ in SECTIONS if a in anchors]
+    assert anchors[:3] == ["verdicts", "warnings", "collisions"] and anchors[-1] == "look-at"
+    contents = page.eval_on_selector_all("nav.contents a", "els => els.map(e => e.hash)")
+    assert contents == [f"#{a}" for a in anchors]
+    verdicts = report.summary["verdicts"]["by_controller"]
+    sentences = page.locator("#verdicts + p + table + ul li").all_inner_texts()
+    assert [s.split(":")[0] for s in sentences] == list(verdicts)
+    bottom = page.eval_on_selector("#verdicts + p + table + ul",
+                                   "e => e.getBoundingClientRect().bottom")
+    assert bottom < 1000  # the first screen
+    warnings = page.locator("#warnings ~ p.warn").all_inner_texts()
+    assert [w.split(":")[1].strip() for w in warnings] == ["PARTIAL sweep", "in 1 run two bodies "
+                                                           "other than the ego overlapped where "
+                                                           "SUMO's own lanes hold them apart (7 "
+                                                           "steps in all, column world_overlaps)"]
+    assert "--resume" in warnings[0] and "report it" in warnings[1]
+    text = page.inner_text("body")
+    assert all(text.count(w) == 1 for w in warnings)
+    markdown = (bad / "report.md").read_text()
+    assert all(markdown.count(w) == 1 for w in warnings)
+    assert problems == []
+
+
+def test_every_figure_counts_every_run():
+    """The shares along a parameter are of every run: stuck and failed runs counted."""
+    runs = pd.DataFrame({
+        "controller": ["a"] * 6, "p.x": [1.0, 1.0, 1.0, 2.0, 2.0, 2.0],
+        "status": ["ok", "ok", "error", "ok", "ok", "timeout"],
+        "outcome": ["stuck", "collided", None, "completed", "stuck", None],
+        "collision": [False, True, False, False, False, False]})
+    table = outcomes_by(runs, "p.x").set_index(["group", "outcome"])
+    assert (table.of == 3).all()
+    assert table.groupby("group").runs.sum().tolist() == [3, 3]
+    assert table.loc[(1.0, "stuck"), "runs"] == 1 and table.loc[(2.0, "stuck"), "runs"] == 1
+    assert table.loc[(1.0, "no outcome"), "rate"] == pytest.approx(1 / 3)
+    assert table.loc[(1.0, "collided"), "rate"] == pytest.approx(1 / 3)  # not 1/2 of ok runs

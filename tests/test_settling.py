@@ -281,6 +281,10 @@ def test_a_configurations_warm_up_is_told_on_its_own_clock():
                            f"the ego entered at {on_config['warm_up_s']:.0f} s on its clock "
                            "(traffic.enter_s; the mean of 2 warm-ups")
     assert line.endswith("suggests a traffic.enter_s.") and "warm_up_s" not in line
+    # not settled within the warm-up: too short to tell, never "settled" before entering
+    at_least_s = on_config["suggestion"]["warm_up_at_least_s"]
+    assert "the warm-up is too short to tell whether the traffic had settled" in line
+    assert f"(not before {at_least_s:.0f} s, if at all)" in line
     assert on_config["warm_up_s"] > start_s
     (built_in,) = settling_lines(settling_summary([ramp_series(0)]))
     assert "(traffic.warm_up_s;" in built_in and built_in.endswith("a traffic.warm_up_s.")

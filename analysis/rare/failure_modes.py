@@ -50,6 +50,7 @@ import pandas as pd
 from scipy import sparse, special
 from scipy.spatial import cKDTree
 
+from analysis.run.numbers import number_text
 from analysis.run.run_outcome import collided
 from scenarios.plain_json import json_plain
 from scenarios.sweep_spec import PARAM_PREFIX, Param
@@ -97,7 +98,8 @@ def region_words(mode: dict) -> str:
         kinds = ", ".join(f"{k} {n}" for k, n in mode["outcomes"].items())
         return f"modes each under {100 * OTHER_SHARE:g}% of the weighted failures ({kinds})"
     parts = [f"{path} = {value!r}" for path, value in mode["discrete"].items()]
-    parts += [f"{path} in [{lo:.4g}, {hi:.4g}]" if lo < hi else f"{path} = {lo:.4g}"
+    parts += [f"{path} in [{number_text(lo)}, {number_text(hi)}]" if lo < hi
+              else f"{path} = {number_text(lo)}"
               for path, (lo, hi) in mode["ranges"].items()]
     return "; ".join(parts) or "every run"
 

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from analysis.run.numbers import params_text
 from analysis.run.run_outcome import COLLIDED, STUCK, UNFINISHED, collided
 from analysis.stats.verdicts import completed_runs
 
@@ -122,16 +123,6 @@ def what_happened(row: Mapping[str, Any]) -> str:
         return ((f"stood still for the last {stood:.1f} s" if stood is not None
                  else "stood still at the end") + f"{progress}{nearest}")
     return f"still moving when the run ended{progress}{nearest}"
-
-
-def params_text(row: Mapping[str, Any], columns: list[str]) -> str:
-    """A run's swept values, ``name=value`` without the ``p.`` prefix."""
-    parts = []
-    for column in columns:
-        value = row[column]
-        shown = f"{value:.4g}" if isinstance(value, float) else str(value)
-        parts.append(f"{column.removeprefix('p.')}={shown}")
-    return ", ".join(parts)
 
 
 def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:

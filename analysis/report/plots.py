@@ -21,9 +21,8 @@ from analysis.stats.rates import (
     group_label,
     group_levels,
     group_values,
-    rates_by,
 )
-from analysis.stats.verdicts import completed_runs
+from analysis.stats.verdicts import NO_OUTCOME, completed_runs, outcomes_by
 
 
 def png_bytes(fig: Figure) -> bytes:
@@ -52,73 +51,99 @@ def _positions(groups: pd.Series) -> tuple[np.ndarray, list[str]]:
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
 
-def rate_by_parameter(results: pd.DataFrame, column: str, method: Method = "wilson") -> bytes:
-    """Collision rate per group of ``column``, one line per controller, 95% band. Lines
+def legend_outside(ax, below: bool = False) -> None:
+    """The axes' legend off the data: to the right of it, or ``below`` it (where a
+    colour bar or another panel is to the right)."""
+    if below:
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), fontsize="small", ncol=3)
+    else:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+
+
+#: the ways a run fails, each a panel of :func:`rate_by_parameter` where any run ended so
+FAILED_OUTCOMES = ("collided", STUCK, NO_OUTCOME)
+
+
+def failures_by_parameter(results: pd.DataFrame, column: str, method: Method = "wilson") -> bytes:
+    """How the runs ended along ``column``: a panel per way of failing (collided, stuck
+    where any run got stuck, no outcome where any errored or timed out), each the
+    share of every run of the group with its 95% band, one line per controller. Lines
     differ by colour and marker and are nudged apart along x, so none hides another."""
-    table = rates_by(results, column, method)
-    fig = Figure(figsize=(7, 4))
-    ax = fig.subplots()
-    categories: list[str] = []
+    table = outcomes_by(results, column, method)
+    shown = [o for o in FAILED_OUTCOMES
+             if o == "collided" or table[table.outcome == o].runs.sum() > 0]
+    fig = Figure(figsize=(4.2 * len(shown) + 1.6, 3.8))
+    axes = np.atleast_1d(fig.subplots(1, len(shown), sharex=True, sharey=True))
     controllers = list(dict.fromkeys(results.controller))
     xs = _positions(table.group.drop_duplicates())[0]
     span = float(np.ptp(xs)) if len(xs) > 1 else 1.0
-    for i, controller in enumerate(controllers):
-        rows = table[table.controller == controller].dropna(subset=["collision_rate"])
-        x, categories = _positions(rows.group)
-        style = {"marker": MARKERS[i % len(MARKERS)], "label": controller, "alpha": 0.85}
-        if categories:  # kinds, not a scale: no line between them, the interval as a bar
-            x = x + (i - (len(controllers) - 1) / 2) * 0.08
-            rate = rows.collision_rate.to_numpy(dtype=float)
-            below = np.clip(rate - rows.low.to_numpy(dtype=float), 0, None)  # rounding
-            above = np.clip(rows.high.to_numpy(dtype=float) - rate, 0, None)
-            ax.errorbar(x, rate, yerr=[below, above],
-                        linestyle="none", capsize=3, **style)
-            continue
-        x = x + (i - (len(controllers) - 1) / 2) * 0.012 * span
-        ax.plot(x, rows.collision_rate, **style)
-        ax.fill_between(x, rows.low, rows.high, alpha=0.12)
-    if categories:
-        ax.set_xticks(range(len(categories)), categories, rotation=30, ha="right")
-    ax.set(xlabel=_label(column), ylabel="collision rate (ok runs)", ylim=(-0.02, 1.02),
-           title=f"Collision rate by {_label(column)} ({method} 95% interval)")
-    ax.grid(alpha=0.3)
-    ax.legend()
+    categories: list[str] = []
+    for ax, outcome in zip(axes, shown, strict=True):
+        for i, controller in enumerate(controllers):
+            rows = table[(table.controller == controller) & (table.outcome == outcome)]
+            x, categories = _positions(rows.group)
+            style = {"marker": MARKERS[i % len(MARKERS)], "label": controller, "alpha": 0.85}
+            rate = rows.rate.to_numpy(dtype=float)
+            if categories:  # kinds, not a scale: no line between them, the interval a bar
+                x = x + (i - (len(controllers) - 1) / 2) * 0.08
+                below = np.clip(rate - rows.low.to_numpy(dtype=float), 0, None)  # rounding
+                above = np.clip(rows.high.to_numpy(dtype=float) - rate, 0, None)
+                ax.errorbar(x, rate, yerr=[below, above], linestyle="none", capsize=3,
+                            **style)
+                continue
+            x = x + (i - (len(controllers) - 1) / 2) * 0.012 * span
+            ax.plot(x, rate, **style)
+            ax.fill_between(x, rows.low, rows.high, alpha=0.12)
+        if categories:
+            ax.set_xticks(range(len(categories)), categories, rotation=30, ha="right")
+        ax.set(xlabel=_label(column), title=outcome, ylim=(-0.02, 1.02))
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("share of every run")
+    legend_outside(axes[-1])
+    fig.suptitle(f"How the runs failed by {_label(column)} (of every run; {method} 95% "
+                 "interval)", y=1.02)
     return png_bytes(fig)
 
 
-def rate_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
-    """Collision rate of ``controller`` over two parameters (ok runs; a cell without one
-    says "no data"; a cell with runs that got stuck says how many: no collision there
-    is no safety)."""
-    ok = results[(results.status == "ok") & (results.controller == controller)]
+def collided_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> bytes:
+    """The share of every run of ``controller`` that collided, over two parameters (a
+    cell without a run says "no data"; a cell whose runs got stuck or ended without an
+    outcome says how many: no collision there is no safety)."""
+    mine = results[results.controller == controller]
     all_x, all_y = group_values(results[x], 8), group_values(results[y], 8)
-    cells = ok.assign(_x=all_x[ok.index], _y=all_y[ok.index],
-                      _stuck=ok.outcome == STUCK if "outcome" in ok else False)
+    failed = run_outcomes(mine) if "outcome" in mine else pd.Series("", index=mine.index)
+    cells = mine.assign(_x=all_x[mine.index], _y=all_y[mine.index],
+                        _collided=(mine.status == "ok") & mine.collision.astype(bool),
+                        _stuck=failed == STUCK, _failed=failed == NO_OUTCOME)
     grouped = cells.groupby(["_y", "_x"], observed=True)
 
     def on_grid(series: pd.Series) -> pd.DataFrame:
         return series.unstack("_x").reindex(index=group_levels(all_y),
                                             columns=group_levels(all_x))
 
-    grid = on_grid(grouped.collision.mean())
-    stuck, runs = on_grid(grouped._stuck.sum()), on_grid(grouped.collision.size())
+    grid = on_grid(grouped._collided.mean())
+    stuck, failed_runs = on_grid(grouped._stuck.sum()), on_grid(grouped._failed.sum())
+    runs = on_grid(grouped._collided.size())
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
     values = grid.to_numpy(dtype=float)
     image = ax.imshow(values, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=1)
     for iy, ix in zip(*np.nonzero(np.isnan(values)), strict=True):  # empty is not zero
         ax.text(ix, iy, "no\ndata", ha="center", va="center", fontsize=7, color="0.4")
-    for iy, ix in zip(*np.nonzero(stuck.fillna(0).to_numpy() > 0), strict=True):
-        ax.text(ix, iy, f"{int(stuck.iat[iy, ix])}/{int(runs.iat[iy, ix])}\nstuck",
-                ha="center", va="center", fontsize=7, color="white",
-                bbox={"boxstyle": "round", "facecolor": "tab:orange", "alpha": 0.8,
-                      "linewidth": 0})
+    marked = (stuck.fillna(0).to_numpy() + failed_runs.fillna(0).to_numpy()) > 0
+    for iy, ix in zip(*np.nonzero(marked), strict=True):
+        words = [f"{int(n.iat[iy, ix])}/{int(runs.iat[iy, ix])}\n{name}"
+                 for n, name in ((stuck, "stuck"), (failed_runs, "no outcome"))
+                 if n.iat[iy, ix] > 0]
+        ax.text(ix, iy, "\n".join(words), ha="center", va="center", fontsize=7,
+                color="white", bbox={"boxstyle": "round", "facecolor": "tab:orange",
+                                     "alpha": 0.8, "linewidth": 0})
     ax.set_xticks(range(grid.shape[1]), [group_label(c) for c in grid.columns], rotation=45,
                   ha="right", fontsize=8)
     ax.set_yticks(range(grid.shape[0]), [group_label(i) for i in grid.index], fontsize=8)
     ax.set(xlabel=_label(x), ylabel=_label(y),
-           title=f"Collision rate, {controller} (orange: runs that got stuck)")
-    fig.colorbar(image, ax=ax, label="collision rate")
+           title=f"Collided, of every run, {controller} (orange: stuck or no outcome)")
+    fig.colorbar(image, ax=ax, label="share of the cell's runs that collided")
     return png_bytes(fig)
 
 
@@ -128,8 +153,8 @@ OUTCOME_STYLE = {"completed": ("tab:green", "o"), "collided": ("tab:red", "X"),
 
 
 def run_outcomes(results: pd.DataFrame) -> pd.Series:
-    """Each run's outcome, ``no outcome`` for errors and timeouts."""
-    return results.outcome.where(results.status == "ok", "no outcome")
+    """Each run's outcome, :data:`NO_OUTCOME` for errors and timeouts."""
+    return results.outcome.where(results.status == "ok", NO_OUTCOME)
 
 
 def outcome_bars(results: pd.DataFrame) -> bytes:
@@ -148,7 +173,7 @@ def outcome_bars(results: pd.DataFrame) -> bytes:
     ax.invert_yaxis()
     ax.set(xlabel="share of the controller's runs", xlim=(0, 1),
            title="How the runs ended")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    legend_outside(ax)
     return png_bytes(fig)
 
 
@@ -192,7 +217,7 @@ def failure_map(results: pd.DataFrame, x: str, y: str | None) -> bytes:
         axes[0].set_ylabel(_label(y))
     else:
         axes[0].set_yticks(range(len(names)), names)
-    axes[-1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    legend_outside(axes[-1])
     fig.suptitle("How every run ended, over the parameters that separate failures best")
     return png_bytes(fig)
 
@@ -219,28 +244,33 @@ def distributions(results: pd.DataFrame) -> bytes:
             ax.hist(rows[column].dropna().clip(upper=cap), bins=np.linspace(0, top, 25),
                     alpha=0.5, label=controller)
         ax.set(xlabel=f"{column} {unit}", ylabel="runs")
-        ax.legend()
-    fig.suptitle("Safety margins of the ok runs (no TTC: nothing on a course to touch; "
-                 "DRAC 0: no leader closed in on)")
+    legend_outside(axes[-1])
+    fig.suptitle(f"Safety margins of the ok runs ({len(results) - len(ok)} runs without an "
+                 "outcome have none; no TTC: nothing on a course to touch; DRAC 0: no leader "
+                 "closed in on)")
     return png_bytes(fig)
 
 
 def collision_breakdown(results: pd.DataFrame) -> bytes:
-    """Collisions by what was hit, per controller, with error and timeout runs beside."""
+    """How the runs failed, per controller: collisions by what was hit, the runs that
+    got stuck, and the error and timeout runs."""
     controllers = list(dict.fromkeys(results.controller))
     fig = Figure(figsize=(7, 3.5))
     ax = fig.subplots()
     bottom = np.zeros(len(controllers))
     ok = results[results.status == "ok"]
     bars = [(kind, ok[ok.collision_with == kind]) for kind in HIT_ORDER]
+    if "outcome" in ok:
+        bars.append((STUCK, ok[ok.outcome == STUCK]))
     bars += [(status, results[results.status == status]) for status in ("error", "timeout")]
     for label, rows in bars:
         counts = rows.controller.value_counts().reindex(controllers, fill_value=0).to_numpy()
         ax.bar(controllers, counts, bottom=bottom, label=label,
                hatch="//" if label in ("error", "timeout") else None)
         bottom += counts
-    ax.set(ylabel="runs", title="Collisions by what was hit (and failed runs)")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set(ylabel="runs", title="How the runs failed: collisions by what was hit, stuck, "
+                                "errors and timeouts")
+    legend_outside(ax)
     return png_bytes(fig)
 
 
@@ -256,11 +286,11 @@ def convergence(history: pd.DataFrame, target_rhw: float | None) -> bytes:
              title="Estimate against runs")
     if (history.p_collision > 0).any():
         left.set_yscale("log")
-    left.legend()
+    legend_outside(left, below=True)
     right.plot(runs, history.rhw, marker="o")
     if target_rhw is not None:
         right.axhline(target_rhw, color="k", linestyle="--", label=f"target {target_rhw:g}")
-        right.legend()
+        legend_outside(right, below=True)
     right.set(xlabel="runs (adaptation included)", ylabel="relative half-width",
               title="Relative half-width (95%)", ylim=(0, None))
     for ax in (left, right):
@@ -289,7 +319,7 @@ def sampling_path(results: pd.DataFrame, x: str, y: str, modes: list[dict],
     ax.set(xlabel=_label(x), ylabel=_label(y), title="Runs drawn, batch by batch")
     ax.grid(alpha=0.3)
     if modes or len(stuck):
-        ax.legend(loc="best", fontsize="small")
+        legend_outside(ax, below=True)
     return png_bytes(fig)
 
 

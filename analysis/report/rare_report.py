@@ -185,5 +185,5 @@ def adaptive_figures(results: pd.DataFrame, summary: RareSummary,
         out.append((f"Runs drawn over {varying[0]} and {varying[1]}, failures ringed by mode",
                     plots.sampling_path(results, varying[0], varying[1],
                                         summary.failure_modes, stuck)))
-    out.append(("What was hit", plots.collision_breakdown(results)))
+    out.append(("How the runs failed", plots.collision_breakdown(results)))
     return out

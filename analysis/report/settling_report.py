@@ -4,9 +4,9 @@ A sweep whose runs start from warm states keeps how the traffic settled in up to
 20 of them (``warm-states.json``: per warm state, the series
 ``scenarios.warm_state.SETTLING_COLUMNS`` over its warm-up). The warm-up truncation
 rule of :mod:`analysis.stats.settling` is applied to their mean: where it finds the
-traffic still settling by the end of the warm-up, the runs started in transient
-traffic, and the report says so as a WARNING (missing evidence of settled traffic
-is not taken for settled traffic).
+traffic not settled by the end of the warm-up (the warm-up too short for it to tell),
+the runs may have started in transient traffic, and the report says so as a
+WARNING (missing evidence of settled traffic is not taken for settled traffic).
 """
 
 from __future__ import annotations
@@ -85,9 +85,12 @@ def settling_lines(summary: dict | None) -> list[str]:
     if rule["settled"] and rule["warm_up_s"] <= summary["warm_up_s"]:
         return [f"{head}: by {rule['rule']} the traffic had settled {after} "
                 f"{rule['warm_up_s']:.0f} s, before the ego entered."]
-    return [f"WARNING: {head}: by {rule['rule']} the traffic was still settling when the "
-            f"ego entered (settled {after} {rule['warm_up_at_least_s']:.0f} s at the "
-            "earliest), so the runs started in transient traffic; sdc settle SPEC.toml "
+    # the series ends where the ego entered: a rule that finds no settled end in it
+    # cannot tell, and a settled traffic cannot be taken for granted
+    return [f"WARNING: {head}: by {rule['rule']} the warm-up is too short to tell whether "
+            "the traffic had settled when the ego entered (not before "
+            f"{rule['warm_up_at_least_s']:.0f} s, if at all), so the runs may have started in "
+            "transient traffic; sdc settle SPEC.toml --for SECONDS watches it longer and "
             f"suggests a {field}."]
 
 

@@ -26,7 +26,6 @@ from analysis.report.look_at import (
     SHOWN_PER_CLASS,
     classes_shown,
     look_at_list,
-    params_text,
     ranked_runs,
     thumbnail,
 )
@@ -37,6 +36,7 @@ from analysis.report.settling_report import (
     settling_summary,
 )
 from analysis.run.commands import replay_command
+from analysis.run.numbers import params_text
 from analysis.run.run_outcome import collided
 from analysis.run.safety import REACTION_TIME_S
 from analysis.run.world_audit import ROLE_TEXT
@@ -311,11 +311,6 @@ def _world_lines(summary: SweepSummary) -> list[str]:
                        summary.sweep_dir)
 
 
-def world_warnings(summary: SweepSummary) -> list[str]:
-    """The world audit's WARNING, if any, for the top of the report."""
-    return [line for line in _world_lines(summary) if line.startswith("WARNING")]
-
-
 def world_lines(world: dict, traffic_model: str | None = None,
                 sumo_config: list | None = None, sweep_dir: str | None = None) -> list[str]:
     """The traffic model, the world audit (``world``: a :func:`world_summary`; a WARNING
@@ -329,8 +324,10 @@ def world_lines(world: dict, traffic_model: str | None = None,
     lines = [f"Traffic model: {traffic_model or 'not recorded'}."]
     for config in sumo_config or []:
         overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
+        step = (f"steps of {config['step_s']:g} s ({config['step_from']}); "
+                if "step_s" in config else "")
         lines.append(f"SUMO configuration {config['file']}: its own demand from "
-                     f"{config['begin_s']:g} s; overridden by the run: "
+                     f"{config['begin_s']:g} s; {step}overridden by the run: "
                      f"{overridden or 'nothing'}; not applied: "
                      f"{', '.join(config['not_applied']) or 'nothing'}.")
     if not world["recorded"]:
@@ -419,7 +416,8 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     if warm.distinct < FEW_WARM_STATES:
         lines.append(f"WARNING: the traffic's variety is only "
                      f"{_plural(warm.distinct, 'warm state')}: the intervals cannot speak "
-                     "for traffic beyond them.")
+                     f"for traffic beyond them; raise [sweep] warm_states to "
+                     f"{FEW_WARM_STATES} or more.")
     return lines
 
 
@@ -429,8 +427,9 @@ def coverage_lines(summary: SweepSummary) -> list[str]:
     if cov.partial:
         planned = "?" if cov.runs_planned is None else cov.runs_planned
         missing = "" if cov.runs_missing is None else f", {cov.runs_missing} missing"
-        lines.append(f"PARTIAL sweep: {cov.runs} of {planned} planned runs{missing} "
-                     f"(sweep status: {cov.sweep_status or 'unknown'}).")
+        lines.append(f"WARNING: PARTIAL sweep: {cov.runs} of {planned} planned runs{missing} "
+                     f"(sweep status: {cov.sweep_status or 'unknown'}); to finish it, run "
+                     "the sweep's command again with --resume.")
     if cov.samples_compared < cov.samples:
         lines.append(f"Controllers are compared on the {cov.samples_compared} samples every "
                      f"one of them ran, of {cov.samples} with a run "
@@ -600,17 +599,36 @@ def people_lines(summary: SweepSummary) -> list[str]:
             for c, rate in summary.by_controller.items() if rate.people_hit]
 
 
-def findings(summary: SweepSummary) -> list[str]:
-    """Sentences: each controller's verdict, the paired comparisons (completing; on
-    collisions over all samples and where a stop was possible) and the envelope."""
+def lead_lines(summary: SweepSummary) -> list[str]:
+    """What the report leads with, under the verdict table: a sentence per controller
+    (:func:`verdict_sentence`), the controllers that hit people, and the gate's bounds
+    where it was asked for (its verdict: the command's last line)."""
     verdicts = summary.verdicts.by_controller if summary.verdicts else {}
-    lines = [*people_lines(summary), *(verdict_sentence(c, numbers)
-                                       for c, numbers in verdicts.items())]
+    lines = [*(verdict_sentence(c, numbers) for c, numbers in verdicts.items()),
+             *people_lines(summary)]
+    return lines + ([gate_bounds_line(summary.gate)] if summary.gate is not None else [])
+
+
+def envelope_lines(summary: SweepSummary) -> list[str]:
+    """Each controller's safe envelope along the ego's speed."""
+    verdicts = summary.verdicts.by_controller if summary.verdicts else {}
     rare = {c for c, numbers in verdicts.items() if completes_rarely(numbers)}
-    lines += [_envelope(e, e.controller in rare) for e in summary.envelope]
-    if summary.gate is not None:
-        lines.append(gate_bounds_line(summary.gate))  # its verdict: the command's last line
-    return lines
+    return [_envelope(e, e.controller in rare) for e in summary.envelope]
+
+
+def _is_warning(line: str) -> bool:
+    return line.startswith("WARNING")
+
+
+def warning_lines(summary: SweepSummary) -> list[str]:
+    """Every WARNING of the report, each once and each saying what to do: a partial
+    sweep, traffic still settling, few warm states, a world that made something up."""
+    every = [*coverage_lines(summary), *warm_state_lines(summary), *_world_lines(summary)]
+    return list(dict.fromkeys(line for line in every if _is_warning(line)))
+
+
+def _not_warnings(lines: list[str]) -> list[str]:
+    return [line for line in lines if not _is_warning(line)]
 
 
 def _aligned(rows: list[list[str]]) -> list[str]:
@@ -620,17 +638,18 @@ def _aligned(rows: list[list[str]]) -> list[str]:
 
 
 def terminal_table(summary: SweepSummary) -> list[str]:
-    """Partial-sweep lines, the traffic model and world audit, the verdicts, the
-    collision table, then the collision rates where a stop was possible in the same
-    columns."""
+    """What ``sdc report`` prints: the verdict table and its sentences, the warnings,
+    then the collision table with the collision rates where a stop was possible in
+    the same columns, the envelope, the world and the traffic's warm states."""
     verdicts = verdict_rows(summary)
-    lines = [*coverage_lines(summary), *warm_state_lines(summary), *world_warnings(summary)]
-    lines += [VERDICT_TITLE, *_aligned(verdicts), VERDICT_NOTES] if verdicts else [NOT_RECORDED]
+    lines = [VERDICT_TITLE, *_aligned(verdicts)] if verdicts else [NOT_RECORDED]
+    lines += [*lead_lines(summary), *warning_lines(summary),
+              *([VERDICT_NOTES] if verdicts else []), *_not_warnings(coverage_lines(summary))]
     rows, stop = headline_rows(summary), stop_rows(summary)
     table = _aligned(rows + stop)
     return [*lines, COLLISION_TITLE, *table[:len(rows)], collision_notes(summary),
-            stop_title(summary),
-            *table[len(rows):], *_world_lines(summary)]
+            stop_title(summary), *table[len(rows):], *envelope_lines(summary),
+            *_not_warnings(_world_lines(summary)), *_not_warnings(warm_state_lines(summary))]
 
 
 def _row_outcome(row: dict) -> str:
@@ -688,41 +707,65 @@ def _count_line(summary: SweepSummary) -> str:
             f"{counts['timeout']} timeout); intervals: {summary.interval} 95%.")
 
 
+#: the report's sections in their fixed order, (anchor, title); the table of contents
+#: at the top names those a report has
+SECTIONS = (("verdicts", "Verdicts"), ("warnings", "Warnings"), ("collisions", "Collisions"),
+            ("world", "World"), ("comparisons", "Comparisons"),
+            ("traffic", "Traffic and warm-up"), ("figures", "Figures"),
+            ("by-parameter", "By parameter"), ("look-at", "Runs to look at"))
+
+
+def _contents(present: list[str]) -> list[tuple[str, str]]:
+    """The :data:`SECTIONS` among ``present`` anchors, in their order."""
+    return [(anchor, title) for anchor, title in SECTIONS if anchor in present]
+
+
 def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
              bad: pd.DataFrame) -> str:
-    """``report.md``; ``bad``: the runs to look at (:func:`ranked_runs` of ``results``)."""
+    """``report.md``, its sections in :data:`SECTIONS` order; ``bad``: the runs to look
+    at (:func:`ranked_runs` of ``results``)."""
     rows, verdicts = headline_rows(summary), verdict_rows(summary)
-    lines = [f"# Collision report: {summary.sweep}", "", _count_line(summary), "",
-             *(f"**{line}**" for line in coverage_lines(summary)), ""]
-    for line in [*warm_state_lines(summary), *world_warnings(summary)]:  # paragraphs
-        lines += [f"**{line}**" if line.startswith("WARNING") else line, ""]
-    lines += ([VERDICT_TITLE, "", *_markdown_table(verdicts), "", VERDICT_NOTES, ""] if verdicts
-              else [NOT_RECORDED, ""])
-    lines += [COLLISION_TITLE, "", *_markdown_table(rows), "", collision_notes(summary), "",
-              f"Collision rates {stop_title(summary)}", ""]
-    if summary.stop_possible is not None:
-        lines += [*_markdown_table([rows[0], *stop_rows(summary)]), ""]
-    lines += [WORLD_TITLE, ""] + [f"{line}\n" for line in _world_lines(summary)]
-    lines += [f"- {line}" for line in findings(summary)]
+    sections = {"verdicts": ([VERDICT_TITLE, "", *_markdown_table(verdicts), ""] if verdicts
+                             else [NOT_RECORDED, ""])
+                + [*(f"- {line}" for line in lead_lines(summary)), ""]
+                + ([VERDICT_NOTES, ""] if verdicts else [])
+                + [f"{line}\n" for line in _not_warnings(coverage_lines(summary))],
+                "warnings": [f"**{line}**\n" for line in warning_lines(summary)]}
+    sections["collisions"] = [
+        COLLISION_TITLE, "", *_markdown_table(rows), "", collision_notes(summary), "",
+        f"Collision rates {stop_title(summary)}", "",
+        *([*_markdown_table([rows[0], *stop_rows(summary)]), ""]
+          if summary.stop_possible is not None else []),
+        *(f"- {line}" for line in envelope_lines(summary))]
+    sections["world"] = [f"{line}\n" for line in _not_warnings(_world_lines(summary))]
     groups = comparison_groups(summary)
-    if groups:
-        lines += ["", "## Comparisons", "", COMPARISONS_TITLE]
-        for title, sentences in groups:
-            lines += ["", f"### {title}", "", *(f"- {s}" for s in sentences)]
-    lines += ["", "## Runs to look at", "", f"{RANKING} {SHOWN_WORDS}", ""]
+    sections["comparisons"] = [COMPARISONS_TITLE] if groups else []
+    for title, sentences in groups:
+        sections["comparisons"] += ["", f"### {title}", "", *(f"- {s}" for s in sentences)]
+    sections["traffic"] = [f"{line}\n" for line in _not_warnings(warm_state_lines(summary))]
+    look_at = [f"{RANKING} {SHOWN_WORDS}", ""]
     params = varying_parameters(results)
     for controller, rows in bad.groupby("controller", sort=False):
-        lines += ["", f"### {controller} ({len(rows)})", ""]
+        look_at += ["", f"### {controller} ({len(rows)})", ""]
         for rank_class, shown, more in classes_shown(rows):
-            lines += [f"{row['rank']}. `{row['run_id']}`: {row['why']}; "
-                      f"{params_text(row, params)} — "
-                      f"`{replay_command(sweep_dir, row['run_id'])}`" for row in shown]
+            look_at += [f"{row['rank']}. `{row['run_id']}`: {row['why']}; "
+                        f"{params_text(row, params)} — "
+                        f"`{replay_command(sweep_dir, row['run_id'])}`" for row in shown]
             if more:
-                lines.append(f"- {more} more {rank_class} in [{LIST_FILE}]({LIST_FILE})")
+                look_at.append(f"- {more} more {rank_class} in [{LIST_FILE}]({LIST_FILE})")
+    sections["look-at"] = look_at
+    contents = _contents([anchor for anchor, lines in sections.items() if lines])
+    lines = [f"# Collision report: {summary.sweep}", "", _count_line(summary), "",
+             "Contents: " + " · ".join(f"[{title}](#{anchor})" for anchor, title in contents),
+             ""]
+    for anchor, title in contents:
+        lines += [f'<a id="{anchor}"></a>', "", f"## {title}", "", *sections[anchor], ""]
     return "\n".join(lines) + "\n"
 
 
 def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[str, bytes]]:
+    """The report's figures, each counting every run (a stuck run, an error and a
+    timeout are failures in each)."""
     out = []
     if outcomes_recorded(results):
         out.append(("How the runs ended", plots.outcome_bars(results)))
@@ -731,17 +774,16 @@ def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[
             y = pair[1] if len(pair) > 1 else None
             out.append((f"Failure map over {' and '.join(p.removeprefix('p.') for p in pair)}",
                         plots.failure_map(results, pair[0], y)))
-    out += [(f"Collision rate by {c.removeprefix('p.')}", plots.rate_by_parameter(results, c,
-                                                                                 method))
-           for c in by]
+    out += [(f"How the runs failed by {c.removeprefix('p.')}",
+             plots.failures_by_parameter(results, c, method)) for c in by]
     numeric = [c for c in by if pd.api.types.is_numeric_dtype(results[c])]
     if len(numeric) >= 2:
         for controller in dict.fromkeys(results.controller):
-            out.append((f"Collision rate over {numeric[0]} and {numeric[1]}, {controller}",
-                        plots.rate_heatmap(results, numeric[0], numeric[1], controller)))
+            out.append((f"Collided over {numeric[0]} and {numeric[1]}, {controller}",
+                        plots.collided_heatmap(results, numeric[0], numeric[1], controller)))
     out.append(("Safety margins: minimum gap, minimum TTC, maximum DRAC",
                 plots.distributions(results)))
-    out.append(("What was hit", plots.collision_breakdown(results)))
+    out.append(("How the runs failed", plots.collision_breakdown(results)))
     return out
 
 
@@ -756,6 +798,7 @@ figure { margin: 1.5em 0; }
 img { max-width: 100%; }
 img.thumb { width: 320px; max-width: none; }
 .warn { background: #fff3cd; border: 1px solid #e0c36c; padding: 6px 10px; }
+nav.contents { margin: 0.5em 0 1em; }
 """
 
 
@@ -777,59 +820,80 @@ def _figure_html(title: str, png: bytes) -> str:
             f"<figcaption>{html.escape(title)}</figcaption></figure>")
 
 
+def _paragraphs(lines: list[str]) -> str:
+    return "".join(f"<p{_warn_class(line)}>{html.escape(line)}</p>" for line in lines)
+
+
+def _bullets(lines: list[str]) -> str:
+    return ("<ul>" + "".join(f"<li>{html.escape(line)}</li>" for line in lines) + "</ul>"
+            if lines else "")
+
+
 def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
               bad: pd.DataFrame, images: list[tuple[str, bytes]],
               warm_up_images: list[tuple[str, bytes]] = (), list_href: str = LIST_FILE) -> str:
-    """The report page; ``bad``: the runs to look at (:func:`ranked_runs` of
-    ``results``); ``warm_up_images`` beside the warm-state lines they show;
-    ``list_href``: where the page finds the whole list of them."""
+    """The report page, its sections in :data:`SECTIONS` order under a table of
+    contents; ``bad``: the runs to look at (:func:`ranked_runs` of ``results``);
+    ``warm_up_images`` beside the warm-state lines they show; ``list_href``: where the
+    page finds the whole list of them."""
     verdicts = verdict_rows(summary)
+    sections = {
+        "verdicts": (f"<p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}</p>"
+                     + (_table_html(verdicts, "verdicts") if verdicts else "")
+                     + _bullets(lead_lines(summary))
+                     + (f"<p>{html.escape(VERDICT_NOTES)}</p>" if verdicts else "")
+                     + _paragraphs(_not_warnings(coverage_lines(summary)))),
+        "warnings": _paragraphs(warning_lines(summary)),
+        "collisions": (f"<p>{html.escape(COLLISION_TITLE)}</p>"
+                       + _table_html(headline_rows(summary))
+                       + f"<p>{html.escape(collision_notes(summary))}</p>"
+                       + f"<p>Collision rates {html.escape(stop_title(summary))}</p>"
+                       + (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
+                          if summary.stop_possible is not None else "")
+                       + _bullets(envelope_lines(summary))),
+        "world": _paragraphs(_not_warnings(_world_lines(summary))),
+        "comparisons": "".join(
+            [f"<p>{html.escape(COMPARISONS_TITLE)}</p>"]
+            + [f"<h3>{html.escape(title)}</h3>{_bullets(sentences)}"
+               for title, sentences in comparison_groups(summary)]
+            if comparison_groups(summary) else []),
+        "traffic": (_paragraphs(_not_warnings(warm_state_lines(summary)))
+                    + "".join(_figure_html(title, png) for title, png in warm_up_images)),
+        "figures": "".join(_figure_html(title, png) for title, png in images),
+        "by-parameter": "".join(f"<details><summary>By {html.escape(column)}</summary>"
+                                f"{_table_html(_by_rows(summary, rows))}</details>"
+                                for column, rows in summary.by.items()),
+        "look-at": (f"<p>{html.escape(RANKING)} {html.escape(SHOWN_WORDS)} The pictures "
+                    "show the moment that decided each run whose trace was kept (top-down; "
+                    f'lidar returns in orange). All of them: <a href="{html.escape(list_href)}"'
+                    f">{LIST_FILE}</a>.</p>"
+                    + _look_at_tables(bad, sweep_dir, varying_parameters(results), list_href)),
+    }
+    contents = _contents([anchor for anchor, body in sections.items() if body])
+    titles = {**dict(contents), "look-at": f"Runs to look at ({len(bad)})"}
     parts = [f"<h1>Collision report: {html.escape(summary.sweep)}</h1>",
              f"<p>{html.escape(_count_line(summary))} Errors and timeouts are never counted "
              "as safe.</p>",
-             *(f'<p class="warn">{html.escape(line)}</p>' for line in coverage_lines(summary)),
-             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>'
-               for line in [*warm_state_lines(summary), *world_warnings(summary)]),
-             *(_figure_html(title, png) for title, png in warm_up_images),
-             f"<h2>Verdicts</h2><p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}"
-             "</p>",
-             _table_html(verdicts, "verdicts") if verdicts else "",
-             f"<p>{html.escape(VERDICT_NOTES)}</p>" if verdicts else "",
-             f"<h2>Collisions</h2><p>{html.escape(COLLISION_TITLE)}</p>",
-             _table_html(headline_rows(summary)),
-             f"<p>{html.escape(collision_notes(summary))}</p>",
-             f"<p>Collision rates {html.escape(stop_title(summary))}</p>",
-             (_table_html([headline_rows(summary)[0], *stop_rows(summary)])
-              if summary.stop_possible is not None else ""),
-             "<h2>World</h2>",
-             *(f'<p{_warn_class(line)}>{html.escape(line)}</p>' for line in _world_lines(summary)),
-             "<ul>" + "".join(f"<li>{html.escape(s)}</li>" for s in findings(summary)) + "</ul>"]
-    groups = comparison_groups(summary)
-    if groups:
-        parts += ["<h2>Comparisons</h2>", f"<p>{html.escape(COMPARISONS_TITLE)}</p>"]
-        parts += [f"<h3>{html.escape(title)}</h3><ul>"
-                  + "".join(f"<li>{html.escape(s)}</li>" for s in sentences) + "</ul>"
-                  for title, sentences in groups]
-    parts += [_figure_html(title, png) for title, png in images]
-    deff = shares_traffic(summary)
-    for column, rows in summary.by.items():
-        table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
-                  "failed", *([DEFF_HEAD] if deff else [])]]
-        table += [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
-                   percent(json_scalar(r["collision_rate"])),
-                   f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"]),
-                   *([_deff(r["deff"])] if deff else [])]
-                  for r in rows]
-        parts.append(f"<details><summary>By {html.escape(column)}</summary>"
-                     f"{_table_html(table)}</details>")
-    parts += [f"<h2>Runs to look at ({len(bad)})</h2>",
-              f"<p>{html.escape(RANKING)} {html.escape(SHOWN_WORDS)} The pictures show the "
-              "moment that decided each run whose trace was kept (top-down; lidar returns in "
-              f'orange). All of them: <a href="{html.escape(list_href)}">{LIST_FILE}</a>.</p>',
-              _look_at_tables(bad, sweep_dir, varying_parameters(results), list_href)]
+             '<nav class="contents">Contents: ' + " · ".join(
+                 f'<a href="#{anchor}">{html.escape(title)}</a>' for anchor, title in contents)
+             + "</nav>"]
+    parts += [f'<h2 id="{anchor}">{html.escape(titles[anchor])}</h2>{sections[anchor]}'
+              for anchor, _ in contents]
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>sdc report: {html.escape(summary.sweep)}</title>"
             f"<style>{_CSS}</style></head><body>{''.join(parts)}</body></html>\n")
+
+
+def _by_rows(summary: SweepSummary, rows: list[dict]) -> list[list[str]]:
+    """A by-parameter table: a row per group and controller."""
+    deff = shares_traffic(summary)
+    table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
+              "failed", *([DEFF_HEAD] if deff else [])]]
+    return table + [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
+                     percent(json_scalar(r["collision_rate"])),
+                     f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"]),
+                     *([_deff(r["deff"])] if deff else [])]
+                    for r in rows]
 
 
 def junit_xml(results: pd.DataFrame, name: str) -> str:
@@ -909,7 +973,7 @@ def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str
     markdown_path.write_text(markdown(summary, results, sweep_dir, bad))
     if junit_path is not None:
         Path(junit_path).write_text(junit_xml(results, summary.sweep))
-    terminal = terminal_table(summary) + findings(summary) + comparison_lines(summary)
+    terminal = terminal_table(summary) + comparison_lines(summary)
     return Report(plain, html_path, summary_path, markdown_path, junit_path, terminal,
                   summary.gate)
 

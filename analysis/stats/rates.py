@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from analysis.run.numbers import number_text
 from analysis.run.run_outcome import STATUSES, failed_or_collided
 from scenarios.bodies import PEDESTRIAN
 
@@ -303,13 +304,11 @@ def group_levels(groups: pd.Series) -> list:
 def group_label(group) -> str:
     """A group as people read it: a bin as ``12.5 to 20``, a number to 4 digits."""
     if isinstance(group, pd.Interval):
-        return f"{group.left:.4g} to {group.right:.4g}"
-    if isinstance(group, float | np.floating):
-        return f"{group:.4g}"
-    return str(group)
+        return f"{number_text(group.left)} to {number_text(group.right)}"
+    return number_text(group)
 
 
-def _grouped(results: pd.DataFrame, column: str):
+def grouped_runs(results: pd.DataFrame, column: str):
     """(group of ``column``, controller, rows) for every pair with a run, in order."""
     if column not in results.columns:
         known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
@@ -324,7 +323,7 @@ def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> p
     """One row per (group of ``column``, controller): counts, rate, interval (clustered
     by warm state, with its design effect ``deff`` and the group's ``warm_states``)."""
     out = []
-    for group, controller, rows in _grouped(results, column):
+    for group, controller, rows in grouped_runs(results, column):
         rate = rate_summary(rows)
         low, high = rate.interval(method)
         out.append({"group": group, "controller": controller, "n_ok": rate.n_ok,
@@ -454,7 +453,7 @@ def safe_envelope(results: pd.DataFrame, column: str, controller: str,
     (:func:`upper_bound_counting_failures`).
     """
     groups = group_levels(group_values(results[column]))  # every controller's: same bins
-    mine = {str(group): rows for group, c, rows in _grouped(results, column)
+    mine = {str(group): rows for group, c, rows in grouped_runs(results, column)
             if c == controller}
     safe_up_to, stopped = None, None
     for group in groups:

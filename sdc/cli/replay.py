@@ -146,12 +146,12 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
     """A run that raised or timed out in its sweep: what it was and how it ended
     (one line), the replay's own end, and the run drawn as far as it went. True:
     the replay ended otherwise; None: it failed alike and nothing was drawn."""
+    from analysis.run.numbers import params_text
     from scenarios.sweep_spec import PARAM_PREFIX
     from sdc.run.episode import Stopped, run_as_far_as_it_goes
 
     row = recorded.row
-    params = ", ".join(f"{k[len(PARAM_PREFIX):]}={_param_text(v)}" for k, v in row.items()
-                       if k.startswith(PARAM_PREFIX))
+    params = params_text(row, [k for k in row if k.startswith(PARAM_PREFIX)])
     click.echo(f"{recorded.run_id}: {row['status']} in the sweep: {row['error']} "
                f"(controller {row['controller']}, seed {row['seed']}"
                + (f"; {params}" if params else "") + ")")
@@ -175,7 +175,3 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
     check_at(at_s, float(replayed.episode.trace.floats["t_s"][-1]))
     _render(replayed.episode.trace, replayed.episode.metadata, out, every, at_s)
     return False
-
-
-def _param_text(value) -> str:
-    return f"{value:.4g}" if isinstance(value, float) else str(value)
