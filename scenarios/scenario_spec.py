@@ -39,7 +39,9 @@ MAX_STEPS = 1_000_000
 class ScenarioMeta(Spec):
     name: str
     duration_s: float = num(gt=0, le=36_000)
-    step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)  # a whole number of milliseconds
+    #: a whole number of milliseconds; on a sumo_config road left out, the configuration's
+    #: own step-length where it has one
+    step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)
     seed: int = num(0, ge=0, lt=SEED_LIMIT)
     backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
 

@@ -39,7 +39,7 @@ from scenarios.sumo_net.build import EDGE_ID, network_file, source_sha256, sumo_
 from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
-from scenarios.sumo_net.sumo_config import load_bundle
+from scenarios.sumo_net.sumo_config import check_enter_s, load_bundle
 from scenarios.vehicle_types import VehicleTypes
 from scenarios.warm_state import (
     HALTING_SPEED_MPS,
@@ -295,8 +295,10 @@ class SumoWorld:
         self.keep_ids = False
         self.last_ids: list[str] = []
         # a sumo_config road's configuration (its files are written into the scratch folder)
-        self._config = (load_bundle(spec.road.config_file) if spec.road.kind == "sumo_config"
-                        else None)
+        self._config = None
+        if spec.road.kind == "sumo_config":
+            check_enter_s(spec.road.config_file, spec.traffic.enter_s)  # before any SUMO
+            self._config = load_bundle(spec.road.config_file)
         self._config_paths: dict[str, Path] | None = None
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None

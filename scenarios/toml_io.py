@@ -10,7 +10,8 @@ from typing import Any
 from scenarios.controller_ref import resolve_file
 from scenarios.errors import FileError, SpecError
 from scenarios.file_read import read_text
-from scenarios.scenario_spec import SUMO_HOME_PREFIX, ScenarioSpec
+from scenarios.scenario_spec import SUMO_HOME_PREFIX, ScenarioMeta, ScenarioSpec
+from scenarios.spec_fields import build
 
 
 def read_toml(path: str | Path, what: str = "the TOML file") -> dict:
@@ -32,8 +33,10 @@ def _resolved(path: Path, spec_path: str | Path, field: str) -> str:
 def load_spec(path: str | Path) -> ScenarioSpec:
     """The scenario in a TOML file; a relative ``road.net_file``, ``road.config_file``
     or controller file is taken from the file's folder (and kept absolute, so the
-    spec runs from anywhere); ``sumo:<path>`` is inside SUMO's installation. Every
-    error names the file."""
+    spec runs from anywhere); ``sumo:<path>`` is inside SUMO's installation. On a
+    ``sumo_config`` road without ``scenario.step_s`` the step is the one the
+    configuration asks for (its ``step-length``), where it asks one. Every error
+    names the file."""
     data = read_toml(path, "the scenario file")
     road = data.get("road")
     for name in ("net_file", "config_file"):
@@ -41,6 +44,7 @@ def load_spec(path: str | Path) -> ScenarioSpec:
         if isinstance(value, str) and value and not value.startswith(SUMO_HOME_PREFIX):
             road[name] = _resolved(Path(path).parent / value, path, f"road.{name}")
     try:
+        _config_step(data)
         controller = data.get("controller")
         if isinstance(controller, dict) and "name" in controller:
             controller["name"] = resolve_file(controller["name"], Path(path).parent,
@@ -48,6 +52,31 @@ def load_spec(path: str | Path) -> ScenarioSpec:
         return ScenarioSpec.from_plain(data)
     except SpecError as e:
         raise e.in_file(path) from None
+
+
+def _config_step(data: dict) -> None:
+    """Set ``scenario.step_s`` of a ``sumo_config`` road's spec that leaves it out to
+    the step length its configuration asks for (none asked: the spec's default)."""
+    from scenarios.sumo_net.sumo_config import config_step_s
+
+    road, meta = data.get("road"), data.get("scenario")
+    if not (isinstance(road, dict) and isinstance(meta, dict) and "step_s" not in meta
+            and road.get("kind") == "sumo_config" and isinstance(road.get("config_file"), str)):
+        return
+    asked = config_step_s(road["config_file"])
+    if asked is None:
+        return
+    try:
+        build(ScenarioMeta, {**meta, "step_s": asked}, "scenario")
+    except SpecError as e:
+        try:
+            build(ScenarioMeta, meta, "scenario")
+        except SpecError:
+            return  # the table's own fields are wrong: from_plain names them
+        raise SpecError("scenario.step_s", f"the configuration asks a step-length of "
+                        f"{asked:g} s, which a run cannot take ({e}); set "
+                        "scenario.step_s") from None
+    meta["step_s"] = asked
 
 
 def _value(value: Any) -> str:

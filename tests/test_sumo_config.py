@@ -22,12 +22,17 @@ from click.testing import CliRunner
 from scenarios.errors import SpecError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_net.sumo_config import (
+    STEP_FROM_CONFIG,
+    STEP_FROM_SPEC,
     check_config,
+    config_manifest,
+    config_step_s,
     last_departure_s,
     load_bundle,
     read_config,
     seconds,
 )
+from scenarios.toml_io import dumps_plain, load_spec
 from scenarios.world_backends import make_road
 from sdc.car.geometry import boxes_overlap
 from sdc.cli import main
@@ -75,6 +80,60 @@ def test_files_resolve_as_sumo_resolves_them(tmp_path):
     bundle = load_bundle(config)
     assert last_departure_s(bundle) == last_departure_s(load_bundle(config))
     assert bundle.sha256 == load_bundle(config).sha256
+
+
+@pytest.mark.parametrize("name, asked_s", [("A10KW", 0.5), ("cross", 0.2), ("square", 0.1),
+                                           ("fokr_bs_demo", 0.05)])
+def test_a_configuration_steps_as_it_asks_unless_the_spec_sets_step_s(tmp_path, name, asked_s):
+    """A spec that leaves ``step_s`` out steps as its configuration asks; one that sets
+    it keeps its own; the manifest says which, and a run steps so."""
+    plain = config_plain(name)
+    del plain["scenario"]["step_s"]
+    (tmp_path / "own.toml").write_text(dumps_plain(plain))
+    own = load_spec(tmp_path / "own.toml")
+    assert own.scenario.step_s == asked_s == config_step_s(plain["road"]["config_file"])
+    entry = config_manifest(own.road, own.scenario.step_s)
+    assert (entry["step_s"], entry["step_from"]) == (asked_s, STEP_FROM_CONFIG)
+    assert "step-length" not in entry["overridden"]
+    assert seconds(entry["applied"]["step-length"]) == asked_s
+    plain["scenario"]["step_s"] = 0.25
+    (tmp_path / "set.toml").write_text(dumps_plain(plain))
+    spec = load_spec(tmp_path / "set.toml")
+    assert spec.scenario.step_s == 0.25
+    entry = config_manifest(spec.road, spec.scenario.step_s)
+    assert entry["step_from"] == STEP_FROM_SPEC
+    assert seconds(entry["overridden"]["step-length"]) == asked_s
+
+
+def test_a_run_steps_as_its_configuration_asks_and_odd_steps_are_refused(tmp_path):
+    """square asks 0.1 s (the default is 0.064 s): the trace's clock steps 0.1 s. A
+    configuration that asks none leaves the default; one that asks what no run can
+    take is bad input naming scenario.step_s."""
+    plain = config_plain("square", enter_s=0.0, duration_s=1.0)
+    del plain["scenario"]["step_s"]
+    (tmp_path / "own.toml").write_text(dumps_plain(plain))
+    episode = run_episode(load_spec(tmp_path / "own.toml"))
+    assert np.diff(episode.trace.floats["t_s"]) == pytest.approx(0.1)
+    shutil.copy(GAME_DIR / "square" / "square.net.xml", tmp_path / "n.net.xml")
+    inputs = "<net-file value='n.net.xml'/>"
+    for time, expected in (("", 0.064), ("<step-length value='2'/>", None)):
+        plain["road"]["config_file"] = str(write_config(tmp_path, inputs, time))
+        (tmp_path / "odd.toml").write_text(dumps_plain(plain))
+        if expected is not None:
+            assert load_spec(tmp_path / "odd.toml").scenario.step_s == expected
+            continue
+        with pytest.raises(SpecError, match=r"scenario\.step_s: the configuration asks a "
+                                            r"step-length of 2 s"):
+            load_spec(tmp_path / "odd.toml")
+
+
+def test_a_run_entering_past_its_demand_is_refused_before_sumo_simulates():
+    """The A10's demand ends at 1800 s: a run (a sweep's sample, which no one checked
+    before) entering at 58000 s fails at once, naming the field, instead of warming the
+    motorway up for 16 hours of SUMO first."""
+    with pytest.raises(SpecError, match=r"traffic\.enter_s: 58000\.0 is past the end of "
+                                        r"the configuration's demand .* 1800 s"):
+        run_episode(ScenarioSpec.from_plain(config_plain("A10KW", enter_s=58000.0)))
 
 
 def test_sumo_times_read_as_seconds():
@@ -283,6 +342,7 @@ seed = 1\ncontrollers = ["avoid"]\n[sweep.params]\n"ego.speed_mps" = { uniform =
     (config,) = manifest["sumo_config"]
     assert config["overridden"] == {
         "end": "1800", "step-length": "0.5", "time-to-teleport": "0", "no-step-log": "true"}
+    assert (config["step_s"], config["step_from"]) == (0.1, STEP_FROM_SPEC)
     assert config["applied"] == {"ignore-route-errors": "true",
                                  "device.rerouting.adaptation-steps": "180"}
     fields = {entry["field"] for entry in manifest["files"].values()}

@@ -278,12 +278,32 @@ def load_bundle(path: str | Path) -> ConfigBundle:
         raise SpecError(FIELD, str(e)) from None
 
 
-def config_manifest(road) -> dict | None:
+def config_step_s(config_file: str) -> float | None:
+    """The step length the configuration at ``config_file`` asks for, in seconds (None:
+    it asks none, and SUMO's default would be 1 s)."""
+    asked = load_bundle(config_file).description["manifest"]["overridden"].get("step-length")
+    return None if asked is None else seconds(asked)
+
+
+#: where a run's step length came from, in a manifest's ``step_from``
+STEP_FROM_CONFIG, STEP_FROM_SPEC = "the configuration's step-length", "scenario.step_s"
+
+
+def config_manifest(road, step_s: float) -> dict | None:
     """What a manifest records of a road's configuration (None: not a ``sumo_config``
-    road): its file, begin, and the options a run applies, overrides, leaves out."""
+    road): its file, begin, the run's step (``step_s``) and where it came from
+    (:data:`STEP_FROM_CONFIG` where it is the one the configuration asks for, else
+    :data:`STEP_FROM_SPEC`), and the options a run applies, overrides, leaves out (the
+    step length among the overridden ones only where the run's differs)."""
     if road.kind != "sumo_config":
         return None
-    return {**load_bundle(road.config_file).description["manifest"], "file": road.config_file}
+    manifest = load_bundle(road.config_file).description["manifest"]
+    overridden, applied = dict(manifest["overridden"]), dict(manifest["applied"])
+    from_config = config_step_s(road.config_file) == step_s
+    if from_config:
+        applied["step-length"] = overridden.pop("step-length")
+    return {**manifest, "file": road.config_file, "applied": applied, "overridden": overridden,
+            "step_s": step_s, "step_from": STEP_FROM_CONFIG if from_config else STEP_FROM_SPEC}
 
 
 @functools.lru_cache(maxsize=4)
@@ -350,16 +370,24 @@ def last_departure_s(bundle: ConfigBundle) -> float | None:
     return latest
 
 
-def check_config(path: str | Path, enter_s: float) -> None:
-    """Bad input before any run: a configuration SUMO cannot load (a
-    :class:`SpecError` naming ``road.config_file``), or ``enter_s`` before its begin
-    or past its demand's last departure (naming ``traffic.enter_s``)."""
+@functools.lru_cache(maxsize=16)
+def _last_departure_of(sha256: str, path: str) -> float | None:
+    """:func:`last_departure_s` of the bundle of ``path`` whose content is ``sha256``,
+    read once a process."""
+    return last_departure_s(load_bundle(path))
+
+
+def check_enter_s(path: str | Path, enter_s: float) -> None:
+    """``enter_s`` before the configuration's begin, or past its demand's last
+    departure, is bad input naming ``traffic.enter_s``; a demand that sends nothing off
+    names ``road.config_file``. Cheap after its first call: each run checks it before
+    SUMO simulates anything."""
     bundle = load_bundle(path)
     begin_s = bundle.begin_s
     if enter_s < begin_s:
         raise SpecError("traffic.enter_s", f"{enter_s} is before the configuration's begin "
                         f"({begin_s:g} s)")
-    latest = last_departure_s(bundle)
+    latest = _last_departure_of(bundle.sha256, str(path))
     if latest is None:
         raise SpecError(FIELD, f"{path}: the configuration's demand sends no vehicle off")
     if enter_s > latest:
@@ -367,6 +395,14 @@ def check_config(path: str | Path, enter_s: float) -> None:
                         f"demand (its last departure, or the end of the last stop that surely "
                         f"holds a vehicle, is at {latest:g} s): past it nothing of the demand is "
                         "sure to be on the road (what departed last may have arrived)")
+
+
+def check_config(path: str | Path, enter_s: float) -> None:
+    """Bad input before any run: a configuration SUMO cannot load (a
+    :class:`SpecError` naming ``road.config_file``), or an ``enter_s`` it cannot take
+    (:func:`check_enter_s`)."""
+    check_enter_s(path, enter_s)
+    bundle = load_bundle(path)
     problem = _sumo_load_error(bundle)
     if problem is not None:
         raise SpecError(FIELD, f"{path}: SUMO cannot load the configuration: {problem}")

@@ -54,7 +54,8 @@ class Reporter(Protocol):
     def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None: ...
     def advance(self, row: dict) -> None: ...
     def set_total(self, total: int) -> None: ...  # the runs now planned (an estimate's change)
-    def warm_states(self, done: int, total: int) -> None: ...  # warm states computed so far
+    def warm_states(self, done: int, total: int, sumo_s: float,
+                    sumo_total_s: float) -> None: ...  # warm states done, SUMO's seconds
     def stop(self) -> None: ...
 
 
@@ -127,9 +128,9 @@ def make_dir(out_dir: Path) -> None:
 
 
 def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
-                 roads: tuple = ()) -> dict:
-    """The manifest of a sweep that has not run yet (``roads``: its runs' road specs,
-    for what it records of their SUMO configurations; default the base's)."""
+                 specs: tuple = ()) -> dict:
+    """The manifest of a sweep that has not run yet (``specs``: its runs' scenario
+    specs, for what it records of their SUMO configurations; default the base)."""
     return {
         "sweep": sweep.to_plain(),
         "base_scenario": sweep.base.to_plain(),
@@ -139,8 +140,9 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
         "versions": package_versions(),
         "traffic_model": traffic_model.description(),
         # sumo_config roads: the options of each configuration applied, overridden, not
-        "sumo_config": [entry for road in dict.fromkeys(roads or (sweep.base.road,))
-                        if (entry := config_manifest(road)) is not None],
+        "sumo_config": [entry for road, step_s in dict.fromkeys(
+                            (spec.road, spec.scenario.step_s) for spec in specs or (sweep.base,))
+                        if (entry := config_manifest(road, step_s)) is not None],
         "controllers": controller_sources(sweep.controllers),
         "files": {},  # what travels with the job: driver path -> field, sha256
         "git": git_state(),
@@ -163,7 +165,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume:
     make_dir(out_dir)
     write_atomic(Path(out_dir) / "plan.parquet", lambda tmp: pq.write_table(plan_table, tmp))
     return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}),
-                        tuple(r.spec.road for r in plan if r.spec is not None))
+                        tuple(r.spec for r in plan if r.spec is not None))
 
 
 def build_networks(tasks: list[RunTask], workers: int) -> None:
