@@ -17,7 +17,7 @@ from scenarios.road_geometry import RoadGeometry
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.snapshot import Snapshot
 from scenarios.sumo_net.build import build_network, source_sha256, sumo_load_error
-from scenarios.warm_state import cached_path, uses_warm_state, warm_key
+from scenarios.warm_state import cached_path, uses_warm_state, warm_key, warm_up_steps
 
 BACKENDS = ("sumo", "highway")
 
@@ -90,6 +90,18 @@ def warm_state_path(spec: ScenarioSpec, cache_dir: Path | None = None) -> Path |
     if not uses_warm_state(spec):
         return None
     return cached_path(warm_key(spec, source_sha256(spec.road, cache_dir)))
+
+
+def warm_up_span_s(spec: ScenarioSpec) -> tuple[float, float]:
+    """SUMO's clock where ``spec``'s warm-up starts and where it ends [s]: from 0 over
+    ``traffic.warm_up_s``, or on a ``sumo_config`` road from its configuration's begin
+    to ``traffic.enter_s``."""
+    begin_s = 0.0
+    if spec.road.kind == "sumo_config":
+        from scenarios.sumo_net.sumo_config import load_bundle
+
+        begin_s = load_bundle(spec.road.config_file).begin_s
+    return begin_s, begin_s + warm_up_steps(spec, begin_s) * spec.scenario.step_s
 
 
 def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None,

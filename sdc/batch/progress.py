@@ -76,12 +76,14 @@ class RichReporter:
         """The runs now planned in all: the bar's length, and so its ETA."""
         self._progress.update(self._task, total=total)
 
-    def warm_states(self, done: int, total: int) -> None:
-        """Warm states computed before the runs: a bar of their own."""
+    def warm_states(self, done: int, total: int, sumo_s: float, sumo_total_s: float) -> None:
+        """Warm states computed before the runs: a bar of their own, in seconds of SUMO
+        simulated (a long warm-up moves it as it goes)."""
+        tally = f"{done} of {total} warm states, SUMO {sumo_s:,.0f} s of {sumo_total_s:,.0f} s"
         if self._warm is None:
-            self._warm = self._progress.add_task("warm states", total=total, completed=done,
-                                                 tally="", rate="")
-        self._progress.update(self._warm, completed=done)
+            self._warm = self._progress.add_task("warm-ups", total=max(sumo_total_s, 1e-9),
+                                                 completed=sumo_s, tally=tally, rate="")
+        self._progress.update(self._warm, completed=sumo_s, tally=tally)
 
     def stop(self) -> None:
         if self._progress is not None:
@@ -103,7 +105,7 @@ class QuietReporter:
     def set_total(self, total: int) -> None:
         pass
 
-    def warm_states(self, done: int, total: int) -> None:
+    def warm_states(self, done: int, total: int, sumo_s: float, sumo_total_s: float) -> None:
         pass
 
     def stop(self) -> None:

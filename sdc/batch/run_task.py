@@ -15,6 +15,7 @@ from analysis.run.run_outcome import COMPLETED
 from scenarios.atomic_write import write_atomic
 from scenarios.scenario_spec import ScenarioSpec
 from sdc.batch.job_files import JobFile
+from sdc.batch.warm_up_clock import ClockWriter
 from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row
 
 TraceMode = Literal["none", "failures", "all"]
@@ -34,7 +35,9 @@ class RunTask:
     warm state the run starts from, when one travels with the job.
 
     A ``warm_up`` task computes the spec's warm state instead of running it, and
-    writes its file to ``trace_path`` (:mod:`sdc.batch.warm_states`).
+    writes its file to ``trace_path`` (:mod:`sdc.batch.warm_states`), and SUMO's
+    clock on the way to ``clock_path``, the driver's path, which a worker on another
+    machine may not reach (:mod:`sdc.batch.warm_up_clock`).
     """
 
     run_id: str
@@ -47,6 +50,7 @@ class RunTask:
     recorded_spec: ScenarioSpec | None = None  # the spec a trace records (default: spec)
     warm_state: Path | None = None  # the worker's copy of the run's warm state
     kind: TaskKind = "run"
+    clock_path: Path | None = None  # warm_up: where its SUMO clock goes, for progress
 
 
 def _identity(task: RunTask) -> dict:
@@ -81,11 +85,15 @@ def _warm_up(task: RunTask) -> dict:
     write its file to ``task.trace_path``; the row says ok or why not."""
     from scenarios.world_backends import warm_state_file
 
+    clock = ClockWriter(task.clock_path) if task.clock_path else None
     try:
-        data = warm_state_file(task.spec, task.cache_dir)
+        data = warm_state_file(task.spec, task.cache_dir, on_sample=clock)
         write_atomic(task.trace_path, lambda tmp: tmp.write_bytes(data))
     except Exception as e:  # noqa: BLE001 - its runs compute it themselves, or fail alike
         return task_error_row(task, f"{type(e).__name__}: {e}", traceback.format_exc())
+    finally:
+        if clock is not None:
+            clock.remove()
     return {"run_id": task.run_id, "status": "ok"}
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
@@ -24,11 +25,16 @@ from scenarios.warm_state import (
     warm_state_dir,
     warm_state_id,
 )
+from scenarios.world_backends import warm_up_span_s
 from sdc.batch.job_files import FileCatalog
 from sdc.batch.run_task import RunTask
+from sdc.batch.warm_up_clock import clock_path, read_clock
 
-#: told the warm states done and in all, as they come
-Progress = Callable[[int, int], None]
+#: told the warm states done and in all, and the seconds of SUMO simulated of all the
+#: warm-ups' seconds, as they come
+Progress = Callable[[int, int, float, float], None]
+#: how often the driver reads the clocks of the warm-ups under way [s]
+CLOCKS_READ_EVERY_S = 0.5
 #: the most warm-ups whose settling a sweep directory keeps (warm-states.json)
 SETTLING_SERIES = 20
 
@@ -53,7 +59,7 @@ def warm_up_tasks(tasks: Iterable[RunTask], keys: dict[str, str]) -> list[RunTas
         if task.run_id in keys:
             first.setdefault(keys[task.run_id], task)
     return [RunTask(f"warm-state-{key[:16]}", task.spec, trace_path=cached_path(key),
-                    kind="warm_up")
+                    kind="warm_up", clock_path=clock_path(cached_path(key)))
             for key, task in first.items() if not cached_path(key).is_file()]
 
 
@@ -78,14 +84,55 @@ def prepare_warm_states(tasks: list[RunTask], executor,
     failed = {}
     if todo:
         warm_state_dir().mkdir(parents=True, exist_ok=True)
-        progress(0, len(todo))
-        for done, row in enumerate(executor.map(todo), start=1):
-            if row["status"] != "ok":
-                failed[row["run_id"]] = row.get("error")
-            progress(done, len(todo))
+        with _SumoClocks(todo, progress) as clocks:
+            for row in executor.map(todo):
+                if row["status"] != "ok":
+                    failed[row["run_id"]] = row.get("error")
+                clocks.done(row["run_id"])
     summary = {"distinct": len(set(keys.values())), "computed": len(todo) - len(failed),
                "failed": failed}
     return summary, keys
+
+
+class _SumoClocks:
+    """The progress of ``tasks`` (warm-ups) in seconds of SUMO: those done in full, and
+    of those under way what their workers' clocks say (:mod:`sdc.batch.warm_up_clock`),
+    told to ``progress`` every :data:`CLOCKS_READ_EVERY_S` from a thread of its own."""
+
+    def __init__(self, tasks: list[RunTask], progress: Progress):
+        self.progress, self.lock, self.stopped = progress, threading.Lock(), threading.Event()
+        self.spans = {task.run_id: (task.clock_path, *warm_up_span_s(task.spec))
+                      for task in tasks}
+        self.total_s = sum(end - begin for _, begin, end in self.spans.values())
+        self.finished: set[str] = set()
+        self.thread = threading.Thread(target=self._watch, daemon=True)
+
+    def __enter__(self) -> _SumoClocks:
+        self._tell()
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stopped.set()
+        self.thread.join()
+        self._tell()
+
+    def done(self, run_id: str) -> None:
+        with self.lock:
+            self.finished.add(run_id)
+        self._tell()
+
+    def _watch(self) -> None:
+        while not self.stopped.wait(CLOCKS_READ_EVERY_S):
+            self._tell()
+
+    def _tell(self) -> None:
+        with self.lock:
+            simulated = 0.0
+            for run_id, (path, begin, end) in self.spans.items():
+                clock = end if run_id in self.finished else path and read_clock(path)
+                simulated += 0.0 if clock is None else min(max(clock - begin, 0.0), end - begin)
+            self.progress(len(self.finished), len(self.spans), simulated, self.total_s)
 
 
 def write_settling(path: Path, keys: list[str]) -> None:

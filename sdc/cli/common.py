@@ -67,18 +67,14 @@ def check_at(at_s: float | None, end_s: float) -> None:
 def warm_up_first(spec: ScenarioSpec) -> None:
     """Warm the run's traffic up before the run when its warm state is not cached yet
     (minutes, once), saying so on stderr and how far SUMO's clock got as it goes."""
-    from scenarios.world_backends import warm_state_file, warm_state_path
+    from scenarios.world_backends import warm_state_file, warm_state_path, warm_up_span_s
 
     path = warm_state_path(spec)
     if path is None or path.is_file():
         return
-    if spec.road.kind == "sumo_config":
-        end_s, what = spec.traffic.enter_s, ("the configuration's demand up to "
-                                             f"traffic.enter_s = {spec.traffic.enter_s:g} s")
-    else:
-        end_s, what = spec.traffic.warm_up_s, f"{spec.traffic.warm_up_s:g} s of SUMO"
-    click.echo(f"warming the traffic up: {what}, once (the warm state is cached in "
-               f"{path.parent})", err=True)
+    begin_s, end_s = warm_up_span_s(spec)
+    click.echo(f"warming the traffic up: SUMO from {begin_s:,.0f} s to {end_s:,.0f} s, once "
+               f"(the warm state is cached in {path.parent})", err=True)
     # a warm-up that fails here fails again in the run, which tells how (an error row)
     with contextlib.suppress(SdcError):
         warm_state_file(spec, on_sample=WarmUpProgress(end_s))
