@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test test-fast lint bench clean system-packages
+.PHONY: demo test test-fast lint bench docs clean system-packages
 
 $(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/_road_kernels.c scenarios/*.h  # C builds at install (optional)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -22,6 +22,10 @@ test: $(STAMP) system-packages
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q -m 'not slow'
+
+# the manual: site/index.html, from docs/ and mkdocs.yml; warnings are errors
+docs: $(STAMP)
+	$(BIN)/mkdocs build --strict --site-dir site
 
 system-packages:
 	.ci/install-system-packages
@@ -42,5 +46,5 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_rare_bank.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build
+	rm -rf $(VENV) .pytest_cache .ruff_cache .hypothesis build site
 	find sdc scenarios -name '*.so' -delete
