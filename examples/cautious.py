@@ -8,8 +8,8 @@ in the range image lies in its path closer than its stopping distance plus
     sdc run scenarios/catalog/seed-lesson.toml --controller examples/cautious.py:Cautious
     sdc sweep examples/cautious-sweep.toml --out cautious --workers 2
 
-Everything it uses comes from ``sdc``'s two exports; see the README's section
-"Your own controller" for the protocol.
+Everything it uses comes from ``sdc``'s two exports; see the manual's
+docs/how-to/own-controller.md for the protocol.
 """
 
 from __future__ import annotations
