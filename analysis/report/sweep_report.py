@@ -303,9 +303,6 @@ def _red_lights(ok: pd.DataFrame) -> dict | None:
             for c, rows in counts.groupby(ok.controller, sort=False)}
 
 
-WORLD_TITLE = "## World"
-
-
 def _world_lines(summary: SweepSummary) -> list[str]:
     return world_lines(summary.world, summary.traffic_model, summary.sumo_config,
                        summary.sweep_dir)
@@ -836,7 +833,7 @@ def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
     contents; ``bad``: the runs to look at (:func:`ranked_runs` of ``results``);
     ``warm_up_images`` beside the warm-state lines they show; ``list_href``: where the
     page finds the whole list of them."""
-    verdicts = verdict_rows(summary)
+    verdicts, groups = verdict_rows(summary), comparison_groups(summary)
     sections = {
         "verdicts": (f"<p>{html.escape(VERDICT_TITLE if verdicts else NOT_RECORDED)}</p>"
                      + (_table_html(verdicts, "verdicts") if verdicts else "")
@@ -855,8 +852,7 @@ def html_page(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
         "comparisons": "".join(
             [f"<p>{html.escape(COMPARISONS_TITLE)}</p>"]
             + [f"<h3>{html.escape(title)}</h3>{_bullets(sentences)}"
-               for title, sentences in comparison_groups(summary)]
-            if comparison_groups(summary) else []),
+               for title, sentences in groups] if groups else []),
         "traffic": (_paragraphs(_not_warnings(warm_state_lines(summary)))
                     + "".join(_figure_html(title, png) for title, png in warm_up_images)),
         "figures": "".join(_figure_html(title, png) for title, png in images),
