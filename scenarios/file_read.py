@@ -8,6 +8,7 @@ file's path and says what is wrong. ``what`` names the file in the message
 from __future__ import annotations
 
 import gzip
+import hashlib
 import json
 import os
 import stat
@@ -57,6 +58,15 @@ def read_bytes(path: str | Path, what: str) -> bytes:
 
 
 GZIP_MAGIC = b"\x1f\x8b"
+
+
+def sha256_hex(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def file_sha256(path: str | Path) -> str:
+    """The sha256 of the file at ``path`` (hex)."""
+    return sha256_hex(Path(path).read_bytes())
 
 
 def unzipped(path: str | Path, data: bytes, what: str) -> bytes:

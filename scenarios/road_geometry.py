@@ -87,6 +87,10 @@ def centre_line_xy(road: RoadSpec) -> np.ndarray:
     return np.column_stack([x, y])
 
 
+#: the SUMO edge of a built-in road (one edge, its lanes numbered from the right)
+EDGE_ID = "road"
+
+
 class RoadGeometry:
     """A one-way road along a polyline centre line."""
 
@@ -109,6 +113,15 @@ class RoadGeometry:
     def from_spec(cls, road: RoadSpec) -> RoadGeometry:
         curvature_1pm = 1 / road.curve_radius_m if road.kind == "curve" else 0.0
         return cls(centre_line_xy(road), road.lanes, road.lane_width_m, curvature_1pm)
+
+    def sumo_place(self, s_m: float, lane: int = 0) -> tuple[str, int, float]:
+        """SUMO's edge, lane index and lane position of road position ``s_m`` in
+        ``lane`` (SUMO gives every lane of a built curve the centre line's length)."""
+        return EDGE_ID, lane, s_m
+
+    def route_edges(self, s_m: float) -> list[str]:
+        """The SUMO edges of the road from ``s_m`` on."""
+        return [EDGE_ID]
 
     @property
     def half_width_m(self) -> float:

@@ -26,7 +26,8 @@ from scenarios import road_kernels, traffic_model
 from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.errors import SdcError
 from scenarios.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
-from scenarios.road_geometry import RoadGeometry
+from scenarios.road_geometry import EDGE_ID, RoadGeometry
+from scenarios.road_source import road_source
 from scenarios.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
 from scenarios.snapshot import (
     Snapshot,
@@ -35,11 +36,10 @@ from scenarios.snapshot import (
     obstacle_boxes,
     sensing_radius_m,
 )
-from scenarios.sumo_net.build import EDGE_ID, network_file, source_sha256, sumo_binary
+from scenarios.sumo_net.build import sumo_binary
 from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
 from scenarios.sumo_net.random_trips import RandomTrips
-from scenarios.sumo_net.route_road import DEMAND, NetworkRoad, scenario_stream
-from scenarios.sumo_net.sumo_config import check_enter_s, load_bundle
+from scenarios.sumo_net.route_road import DEMAND, scenario_stream
 from scenarios.vehicle_types import VehicleTypes
 from scenarios.warm_state import (
     HALTING_SPEED_MPS,
@@ -49,9 +49,8 @@ from scenarios.warm_state import (
     WarmState,
     cached_path,
     uses_warm_state,
-    warm_key,
     warm_seed,
-    warm_up_steps,
+    warm_state_key,
 )
 from scenarios.warm_up_process import computed_apart
 
@@ -77,18 +76,6 @@ def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
     the sensing radius has its front bumper within it plus half of each body's length
     (the longest vehicle type's for the other's) [m]."""
     return 1.0 + (longest_m + ego_length_m) / 2
-
-
-def _sumo_place(road: RoadGeometry, lane: int, s_m: float) -> tuple[str, int, float]:
-    """SUMO's edge, lane index and lane position of road position ``s_m`` in ``lane``."""
-    if isinstance(road, NetworkRoad):
-        return road.sumo_place(s_m)
-    # SUMO gives every lane of a curve the centre line's length
-    return EDGE_ID, lane, s_m
-
-
-def _route_edges(road: RoadGeometry, s_m: float) -> list[str]:
-    return road.route_edges(s_m) if isinstance(road, NetworkRoad) else [EDGE_ID]
 
 
 #: a warm state's flows run on past any run's end (the state must not know the run's
@@ -120,8 +107,8 @@ def _trips(trips: list[tuple[str, str]], depart_s: float = 0.0) -> list[str]:
 
 def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
     traffic = spec.traffic
-    factor = (1.0 if isinstance(road, NetworkRoad)
-              else traffic.speed_mean_mps / spec.road.speed_limit_mps)
+    factor = (traffic.speed_mean_mps / spec.road.speed_limit_mps
+              if road_source(spec.road).flows else 1.0)  # a network: its own limits
     lo, hi = SPEED_FACTOR_BOUNDS
     return (f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
             f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
@@ -141,7 +128,7 @@ def _ego_types(spec: ScenarioSpec) -> list[str]:
 
 def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
     ego_front_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
-    return f'  <route id="r0" edges="{" ".join(_route_edges(road, ego_front_m))}"/>'
+    return f'  <route id="r0" edges="{" ".join(road.route_edges(ego_front_m))}"/>'
 
 
 def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
@@ -188,9 +175,10 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
                                             strict=True)):
         length_m = obstacle.size_m[0]
         s_m = road.place_s_m(obstacle.position_m, length_m)
-        lanes = [obstacle.lane] if isinstance(road, NetworkRoad) else obstacle_lanes(road, box)
+        # on a network, a second body beside it waits for SUMO's types (_show_obstacles_beside)
+        lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
         for k, spec_lane in enumerate(lanes):
-            edge, lane, front_m = _sumo_place(road, spec_lane, s_m + length_m / 2)
+            edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
             vid = f"{OBSTACLE_PREFIX}{i}" if k == 0 else f"{OBSTACLE_PREFIX}{i}.{lane}"
             route = "r0" if edge == EDGE_ID else vid
             if route != "r0":
@@ -214,19 +202,19 @@ def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
     """The ``.rou.xml`` text of a run without a warm state: vehicle types, the ego's
     route, obstacles as stopped vehicles, and the background traffic (flows, or on a
     network the ``trips`` (from edge, to edge) leaving at 0 s)."""
-    network = isinstance(road, NetworkRoad)
+    flows = road_source(spec.road).flows
     end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
     enter_s = spec.scenario.step_s  # after the ego, which enters in the first step
     return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
                     *_obstacles(spec, road),
-                    *(_trips(trips, enter_s) if network
-                      else _flows(spec, "r0", end_s, enter_s))])
+                    *(_flows(spec, "r0", end_s, enter_s) if flows
+                      else _trips(trips, enter_s))])
 
 
 def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
                        trips: list[tuple[str, str]] = ()) -> str:
     """The ``.rou.xml`` text of a warm-up: the background traffic alone."""
-    if isinstance(road, NetworkRoad):
+    if not road_source(spec.road).flows:
         return _routes([_traffic_type(spec, road), *_trips(trips)])
     return _routes([_traffic_type(spec, road), f'  <route id="traffic" edges="{EDGE_ID}"/>',
                     *_flows(spec, "traffic", WARM_FLOW_END_S)])
@@ -294,11 +282,10 @@ class SumoWorld:
         #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
         self.keep_ids = False
         self.last_ids: list[str] = []
-        # a sumo_config road's configuration (its files are written into the scratch folder)
-        self._config = None
-        if spec.road.kind == "sumo_config":
-            check_enter_s(spec.road.config_file, spec.traffic.enter_s)  # before any SUMO
-            self._config = load_bundle(spec.road.config_file)
+        self._source = road_source(spec.road)
+        # a sumo_config road's configuration (its files are written into the scratch
+        # folder), its enter_s checked before any SUMO
+        self._config = self._source.configuration(spec)
         self._config_paths: dict[str, Path] | None = None
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._sumo = None
@@ -315,7 +302,7 @@ class SumoWorld:
         """The network file SUMO runs on."""
         if self._config is not None:
             return self._written_config()[self._config.net_name]
-        return network_file(self.spec.road, self.cache_dir)
+        return self._source.network_file(self.cache_dir)
 
     def _written_config(self) -> dict[str, Path]:
         """The configuration's files, written into the scratch folder: their paths."""
@@ -325,11 +312,11 @@ class SumoWorld:
 
     def warm_key(self) -> str:
         """The key of the spec's warm state (``scenarios/warm_state.py``)."""
-        return warm_key(self.spec, source_sha256(self.spec.road, self.cache_dir))
+        return warm_state_key(self.spec, self.cache_dir)
 
     def _new_demand(self, seed: int) -> RandomTrips | None:
         """The random trips of a network's traffic, drawn from ``seed``'s stream."""
-        if not (isinstance(self.road, NetworkRoad) and self.spec.traffic.vehicles):
+        if self._source.flows or not self.spec.traffic.vehicles:
             return None
         return RandomTrips(self.road.net, scenario_stream(seed, DEMAND))
 
@@ -350,7 +337,7 @@ class SumoWorld:
             path.write_text(routes)
         ours = [
             # a random trip with no way to its end is dropped, not fatal
-            *(["--ignore-route-errors", "true"] if isinstance(self.road, NetworkRoad) else []),
+            *([] if self._source.flows else ["--ignore-route-errors", "true"]),
             "--step-length", repr(self.spec.scenario.step_s),
             "--seed", str(self.spec.scenario.seed if seed is None else seed),
             "--collision.action", "none", "--time-to-teleport", "-1",
@@ -402,8 +389,8 @@ class SumoWorld:
                              *self.sumo_options)
         ego = self.spec.ego
         # inserted where it starts, so traffic knows of it from the first step
-        _, lane, front_m = _sumo_place(self.road, ego.lane,
-                                       ego.start_m + self._model.length_m / 2)
+        _, lane, front_m = self.road.sumo_place(ego.start_m + self._model.length_m / 2,
+                                                   ego.lane)
         sim.vehicle.add(EGO_ID, "r0", typeID=EGO_TYPE, depart="now", departLane=str(lane),
                         departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
         sim.vehicle.setSpeedMode(EGO_ID, 0)
@@ -465,7 +452,7 @@ class SumoWorld:
         own = None if self._config is not None else warm_up_routes_xml(spec, self.road, trips)
         self._start_sumo(libsumo, ["sumo"], own, *SAVE_OPTIONS, seed=warm_seed(spec))
         try:
-            steps = warm_up_steps(spec, self._config.begin_s if self._config else 0.0)
+            steps = self._source.warm_up_steps(spec)
             every = max(1, round(SETTLING_SAMPLE_S / spec.scenario.step_s))
             settling: dict[str, list[float]] = {c: [] for c in SETTLING_COLUMNS}
             for k in range(1, steps + 1):
@@ -547,7 +534,7 @@ class SumoWorld:
         the traffic to pass (:func:`lanes_blocked`, for the widest type SUMO has loaded)
         stands there too, as a second stopped vehicle (``obstacle.<i>.<lane>``)."""
         road = self.road
-        if not isinstance(road, NetworkRoad):
+        if self._source.flows:  # a built road's obstacles stand beside from the start
             return
         vehicle = self._sumo.vehicle
         for i, (obstacle, box) in enumerate(zip(self.spec.obstacles, self._obstacle_boxes,

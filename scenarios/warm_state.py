@@ -36,6 +36,7 @@ from pathlib import Path
 from scenarios import traffic_model
 from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
+from scenarios.road_source import road_source
 from scenarios.scenario_spec import ScenarioSpec
 
 #: bumped whenever what a state holds or how a warm-up runs changes (2: its persons)
@@ -64,17 +65,7 @@ def uses_warm_state(spec: ScenarioSpec) -> bool:
     """Does a run of ``spec`` start from a warm state (a SUMO run with a warm-up; a
     ``sumo_config`` road always: its demand runs until ``traffic.enter_s``)?"""
     return spec.scenario.backend == "sumo" and (spec.traffic.warm_up_s > 0
-                                                or spec.road.kind == "sumo_config")
-
-
-def warm_up_steps(spec: ScenarioSpec, begin_s: float = 0.0) -> int:
-    """SUMO steps of ``spec``'s warm-up: ``warm_up_s``, or on a ``sumo_config`` road
-    from its configuration's ``begin_s`` to ``traffic.enter_s``, one step at least
-    (the demand departing at its begin is in before the ego enters)."""
-    step_s = spec.scenario.step_s
-    if spec.road.kind == "sumo_config":
-        return max(1, round((spec.traffic.enter_s - begin_s) / step_s))
-    return round(spec.traffic.warm_up_s / step_s)
+                                                or road_source(spec.road).always_warm())
 
 
 def sumo_version() -> str:
@@ -83,13 +74,17 @@ def sumo_version() -> str:
 
 def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
     """The identity of ``spec``'s warm state, on the network whose file has ``net_sha256``
-    (a ``sumo_config`` road: the configuration's content,
-    :func:`scenarios.sumo_net.build.source_sha256`)."""
+    (:meth:`scenarios.road_source.RoadSource.identity_sha256`)."""
     traffic = {k: v for k, v in dataclasses.asdict(spec.traffic).items() if k != "warm_seed"}
     body = {"format": WARM_FORMAT, "sumo": sumo_version(), "net_sha256": net_sha256,
             "sumo_options": list(traffic_model.sumo_options(spec.traffic.lane_change_s)),
             "traffic": traffic, "seed": warm_seed(spec), "step_s": spec.scenario.step_s}
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def warm_state_key(spec: ScenarioSpec, cache_dir: Path | None = None) -> str:
+    """The key of ``spec``'s warm state: :func:`warm_key` on its road's identity."""
+    return warm_key(spec, road_source(spec.road).identity_sha256(cache_dir))
 
 
 #: a warm state as a result row names it: its key's first hex digits
@@ -98,10 +93,6 @@ WARM_ID_CHARS = 16
 
 def warm_state_id(key: str | None) -> str | None:
     return None if key is None else key[:WARM_ID_CHARS]
-
-
-def file_sha256(path: str | Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def warm_state_dir() -> Path:

@@ -10,9 +10,7 @@ than the same run from the same warm state computed elsewhere. Computed in a fre
 interpreter, a warm state depends on its inputs only, wherever and after whatever it
 is computed.
 
-Run as ``python -m scenarios.warm_up_process SPEC.json KEY [CACHE_DIR]``: computes the
-warm state of the spec (its plain JSON) with key ``KEY`` into the warm-state cache,
-printing ``t_s T`` (SUMO's clock) on stdout as it goes.
+The process runs ``python -m scenarios.warm_up_child SPEC.json KEY [CACHE_DIR]``.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.warm_state import WarmState, cached_path
@@ -39,7 +36,7 @@ def computed_apart(spec: ScenarioSpec, key: str, cache_dir: Path | None, scratch
     errors; ``on_sample``: called with SUMO's clock [s] as the warm-up goes on."""
     spec_file = scratch / "warm-spec.json"
     spec_file.write_text(json.dumps(spec.to_plain()))
-    command = [sys.executable, "-m", __name__, str(spec_file), key,
+    command = [sys.executable, "-m", "scenarios.warm_up_child", str(spec_file), key,
                *([str(cache_dir)] if cache_dir is not None else [])]
     with open(scratch / "warm-up-errors.txt", "w+") as errors:
         child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=errors, text=True)
@@ -58,21 +55,3 @@ def computed_apart(spec: ScenarioSpec, key: str, cache_dir: Path | None, scratch
             tail = "\n".join(errors.read().strip().splitlines()[-5:])
             raise SdcError(f"computing the warm state {key[:12]}... failed:\n{tail}")
     return WarmState.read(cached_path(key))
-
-
-def main(argv: list[str]) -> None:
-    from scenarios.sumo_world import SumoWorld
-    from scenarios.world_backends import make_road
-
-    spec = ScenarioSpec.from_plain(json.loads(Path(argv[0]).read_text()))
-    key, cache_dir = argv[1], (Path(argv[2]) if len(argv) > 2 else None)
-    with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
-        state = world.compute_warm_state(
-            key, lambda t_s: print(f"{PROGRESS_PREFIX}{t_s!r}", flush=True))
-    path = cached_path(key)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, lambda tmp: tmp.write_bytes(state.to_bytes()))
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])

@@ -40,3 +40,40 @@ def test_the_map_names_every_module_and_only_modules_that_exist():
     mapped = mapped_files()
     missing = sorted(str(p.relative_to(ROOT)) for p in source_files() - mapped)
     assert not missing, f"modules missing from docs/architecture.md's map: {missing}"
+
+
+def import_cycles() -> list[list[str]]:
+    """The groups of modules that import each other round a circle, imports inside
+    functions included (Tarjan's strongly connected components of grimp's graph)."""
+    import grimp
+
+    graph = grimp.build_graph("scenarios", "sdc", "analysis")
+    edges = {m: sorted(graph.find_modules_directly_imported_by(m)) for m in sorted(graph.modules)}
+    order: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    groups: list[list[str]] = []
+
+    def visit(module: str) -> None:
+        order[module] = low[module] = len(order)
+        stack.append(module)
+        for other in edges[module]:
+            if other not in order:
+                visit(other)
+                low[module] = min(low[module], low[other])
+            elif other in stack:
+                low[module] = min(low[module], order[other])
+        if low[module] == order[module]:
+            group = stack[stack.index(module):]
+            del stack[stack.index(module):]
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for module in edges:
+        if module not in order:
+            visit(module)
+    return groups
+
+
+def test_no_modules_import_each_other_round_a_circle():
+    assert import_cycles() == []

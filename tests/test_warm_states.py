@@ -20,11 +20,12 @@ from analysis.report.settling_report import TITLE as SETTLING_TITLE
 from analysis.report.sweep_report import write_report
 from scenarios import CATALOG_DIR
 from scenarios.errors import SdcError, SpecError
+from scenarios.file_read import file_sha256
 from scenarios.scenario_spec import ScenarioSpec
 from scenarios.sumo_world import SumoWorld
 from scenarios.sweep_spec import expand, load_sweep, warm_seeds
 from scenarios.toml_io import load_spec
-from scenarios.warm_state import WARM_FORMAT, WarmState, cached_path, file_sha256, warm_key
+from scenarios.warm_state import WARM_FORMAT, WarmState, cached_path, warm_key
 from scenarios.world_backends import make_road
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter

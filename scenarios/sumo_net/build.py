@@ -17,11 +17,8 @@ from pathlib import Path
 
 from scenarios.cache_dir import network_cache_dir
 from scenarios.errors import SdcError
-from scenarios.road_geometry import RoadGeometry
+from scenarios.road_geometry import EDGE_ID, RoadGeometry
 from scenarios.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
-from scenarios.warm_state import file_sha256
-
-EDGE_ID = "road"
 
 
 def sumo_binary(name: str) -> str:
@@ -95,22 +92,6 @@ def network_file_name(road: RoadSpec) -> str:
     nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
     digest = hashlib.sha256(f"{_netconvert_version()}\n{nodes}\n{edges}".encode())
     return f"{digest.hexdigest()[:20]}.net.xml"
-
-
-def network_file(road: RoadSpec, cache_dir: Path | None = None) -> Path:
-    """The ``.net.xml`` SUMO runs ``road`` on: a ``sumo_net`` road's own file, or the
-    network built for a built-in road (:func:`build_network`)."""
-    return input_path(road.net_file) if road.kind == "sumo_net" else build_network(road, cache_dir)
-
-
-def source_sha256(road: RoadSpec, cache_dir: Path | None = None) -> str:
-    """The sha256 of what SUMO runs ``road`` on, the identity of its warm states: a
-    configuration's content (``sumo_config``), else its network file's."""
-    if road.kind == "sumo_config":
-        from scenarios.sumo_net.sumo_config import load_bundle
-
-        return load_bundle(road.config_file).sha256
-    return file_sha256(network_file(road, cache_dir))
 
 
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:

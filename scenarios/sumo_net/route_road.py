@@ -337,9 +337,10 @@ class NetworkRoad(RoadGeometry):
         """The first route lane outside a junction that starts after ``s_m``."""
         return next((p for p in self.pieces if p.start_s_m > s_m and not p.lane.internal), None)
 
-    def sumo_place(self, s_m: float) -> tuple[str, int, float]:
+    def sumo_place(self, s_m: float, lane: int = 0) -> tuple[str, int, float]:
         """SUMO's edge, lane index and lane position of route position ``s_m``
-        (the start of the next lane when ``s_m`` is inside a junction)."""
+        (the start of the next lane when ``s_m`` is inside a junction; the route is
+        its own lane 0)."""
         piece = self.piece_at(s_m)
         if piece.lane.internal:
             piece = self._lane_after(s_m) or piece

@@ -17,19 +17,15 @@ side; :mod:`sdc.batch.worker_files` is the worker's.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 from pathlib import Path
 
-from scenarios.cache_dir import network_cache_dir
 from scenarios.controller_ref import controller_kind
 from scenarios.errors import SdcError
-from scenarios.file_read import read_bytes
+from scenarios.file_read import read_bytes, sha256_hex
+from scenarios.road_source import road_source
 from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import build_network, input_path
 from scenarios.sumo_net.route_road import edges_cache_path
-from scenarios.sumo_net.sumo_config import BUNDLE_SUFFIX, load_bundle
 from scenarios.warm_state import cached_path, uses_warm_state, warm_key
-from scenarios.world_backends import prepare_network
 
 #: JobFile.field of the files a run finds in its cache directory, by name
 CACHED_FIELDS = ("network", "road edges")
@@ -56,10 +52,6 @@ class JobFile:
         return f"{self.field}: {self.driver_path} (sha256 {self.sha256[:12]}...)"
 
 
-def sha256_hex(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
 class FileCatalog:
     """The driver's side: the files of runs, each read and hashed once for the
     catalog's lifetime (an executor's ``with`` block), and their bytes by sha256.
@@ -72,6 +64,7 @@ class FileCatalog:
         self._by_path: dict[str, JobFile] = {}
         self._payloads: dict[str, bytes] = {}
         self._by_road: dict[RoadSpec, tuple[JobFile, ...]] = {}
+        self._identity: dict[RoadSpec, str] = {}  # its warm states' (RoadSource.identity_sha256)
 
     def payload(self, sha256: str) -> bytes:
         """The bytes of a file this catalog read."""
@@ -89,43 +82,31 @@ class FileCatalog:
         self._by_path[key] = JobFile(field, key, digest, name)
         return self._by_path[key]
 
-    def _network_files(self, road: RoadSpec) -> tuple[JobFile, str]:
-        """A network road's own file (a configuration travels as its bundle) and the
-        sha256 of its network."""
-        if road.kind == "sumo_config":
-            bundle = load_bundle(road.config_file)
-            stem = input_path(road.config_file).stem
-            main = self._by_path.get(road.config_file) or self._add(
-                "road.config_file", road.config_file, bundle.to_bytes(),
-                f"{stem}{BUNDLE_SUFFIX}")
-            return main, sha256_hex(bundle.files[bundle.net_name])
-        main = self._read("road.net_file", input_path(road.net_file), "the SUMO network")
-        return main, main.sha256
-
     def _road_files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
+        """The road's own file (a configuration travels as one bundle) and, where a
+        network's road edges are cached, those."""
         road = spec.road
-        if road.on_network:
-            if road not in self._by_road:
-                prepare_network(road, self.cache_dir)  # caches its road edges
-                main, net_sha256 = self._network_files(road)
-                edges = edges_cache_path(net_sha256, self.cache_dir)
-                self._by_road[road] = (main,) + ((self._read("road edges", edges, "road edges"),)
-                                                 if edges.is_file() else ())
-            return self._by_road[road]
         if spec.scenario.backend != "sumo":
             return ()
         if road not in self._by_road:
-            built = build_network(road, self.cache_dir or network_cache_dir())
-            self._by_road[road] = (self._read("network", built, "the built SUMO network"),)
+            source = road_source(road)
+            source.prepare(self.cache_dir)  # builds the network, caches its road edges
+            own = source.shipped(self.cache_dir)
+            main = self._by_path.get(own.driver_path) or self._add(
+                own.field, own.driver_path, own.data, own.name)
+            edges = None if own.edges_key is None else edges_cache_path(own.edges_key,
+                                                                        self.cache_dir)
+            self._by_road[road] = (main,) + ((self._read("road edges", edges, "road edges"),)
+                                             if edges is not None and edges.is_file() else ())
+            self._identity[road] = source.identity_sha256(self.cache_dir)
         return self._by_road[road]
 
     def warm_key(self, spec: ScenarioSpec) -> str | None:
         """The key of the warm state a run of ``spec`` starts from (None: none)."""
         if not uses_warm_state(spec):
             return None
-        if spec.road.kind == "sumo_config":  # its content, not its bundle's bytes
-            return warm_key(spec, load_bundle(spec.road.config_file).sha256)
-        return warm_key(spec, self._road_files(spec)[0].sha256)
+        self._road_files(spec)
+        return warm_key(spec, self._identity[spec.road])
 
     def files(self, spec: ScenarioSpec) -> tuple[JobFile, ...]:
         """What a run of ``spec`` reads besides the spec."""

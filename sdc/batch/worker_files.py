@@ -20,7 +20,8 @@ from pathlib import Path
 from scenarios.atomic_write import write_atomic
 from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
-from sdc.batch.job_files import WARM_STATE_FIELD, JobFile, sha256_hex
+from scenarios.file_read import sha256_hex
+from sdc.batch.job_files import WARM_STATE_FIELD, JobFile
 from sdc.batch.run_task import RunTask
 
 #: the job's bytes of a file, or None when the executor has none to give

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from scenarios.errors import SdcError, SpecError
+from scenarios.road_source import road_source
 from scenarios.seeding import SEED_LIMIT
 from scenarios.toml_io import load_spec
 from sdc.cli.common import a_number, bad_input, exit_interrupted, progress_bar
@@ -58,8 +59,7 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
             raise SpecError("scenario.backend", "sdc settle watches SUMO's traffic; "
                             f"the spec's backend is {spec.scenario.backend!r}")
         traffic = spec.traffic
-        if (spec.road.kind != "sumo_config" and traffic.flow_vph_per_lane == 0
-                and traffic.vehicles == 0):
+        if not road_source(spec.road).has_traffic(traffic):
             raise SpecError("traffic", "the scenario has no background traffic to watch "
                             "(traffic.flow_vph_per_lane and traffic.vehicles are 0)")
         if seed is not None:
@@ -75,7 +75,7 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
     frame = pd.DataFrame(series)
     suggestion = suggest_warm_up_s(frame)
     # a configuration's warm-up runs on SUMO's clock to traffic.enter_s
-    field = "enter_s" if spec.road.kind == "sumo_config" else "warm_up_s"
+    field = road_source(spec.road).warm_up_field
     current_s = getattr(spec.traffic, field)
     out = out or Path(f"{spec.scenario.name}-settling.png")
     out.write_bytes(settling_figure(frame, suggestion, f"{spec.scenario.name}: traffic "

@@ -1,0 +1,107 @@
+"""One road source per kind (scenarios/road_source.py): every kind answers the same
+questions, the warm-state identity is the same whoever asks, and no module outside
+the road's own asks a road its kind."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from pathlib import Path
+
+import pytest
+
+from scenarios.file_read import file_sha256, sha256_hex
+from scenarios.road_source import BuiltRoad, ConfigRoad, NetworkFileRoad, road_source
+from scenarios.sumo_net.sumo_config import load_bundle
+from scenarios.toml_io import load_spec
+from scenarios.warm_state import uses_warm_state, warm_key, warm_state_key
+from sdc.batch.job_files import FileCatalog
+
+ROOT = Path(__file__).resolve().parents[1]
+CATALOG = ROOT / "scenarios" / "catalog"
+GRID = str(CATALOG / "networks" / "grid-4x4.net.xml")
+SQUARE = "sumo:tools/game/square.sumocfg"
+
+
+def spec_of(kind: str):
+    """A spec of each road kind, with a warm-up."""
+    base = load_spec(CATALOG / "highway-obstacle.toml")
+    traffic = dataclasses.replace(base.traffic, warm_up_s=20.0)
+    if kind == "straight":
+        return dataclasses.replace(base, traffic=traffic)
+    if kind == "sumo_net":
+        road = dataclasses.replace(base.road, kind="sumo_net", net_file=GRID, lanes=None,
+                                   length_m=200.0)
+        traffic = dataclasses.replace(traffic, flow_vph_per_lane=0, vehicles=20)
+        return dataclasses.replace(base, road=road, traffic=traffic, obstacles=())
+    road = dataclasses.replace(base.road, kind="sumo_config", config_file=SQUARE, lanes=None,
+                               length_m=300.0)
+    traffic = dataclasses.replace(traffic, flow_vph_per_lane=0, warm_up_s=0.0, enter_s=30.0)
+    return dataclasses.replace(base, road=road, traffic=traffic, obstacles=())
+
+
+@pytest.mark.parametrize(("kind", "cls"), [("straight", BuiltRoad), ("sumo_net", NetworkFileRoad),
+                                           ("sumo_config", ConfigRoad)])
+def test_each_kind_has_one_source_and_one_warm_state_identity(kind, cls, tmp_path):
+    spec = spec_of(kind)
+    source = road_source(spec.road)
+    assert type(source) is cls and source.road == spec.road
+    assert uses_warm_state(spec)
+    # the identity: a configuration's content, else the network file SUMO runs on
+    if kind == "sumo_config":
+        assert source.identity_sha256() == load_bundle(SQUARE).sha256
+        assert source.configuration(spec) is load_bundle(SQUARE)
+    else:
+        assert source.identity_sha256(tmp_path) == file_sha256(source.network_file(tmp_path))
+        assert source.configuration(spec) is None
+    # a job ships the file the identity is of (a configuration: as one bundle)
+    shipped = source.shipped(tmp_path)
+    assert shipped.field == {"straight": "network", "sumo_net": "road.net_file",
+                             "sumo_config": "road.config_file"}[kind]
+    if kind != "sumo_config":
+        assert sha256_hex(shipped.data) == source.identity_sha256(tmp_path)
+    assert (shipped.edges_key is None) == (kind == "straight")
+    # the driver's catalog and a run agree on the warm state
+    assert FileCatalog(tmp_path).warm_key(spec) == warm_state_key(spec, tmp_path)
+    assert warm_state_key(spec, tmp_path) == warm_key(spec, source.identity_sha256(tmp_path))
+
+
+def test_a_warm_up_counts_from_its_road_s_clock():
+    built, config = spec_of("straight"), spec_of("sumo_config")
+    assert road_source(built.road).warm_up_steps(built) == round(20.0 / built.scenario.step_s)
+    source = road_source(config.road)
+    begin_s = load_bundle(SQUARE).begin_s
+    assert source.warm_up_begin_s() == begin_s
+    assert source.warm_up_steps(config) == max(1, round((30.0 - begin_s)
+                                                        / config.scenario.step_s))
+    early = dataclasses.replace(config, traffic=dataclasses.replace(config.traffic,
+                                                                    enter_s=begin_s + 1e-6))
+    assert source.warm_up_steps(early) == 1  # the demand departing at its begin is in
+    assert {road_source(s.road).warm_up_field for s in (built, config)} == {"warm_up_s",
+                                                                             "enter_s"}
+
+
+def test_has_traffic_is_each_kinds_own_demand():
+    built, net, config = (spec_of(k) for k in ("straight", "sumo_net", "sumo_config"))
+    assert road_source(net.road).has_traffic(net.traffic)
+    assert not road_source(net.road).has_traffic(dataclasses.replace(net.traffic, vehicles=0))
+    assert road_source(config.road).has_traffic(config.traffic)  # its configuration's
+    assert road_source(built.road).has_traffic(built.traffic) == (
+        built.traffic.flow_vph_per_lane > 0)
+
+
+#: where a road's kind may be named: the spec that defines the kinds, the one dispatch,
+#: and the built roads' own geometry (straight or curve)
+KIND_HOMES = {"scenarios/scenario_spec.py", "scenarios/road_source.py",
+              "scenarios/road_geometry.py", "scenarios/highway_world.py",
+              "scenarios/toml_io.py", "scenarios/sumo_net/route_road.py",
+              "scenarios/sumo_net/sumo_config.py", "analysis/run/safety.py"}
+
+
+def test_no_module_outside_the_roads_own_asks_a_road_its_kind():
+    asking = re.compile(r"road\.kind\b|isinstance\([^)]*NetworkRoad")
+    found = [f"{p.relative_to(ROOT)}:{n}" for folder in ("sdc", "analysis", "scenarios")
+             for p in sorted((ROOT / folder).rglob("*.py"))
+             if str(p.relative_to(ROOT)) not in KIND_HOMES
+             for n, line in enumerate(p.read_text().splitlines(), 1) if asking.search(line)]
+    assert not found, found
