@@ -188,6 +188,7 @@ def check_against_the_oracle(row: dict, first: int | None, last: int) -> None:
         assert first is None, (row["collision_with"], first, last)
 
 
+@pytest.mark.slow
 def test_every_contact_with_a_person_at_a_crossing_is_a_pedestrian_collision(lesson_plain,
                                                                            tmp_path):
     config = crossing_config(tmp_path / "cross")
@@ -204,6 +205,7 @@ def test_every_contact_with_a_person_at_a_crossing_is_a_pedestrian_collision(les
     assert set(outcomes) <= {PEDESTRIAN, "none"}  # nothing else to hit there
 
 
+@pytest.mark.slow
 def test_avoid_gives_way_to_people_crossing_where_lane_keep_runs_into_them(lesson_plain,
                                                                          tmp_path):
     """At 13 m/s through the crossings with people first: the entries at which
@@ -224,6 +226,7 @@ def test_avoid_gives_way_to_people_crossing_where_lane_keep_runs_into_them(lesso
                 assert row["outcome"] == "completed", enter_s
 
 
+@pytest.mark.slow
 def test_people_wait_for_the_ego_where_the_cars_go_first(lesson_plain, tmp_path):
     """SUMO's pedestrians see the ego pushed in with moveToXY as they see its own cars:
     at a crossing where cars go first they wait for it. The same entries with people
@@ -245,6 +248,7 @@ def test_on_a_real_junction_the_people_and_the_collisions_agree(lesson_plain):
         check_against_the_oracle(row, first, last)
 
 
+@pytest.mark.slow
 def test_the_lidar_sees_the_people_of_a_real_junction_as_brute_force_does(lesson_plain):
     spec = config_spec(lesson_plain, game("fokr_bs_demo.sumocfg"), 54600.0)
     controller = make_controller(spec.controller)
@@ -421,6 +425,7 @@ controllers = ["lane-keep", "seed"]
     return out
 
 
+@pytest.mark.slow
 def test_the_report_counts_people_first_and_the_gate_holds_them_to_their_bound(person_sweep):
     import json
 
@@ -549,6 +554,7 @@ def test_the_time_to_collision_counts_a_person_in_the_path(lesson_plain):
     assert conflicts.ttc_s == math.inf
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lanes, width_m", [(1, 3.2), (2, 3.0), (3, 3.5)])
 def test_avoid_never_hits_a_standing_person_and_keeps_clear_of_one(lesson_plain, lanes,
                                                                     width_m):

@@ -132,6 +132,7 @@ def scenario_with(tmp_path: Path, controller: dict, name: str = "spec.toml") -> 
     return path
 
 
+@pytest.mark.slow
 def test_the_four_ways_to_name_a_controller_run_the_same_code(on_path, tmp_path):
     # the example three ways, and from a scenario file naming it relative to itself
     rows = {
@@ -294,6 +295,7 @@ def test_a_plugin_failing_during_a_run_is_an_error_row_and_the_sweep_goes_on(on_
     assert message["WritesRanges"].startswith("ValueError: assignment destination is read-only")
 
 
+@pytest.mark.slow
 def test_the_example_plugins_sweep_file_runs_as_its_docstring_says(tmp_path):
     """...and its brake-only plug-in, which never collides, is never called safe: all
     its runs end stuck behind the barrel, and the report's verdicts rank it below avoid."""

@@ -103,6 +103,7 @@ def test_the_estimate_says_its_bound_or_its_interval_and_never_rounds_a_loss_to_
 
 # ---------------------------------------------------------------- SUMO on the executors
 
+@pytest.mark.slow
 def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
     sweep = write(tmp_path, "toy", TOY)
     out = tmp_path / "search"
@@ -156,6 +157,7 @@ class StopWhenFast:
 """
 
 
+@pytest.mark.slow
 def test_a_search_reports_its_stuck_runs_beside_its_collisions(tmp_path):
     (tmp_path / "stop.py").write_text(STOP_WHEN_FAST)
     plugin = f"{tmp_path / 'stop.py'}:StopWhenFast"
@@ -179,6 +181,7 @@ def test_a_search_reports_its_stuck_runs_beside_its_collisions(tmp_path):
     assert "<h2>Stuck runs</h2>" in page and stuck.run_id.iloc[0] in page
 
 
+@pytest.mark.slow
 def test_estimate_is_recomputable_from_the_rows_and_resumes_after_kill(tmp_path):
     sweep = write(tmp_path, "toy", TOY)
     args = ["--target-rhw", 0.15, "--max-runs", 200, "--batch-size", 40, "--workers", 2,

@@ -85,6 +85,7 @@ def test_the_next_light_and_the_red_crossings_agree_with_sumo(seed):
     assert sim.stop_lines.red_light_violations == sumo_reds
 
 
+@pytest.mark.slow
 def test_avoid_stops_for_red_where_lane_keeping_runs_it():
     seeds = range(1, 7)
     lane_keep = [run_episode(grid_town(s, "lane-keep", 100.0)).row for s in seeds]

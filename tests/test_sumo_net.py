@@ -76,6 +76,7 @@ def test_same_seed_same_trace_in_another_process_and_other_seeds_differ(seed):
     assert run_episode(town(seed + 1, vehicles=200)).row["trace_sha256"] != here
 
 
+@pytest.mark.slow
 def test_random_trips_fill_the_network(seed):
     row = run_episode(town(seed, vehicles=400)).row
     # a few may be taken off where the ego enters, none are lost otherwise
@@ -123,6 +124,7 @@ def test_a_2000_vehicle_town_runs_end_to_end_in_a_sweep(tmp_path):
     assert (out / "report.html").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_a_network_converted_from_openstreetmap_runs(tmp_path):
     """netconvert a small hand-written OpenStreetMap town (a curved four-lane
     primary road, a residential street, a one-way) and run in it."""

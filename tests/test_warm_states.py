@@ -71,6 +71,7 @@ def sha_in_fresh_process(spec: ScenarioSpec, tmp_path: Path) -> str:
     return out.stdout.strip()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make", [town, highway], ids=["town", "highway"])
 def test_computed_cached_and_fresh_process_warm_states_give_one_trace(make, tmp_path,
                                                                       monkeypatch):
@@ -86,6 +87,7 @@ def test_computed_cached_and_fresh_process_warm_states_give_one_trace(make, tmp_
     assert computed.row["network_vehicles"] > 10
 
 
+@pytest.mark.slow
 def test_a_warm_state_is_the_traffic_alone(tmp_path, monkeypatch):
     """Runs that differ in the ego, its route or the obstacles share one state; the
     warm-up's seed, the traffic or its length make another."""
@@ -111,6 +113,7 @@ def test_a_warm_state_is_the_traffic_alone(tmp_path, monkeypatch):
     assert state.demand["trips_made"] >= 300
 
 
+@pytest.mark.slow
 def test_a_warm_state_made_for_other_traffic_is_refused(tmp_path, monkeypatch):
     fresh_cache(tmp_path / "cache", monkeypatch)
     run_episode(town(warm_seed=1))
@@ -150,6 +153,7 @@ def town_sweep(root: Path, warm_states: str = "warm_states = 2") -> Path:
     return root / "sweep.toml"
 
 
+@pytest.mark.slow
 def test_a_sweep_draws_its_samples_from_its_warm_states_and_replays_them(tmp_path, monkeypatch,
                                                                         chromium_page):
     cache = fresh_cache(tmp_path / "cache", monkeypatch)
@@ -265,6 +269,7 @@ def test_sdc_settle_on_a_scenario_without_traffic_says_so(lesson_plain, tmp_path
     assert "traffic: the scenario has no background traffic to watch" in result.output
 
 
+@pytest.mark.slow
 def test_sdc_settle_watches_the_traffic_and_suggests_a_warm_up(tmp_path):
     spec_file = tmp_path / "highway.toml"
     text = (CATALOG_DIR / "highway-obstacle.toml").read_text()
@@ -332,6 +337,7 @@ def _state_text(state: WarmState) -> list[str]:
             if "generated on" not in line and not re.search(r"<[\w.-]*-files? value=", line)]
 
 
+@pytest.mark.slow
 def test_a_warm_state_is_the_same_whatever_ran_before_it_in_the_process(tmp_path,
                                                                           monkeypatch):
     """libsumo counts its route parser's random draws across simulations in one
