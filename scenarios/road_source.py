@@ -212,7 +212,7 @@ class ConfigRoad(_NetworkRoad):
         return self._bundle().sha256  # its content, not its bundle's bytes
 
     def always_warm(self) -> bool:
-        return True
+        return self.road.own_demand
 
     def warm_up_begin_s(self) -> float:
         return self._bundle().begin_s

@@ -102,6 +102,12 @@ class RoadSpec(Spec):
         return self.kind in NETWORK_KINDS
 
     @property
+    def own_demand(self) -> bool:
+        """Does the road bring its own demand (a ``sumo_config`` road's configuration),
+        run until ``traffic.enter_s`` as every run's warm-up?"""
+        return self.kind == "sumo_config"
+
+    @property
     def network_field(self) -> str:
         """The field naming what a network road is read from."""
         return "road.net_file" if self.kind == "sumo_net" else "road.config_file"

@@ -29,7 +29,6 @@ import numpy as np
 
 from scenarios.controller_ref import controller_label, resolve_file
 from scenarios.errors import SpecError
-from scenarios.road_source import road_source
 from scenarios.scenario_spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
 from scenarios.seeding import (
     POINTS_STREAM,
@@ -398,7 +397,7 @@ def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
                         "warm-ups' seeds: keep one")
     # a configuration's demand up to traffic.enter_s is its warm-up
     if (base.traffic.warm_up_s == 0 and "traffic.warm_up_s" not in swept
-            and not road_source(base.road).always_warm()):
+            and not base.road.own_demand):
         raise SpecError("sweep.warm_states", "the base scenario has no traffic warm-up "
                         "(traffic.warm_up_s = 0), so there is no warm state to share")
 

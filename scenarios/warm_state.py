@@ -36,7 +36,6 @@ from pathlib import Path
 from scenarios import traffic_model
 from scenarios.cache_dir import sdc_cache_dir
 from scenarios.errors import SdcError
-from scenarios.road_source import road_source
 from scenarios.scenario_spec import ScenarioSpec
 
 #: bumped whenever what a state holds or how a warm-up runs changes (2: its persons)
@@ -65,7 +64,7 @@ def uses_warm_state(spec: ScenarioSpec) -> bool:
     """Does a run of ``spec`` start from a warm state (a SUMO run with a warm-up; a
     ``sumo_config`` road always: its demand runs until ``traffic.enter_s``)?"""
     return spec.scenario.backend == "sumo" and (spec.traffic.warm_up_s > 0
-                                                or road_source(spec.road).always_warm())
+                                                or spec.road.own_demand)
 
 
 def sumo_version() -> str:
@@ -84,6 +83,8 @@ def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
 
 def warm_state_key(spec: ScenarioSpec, cache_dir: Path | None = None) -> str:
     """The key of ``spec``'s warm state: :func:`warm_key` on its road's identity."""
+    from scenarios.road_source import road_source  # its road's network: not at import
+
     return warm_key(spec, road_source(spec.road).identity_sha256(cache_dir))
 
 
