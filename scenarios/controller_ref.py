@@ -16,17 +16,27 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Literal
+from typing import Literal, NamedTuple
 
 from scenarios.errors import SpecError
 
 ENTRY_POINT_GROUP = "sdc.controllers"
-#: the built-in controllers, the one registry: name -> where its class lives (its
-#: parameters: ``scenario_spec.CONTROLLER_PARAMS``, checked against these names there)
-BUILTIN_CONTROLLERS: dict[str, str] = {
-    "seed": "sdc.car.controllers:SeedController",
-    "lane-keep": "sdc.car.controllers:LaneKeepController",
-    "avoid": "sdc.car.avoid:AvoidController",
+
+
+class Builtin(NamedTuple):
+    """A built-in controller, as the registry holds it: where its class lives and the
+    spec class of its parameters. Names only: nothing is imported here."""
+
+    controller: str  # "package.module:ClassName" (``sdc.car.controller_plugins`` imports it)
+    params: str  # its parameters' class in ``scenarios.scenario_spec`` (validated there)
+
+
+#: the built-in controllers, the one registry: adding one is adding its line here
+#: (``scenario_spec.CONTROLLER_PARAMS`` and ``sdc.car.controller_plugins`` read it)
+BUILTIN_CONTROLLERS: dict[str, Builtin] = {
+    "seed": Builtin("sdc.car.controllers:SeedController", "SeedParams"),
+    "lane-keep": Builtin("sdc.car.controllers:LaneKeepController", "LaneKeepParams"),
+    "avoid": Builtin("sdc.car.avoid:AvoidController", "AvoidParams"),
 }
 
 Kind = Literal["builtin", "file", "module", "entry_point"]

@@ -407,13 +407,11 @@ class AvoidParams(Spec):
     bend_clearance_m: float = num(0.25, ge=0, le=5)
 
 
-#: each built-in controller's parameters (its classes are in ``sdc.car.controller_plugins``)
+#: each built-in controller's parameters: the class of this module that its line in the
+#: registry (``controller_ref.BUILTIN_CONTROLLERS``) names
 CONTROLLER_PARAMS: dict[str, type[Spec]] = {
-    "seed": SeedParams,
-    "lane-keep": LaneKeepParams,
-    "avoid": AvoidParams,
-}
-assert tuple(CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)
+    name: globals()[builtin.params] for name, builtin in BUILTIN_CONTROLLERS.items()}
+assert all(issubclass(params, Spec) for params in CONTROLLER_PARAMS.values())
 #: the preview distance of the lane reading for a controller that names none
 DEFAULT_LOOK_AHEAD_M = LaneKeepParams().look_ahead_m
 

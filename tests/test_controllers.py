@@ -72,3 +72,30 @@ def test_lane_keep_never_avoids():
     controller = make_controller(ControllerSpec("lane-keep", LaneKeepParams()))
     command, phase = steps(controller, obstacle_at(0.5), reading(0.0))
     assert phase == LANE_KEEP and command.steer_rad == 0.0
+
+
+# ---- the registry of built-ins -----------------------------------------------------
+
+def test_one_line_of_the_registry_makes_a_built_in_whole():
+    """Each line of ``BUILTIN_CONTROLLERS`` names the class and its parameters' class:
+    the spec validates the table into that class, the sweep takes its fields, and the
+    plug-in machinery builds the class from it, with nothing listed anywhere else."""
+    import dataclasses
+
+    from scenarios import scenario_spec
+    from scenarios.controller_ref import BUILTIN_CONTROLLERS, controller_kind
+    from sdc.car.controller_plugins import controller_class
+
+    assert tuple(scenario_spec.CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)
+    for name, builtin in BUILTIN_CONTROLLERS.items():
+        params = scenario_spec.CONTROLLER_PARAMS[name]
+        assert params.__name__ == builtin.params and params.__module__ == scenario_spec.__name__
+        assert controller_kind(name) == "builtin"
+        cls = controller_class(name)
+        assert f"{cls.__module__}:{cls.__name__}" == builtin.controller
+        spec = scenario_spec.ControllerSpec.from_plain({"name": name})
+        assert isinstance(spec.params, params)  # validated, defaults filled
+        fields = {f.name for f in dataclasses.fields(params)}
+        assert set(spec.plain_params()) <= fields  # round trip: every value, None left out
+        assert all(spec.takes(name, field) for field in fields)  # sweepable
+        assert isinstance(make_controller(spec), cls)

@@ -20,15 +20,10 @@ import pytest
 from click.testing import CliRunner
 
 from analysis.report.look_at import LIST_FILE, SHOWN_PER_CLASS, ranked_runs
-from analysis.report.sweep_report import (
-    COLLISION_TITLE,
-    NOT_RECORDED,
-    SECTIONS,
-    VERDICT_TITLE,
-    world_lines,
-    world_summary,
-    write_report,
-)
+from analysis.report.sweep_page import SECTIONS
+from analysis.report.sweep_report import COLLISION_TITLE, VERDICT_TITLE, write_report
+from analysis.report.sweep_words import NOT_RECORDED
+from analysis.report.sweep_world import world_lines, world_summary
 from analysis.run.commands import replay_command
 from analysis.stats.rates import wilson_interval
 from analysis.stats.verdicts import completed_runs, outcomes_by

@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from analysis.run.commands import program_words
+from analysis.run.sweep_manifest import SweepManifest
 from scenarios import CATALOG_DIR, traffic_model
 from scenarios.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
@@ -54,6 +55,11 @@ controllers = ["lane-keep"]
 "ego.speed_mps" = {{ choice = [3.0, 3.74, 9.0] }}
 "scenario.duration_s" = {{ choice = [12.0] }}
 """
+# a new manifest's keys and a session's, in the order they are written
+MANIFEST_KEYS = ["sweep", "base_scenario", "plan_sha256", "runs", "samples", "versions",
+                 "traffic_model", "sumo_config", "controllers", "files", "git", "started_at",
+                 "ended_at", "status", "counts", "collisions", "sessions"]
+SESSION_KEYS = ["started_at", "ended_at", "executor", "workers", "traces", "runs_to_do"]
 HUNG_RUN = "00000-lane-keep"
 HANG_S = 3600.0  # far past any run timeout below: only a stopped worker ends it
 RUN_TIMEOUT_S = 10.0  # a short lesson run takes well under a second
@@ -148,7 +154,12 @@ def test_traces_for_failures_only(tmp_path):
     results = pd.read_parquet(out / "results.parquet")
     written = sorted(p.stem for p in (out / "traces").glob("*.parquet"))
     assert written == sorted(results.run_id[results.collision])
-    manifest = json.loads((out / "manifest.json").read_text())
+    text = (out / "manifest.json").read_text()
+    manifest = json.loads(text)
+    # the typed manifest the runner wrote: its keys as a dict made them, read back to the byte
+    assert list(manifest) == [*MANIFEST_KEYS, "warm_states", "outcomes"]
+    assert list(manifest["sessions"][0]) == [*SESSION_KEYS, "warm_states", "files"]
+    assert json.dumps(SweepManifest.from_dict(manifest).to_dict(), indent=2) + "\n" == text
     assert manifest["status"] == "complete"
     assert manifest["counts"] == {"ok": 12, "error": 0, "timeout": 0, "missing": 0}
     assert manifest["collisions"] == int(results.collision.sum())

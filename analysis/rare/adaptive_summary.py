@@ -17,21 +17,17 @@ import pandas as pd
 from analysis.rare.failure_modes import failure_modes, weighed_rows
 from analysis.rare.rare_events import Estimate, estimate_from_rows
 from analysis.run.commands import replay_command
+from analysis.run.failure_event import FAILURE
 from analysis.run.run_outcome import OUTCOMES, STUCK
+from analysis.run.sweep_manifest import SweepManifest
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import Param, parse_param
 
 
-def sweep_params(manifest: dict) -> list[Param]:
+def sweep_params(manifest: SweepManifest) -> list[Param]:
     """The swept parameters as the manifest records them."""
-    table = manifest["sweep"]["sweep"].get("params", {})
-    return [parse_param(path, dist, f'sweep.params."{path}"') for path, dist in table.items()]
-
-
-def scored_failure(rows: pd.DataFrame) -> pd.Series:
-    """Per row of a search or estimate: did it fail (score <= 0; a run with no outcome
-    scores 0)?"""
-    return rows.score.notna() & (rows.score <= 0)
+    return [parse_param(path, dist, f'sweep.params."{path}"')
+            for path, dist in manifest.sweep_params.items()]
 
 
 def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
@@ -43,7 +39,7 @@ def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
     if estimation.empty:
         return None
     return estimate_from_rows(estimation.weight.to_numpy(dtype=float),
-                              scored_failure(estimation).to_numpy(), runs=len(rows),
+                              FAILURE.failed_rows(estimation).to_numpy(), runs=len(rows),
                               max_weight=max_weight)
 
 
@@ -59,7 +55,7 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     if estimation.empty:
         return modes
     weights = estimation.weight.to_numpy(dtype=float)
-    failed = scored_failure(estimation).to_numpy()
+    failed = FAILURE.failed_rows(estimation).to_numpy()
     total = float(np.mean(weights * failed))
     out = []
     for mode in modes:
@@ -88,8 +84,8 @@ def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
     the report get them from."""
     if results.empty:
         return []
-    return mode_estimates(results, _described(results, params, scored_failure(results), sweep_dir),
-                          max_weight)
+    return mode_estimates(results, _described(results, params, FAILURE.failed_rows(results),
+                                              sweep_dir), max_weight)
 
 
 def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> list[dict]:
@@ -144,7 +140,7 @@ class RareSummary:
     state: str | None  # finished, interrupted, ...
     score: str
     batches: int
-    failures: int  # runs with score <= 0
+    failures: int  # runs that failed (analysis.run.failure_event)
     first_failure_run: int | None  # counted from 1
     first_failure_run_id: str | None
     outcomes: dict[str, int]  # completed, collided, stuck, unfinished, failed
@@ -178,22 +174,22 @@ _ESTIMATE_FIELDS = ("target_rhw", "judged_from", "stopped", "level_ess", "level_
                     "estimate")
 
 
-def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
+def adaptive_summary(results: pd.DataFrame, manifest: SweepManifest, saved: dict,
                      sweep_dir: Path) -> RareSummary:
     """The report's summary of a search or estimate; ``saved``: its :func:`saved_summary`."""
-    settings = manifest["adaptive"]
-    mode = settings["mode"]
-    failed = results[scored_failure(results)]
+    settings = manifest.adaptive
+    mode = settings.mode
+    failed = results[FAILURE.failed_rows(results)]
     max_weight = saved.get("max_weight") or math.inf
     first = failed.run_index.idxmin() if len(failed) else None
     common = {
         "mode": mode,
-        "sweep": manifest["sweep"]["sweep"]["name"],
+        "sweep": manifest.sweep_name,
         "controller": saved.get("controller", results.controller.iloc[0]),
         "runs": len(results),
         "counts": {s: int((results.status == s).sum()) for s in ("ok", "error", "timeout")},
-        "state": saved.get("state", manifest.get("status")),
-        "score": settings["score"],
+        "state": saved.get("state", manifest.status),
+        "score": settings.score,
         "batches": int(results.batch.max()) + 1,
         "failures": len(failed),
         "first_failure_run": None if first is None else int(failed.run_index.min()) + 1,
@@ -206,7 +202,7 @@ def adaptive_summary(results: pd.DataFrame, manifest: dict, saved: dict,
     }
     if mode != "estimate":
         return RareSummary(**common)
-    return RareSummary(**common, target_rhw=settings["target_rhw"],
+    return RareSummary(**common, target_rhw=settings.target_rhw,
                        judged_from=saved.get("judged_from"), stopped=saved.get("stopped"),
                        level_ess=saved.get("level_ess"),
                        level_uncovered=saved.get("level_uncovered"),

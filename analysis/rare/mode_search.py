@@ -44,6 +44,7 @@ from analysis.rare.rare_events import (
     standard_normal,
     wide_normal,
 )
+from analysis.run.failure_event import FAILURE
 
 #: a run this close to the origin has no direction (it lies in no cone)
 _TINY_NORM = 1e-12
@@ -265,7 +266,7 @@ class ModeSearch:
         z, scores = checked_batch(z, scores, self.dims)
         before = self.runs
         self._pool(z, scores)
-        failed = np.flatnonzero(scores <= 0)
+        failed = np.flatnonzero(FAILURE.fails(scores))
         for index in failed:
             self._modes.add(before + int(index), self._unit[before + index])
         if self.adapting:

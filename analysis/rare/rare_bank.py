@@ -1,7 +1,8 @@
 """Reliability problems with exactly known failure probabilities, to check estimators on.
 
 Each :class:`Problem` lives in standard-normal space ``z`` (the space of
-:mod:`analysis.rare.rare_events`) and fails where its vectorised score ``g(z) <= 0``.
+:mod:`analysis.rare.rare_events`) and fails where its vectorised score ``g(z) <= 0``
+(the failure event, :mod:`analysis.run.failure_event`).
 The bank holds the standard cases where a sampler that adapts to one failure
 region goes wrong: several regions of equal or unequal mass, regions on
 opposite sides, curved boundaries, and one region in ten dimensions.
@@ -27,6 +28,7 @@ import numpy as np
 import pandas as pd
 from scipy import special
 
+from analysis.run.failure_event import FAILURE
 from scenarios import CATALOG_DIR
 from scenarios.file_read import read_json
 from scenarios.sweep_spec import PARAM_PREFIX, Param
@@ -55,7 +57,7 @@ class Problem:
 
     def regions_hit(self, z: np.ndarray) -> int:
         """How many of the regions hold at least one failure among the runs ``z``."""
-        failed = self.score(z) <= 0
+        failed = FAILURE.fails(self.score(z))
         return int(np.sum(np.any(self.in_regions(z) & failed[:, None], axis=0)))
 
 
@@ -88,7 +90,7 @@ def _four_branch(k: float) -> ScoreFn:
 
 def _four_branch_parts(k: float) -> RegionFn:
     def parts(z: np.ndarray) -> np.ndarray:
-        return np.stack(_four_branches(z, k), axis=1) <= 0
+        return FAILURE.fails(np.stack(_four_branches(z, k), axis=1))
     return parts
 
 
@@ -232,8 +234,8 @@ def _seed_rare_emulated() -> Problem:
     p = float(np.trapezoid(special.ndtr((swing / 2.5 - w_mean) / w_sd) * _density(z0), z0))
     return Problem("seed-rare-emulated", 2, gap_m, p, 1,
                    "seed-rare from its truth scan: fast on narrow lanes (the road edge)",
-                   lambda z: (gap_m(z) <= 0)[:, None],
-                   lambda z: np.where(gap_m(z) <= 0, "road_edge", ""))
+                   lambda z: FAILURE.fails(gap_m(z))[:, None],
+                   lambda z: np.where(FAILURE.fails(gap_m(z)), "road_edge", ""))
 
 
 SEED_RARE_EMULATED = _seed_rare_emulated()
@@ -317,7 +319,7 @@ def sampled_runs(case: Problem, mode: str, seed: int, max_runs: int) -> pd.DataF
                                    **{PARAM_PREFIX + p.path: z[:, k]
                                       for k, p in enumerate(normal_params(case.dims))}}))
     runs = pd.concat(parts, ignore_index=True)
-    failed = runs.score <= 0
+    failed = FAILURE.failed_rows(runs)
     kinds = (case.kinds(normal_scores(runs, case.dims)) if case.kinds is not None
              else np.full(len(runs), "failure"))
     return runs.assign(run_id=[f"r{i}" for i in range(len(runs))], run_index=runs.index,
@@ -341,6 +343,7 @@ def mode_count(case: Problem, mode: str, seed: int, max_runs: int) -> tuple[int,
     from analysis.rare.failure_modes import OTHER, failure_modes, weighed_rows
 
     runs = sampled_runs(case, mode, seed, max_runs)
-    modes = failure_modes(runs, normal_params(case.dims), runs.score <= 0, weighed_rows(runs))
+    modes = failure_modes(runs, normal_params(case.dims), FAILURE.failed_rows(runs),
+                          weighed_rows(runs))
     return (sum(m.outcome != OTHER for m in modes),
             case.regions_hit(normal_scores(runs, case.dims)))

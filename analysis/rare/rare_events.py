@@ -2,7 +2,8 @@
 
 Runs live in standard-normal space ``z = Phi^-1(u)``, where the nominal density is
 ``N(0, I)``; :func:`unit_points` maps a batch back to the sweep's unit cube. A run's
-score is continuous and it fails when ``score <= 0``. :class:`MultilevelIS` is
+score is continuous and it fails when ``score <= 0`` (the failure event,
+:mod:`analysis.run.failure_event`). :class:`MultilevelIS` is
 ask/tell (a caller evaluates each batch anywhere); :func:`estimate` is the loop for a
 batch score function; :func:`estimate_from_rows` recomputes an estimate from the
 weights stored in the rows.
@@ -35,6 +36,8 @@ from typing import Literal
 
 import numpy as np
 from scipy import special
+
+from analysis.run.failure_event import FAILURE
 
 Z_95 = 1.959963984540054  # two-sided 95 % normal quantile
 #: -ln(0.05): with no failure in n plain Monte Carlo runs, p < 3.0/n at 95 % (rule of three)
@@ -194,7 +197,7 @@ def nominal_proposal(dims: int) -> Proposal:
 
 def elite_threshold(scores: np.ndarray, elite_fraction: float) -> float:
     """``gamma = max(elite_fraction quantile of the scores, 0)``: never below failure."""
-    return max(float(np.quantile(scores, elite_fraction)), 0.0)
+    return max(float(np.quantile(scores, elite_fraction)), FAILURE.threshold)
 
 
 def effective_sample_size(weights: np.ndarray) -> float:
@@ -481,11 +484,12 @@ class MultilevelIS:
         else:
             self.estimation_log_weights = np.concatenate([self.estimation_log_weights,
                                                           self.proposal.log_weights(z)])
-            self.estimation_failed = np.concatenate([self.estimation_failed, scores <= 0])
+            self.estimation_failed = np.concatenate([self.estimation_failed,
+                                                     FAILURE.fails(scores)])
 
     def _adapt(self, z: np.ndarray, scores: np.ndarray) -> None:
         self.adaptation_runs += z.shape[0]
-        uncovered = self._uncovered(z[scores <= 0])
+        uncovered = self._uncovered(z[FAILURE.fails(scores)])
         log_pooled = self._pool(z, scores)
         gamma = elite_threshold(scores, self.elite_fraction)
         elite = self._seen_scores <= gamma
@@ -499,7 +503,7 @@ class MultilevelIS:
                                              self.bandwidth_scale))
         e = self.explore_fraction
         self.proposal = Proposal((self._wide, self._fits[-1]), (e, 1 - e))
-        fitted_on_failures = gamma <= 0 and elite_ess >= self.min_elite_ess
+        fitted_on_failures = FAILURE.fails(gamma) and elite_ess >= self.min_elite_ess
         if (fitted_on_failures and not uncovered) or len(self.levels) >= self.max_levels:
             self.freeze()
 

@@ -14,10 +14,11 @@ import math
 
 import pandas as pd
 
-from analysis.rare.adaptive_summary import RareSummary, convergence, scored_failure
+from analysis.rare.adaptive_summary import RareSummary, convergence
 from analysis.rare.failure_modes import OTHER, region_words
 from analysis.rare.rare_events import unjudged
 from analysis.report import plots
+from analysis.run.failure_event import FAILURE
 from analysis.run.run_outcome import STUCK, failed_or_collided, outcomes_text
 from scenarios.sweep_spec import PARAM_PREFIX
 
@@ -29,11 +30,12 @@ LOOK_AT = ("Runs with no outcome (error, timeout) first, then collisions and stu
 
 def runs_to_look_at(results: pd.DataFrame, estimate: bool = False) -> pd.DataFrame:
     """Runs to look at in a search or estimate: failed runs (error, timeout) first, then
-    collisions and stuck runs; in an estimate, the estimation runs that count in P (score
-    <= 0) by weight, the largest share of P first, before the rest; otherwise by run."""
+    collisions and stuck runs; in an estimate, the estimation runs that count in P (those
+    of the failure event) by weight, the largest share of P first, before the rest;
+    otherwise by run."""
     stuck = results.outcome == STUCK if "outcome" in results else False
     bad = results[failed_or_collided(results) | stuck]
-    counted = (bad.phase == "estimate") & scored_failure(bad) & estimate
+    counted = (bad.phase == "estimate") & FAILURE.failed_rows(bad) & estimate
     key = pd.DataFrame({"ok": bad.status == "ok", "counted": counted,
                         "weight": bad.weight.where(counted, 0.0), "run": bad.run_index})
     order = key.sort_values(["ok", "counted", "weight", "run"],

@@ -37,7 +37,9 @@ from analysis.rare.adaptive_summary import described_modes, stuck_modes, summary
 from analysis.rare.failure_modes import OTHER
 from analysis.rare.mode_search import ModeSearch
 from analysis.rare.rare_events import EstimationLoop, unit_points
-from analysis.run.run_score import ScoreKind, run_score
+from analysis.run.failure_event import FailureEvent
+from analysis.run.run_score import ScoreKind
+from analysis.run.sweep_manifest import AdaptiveRecord, SweepManifest
 from scenarios.atomic_write import write_atomic
 from scenarios.controller_ref import controller_label
 from scenarios.errors import SdcError, SpecError
@@ -146,9 +148,10 @@ class _Runs:
     the manifest starts with it)."""
 
     def __init__(self, out_dir: Path, sweep: SweepSpec, executor: Executor, reporter: Reporter,
-                 traces: TraceMode, settings: AdaptiveSettings, manifest: dict):
+                 traces: TraceMode, settings: AdaptiveSettings, manifest: SweepManifest):
         self.out_dir, self.sweep, self.executor, self.reporter = out_dir, sweep, executor, reporter
-        self.traces, self.settings, self.manifest = traces, settings, manifest
+        self.traces, self.settings = traces, settings
+        self.event = FailureEvent(settings.score)
         self.store = ResultStore(out_dir, result_schema(sweep.param_types, adaptive=True))
         self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table="plan",
                                  parts="plan-parts")
@@ -157,8 +160,8 @@ class _Runs:
                         for r in self.plans.read().select(["run_id", "spec_json"]).to_pylist()}
         self.trace_dir = out_dir / "traces"
         self._entered = False
-        self.session = start_session(out_dir, manifest, executor, traces,
-                                     max(0, settings.max_runs - len(self.rows)))
+        self.manifest = start_session(out_dir, manifest, executor, traces,
+                                      max(0, settings.max_runs - len(self.rows)))
 
     def close(self) -> None:
         if self._entered:
@@ -196,11 +199,11 @@ class _Runs:
                 self.executor.__enter__()
                 self._entered = True
             warm, keys = prepare_warm_states(tasks, self.executor, self.reporter.warm_states)
-            record_warm_states(self.out_dir, self.manifest, self.session, warm, keys)
-            record_job_files(self.out_dir, self.manifest, self.session, tasks)
+            self.manifest = record_warm_states(self.out_dir, self.manifest, warm, keys)
+            self.manifest = record_job_files(self.out_dir, self.manifest, tasks)
             for row in self.executor.map(tasks):
                 row = with_warm_state(row, keys)
-                score = run_score(row, self.settings.score)
+                score = self.event.run_score(row)
                 self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
         return [self.rows[r.run_id] for r in plan]
 
@@ -218,7 +221,8 @@ class _Runs:
 
 
 def _scores(rows: list[dict]) -> np.ndarray:
-    return np.array([math.inf if r["score"] is None else r["score"] for r in rows])
+    """What the sampler is told of the rows' scores (a sample with no run: +inf)."""
+    return np.array([FailureEvent.told(r["score"]) for r in rows])
 
 
 def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter,
@@ -233,8 +237,8 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
     manifest = open_dir(out_dir, digest, resume)
     if manifest is None:
         make_dir(out_dir)
-        manifest = new_manifest(sweep, digest, 0, 0)
-        manifest["adaptive"] = settings.to_plain()
+        manifest = new_manifest(sweep, digest, 0, 0).updated(
+            adaptive=AdaptiveRecord.from_dict(settings.to_plain()))
     runs = _Runs(out_dir, sweep, executor, reporter, traces, settings, manifest)
     loop = _loop(sweep, settings)
     seed_rng = stream_rng(sweep.seed, RUN_SEEDS_STREAM)
@@ -261,9 +265,8 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
         reporter.stop()
         planned = runs.plans.consolidate().num_rows
         table = runs.store.consolidate()
-        manifest.update(runs=planned, samples=planned)
-        counts, outcomes = end_session(out_dir, manifest, runs.session, table, planned,
-                                       state == "finished")
+        manifest = runs.manifest.updated(runs=planned, samples=planned)
+        counts, outcomes = end_session(out_dir, manifest, table, planned, state == "finished")
         summary = _write_summary(out_dir, sweep, settings, loop, runs.rows, state)
     return AdaptiveOutcome(out_dir, table.num_rows, counts, outcomes, state == "interrupted",
                            time.perf_counter() - wall_start, summary)
@@ -295,7 +298,8 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
         "stuck_modes": stuck,
     }
     if isinstance(loop, ModeSearch):
-        failed = [r["run_id"] for r in ordered if r["score"] is not None and r["score"] <= 0]
+        event = FailureEvent(settings.score)
+        failed = [r["run_id"] for r in ordered if event.failed(r["score"])]
         stopped = "failures found" if loop.found_enough else "budget"
         summary.update(stopped=stopped if state == "finished" else None,
                        failures=len(failed), first_failure_run=loop.first_failure_run,

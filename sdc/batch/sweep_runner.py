@@ -22,6 +22,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from analysis.run.run_outcome import COLLIDED, OUTCOMES, STATUSES
+from analysis.run.sweep_manifest import Session, SweepManifest
 from scenarios import traffic_model
 from scenarios.atomic_write import write_atomic
 from scenarios.errors import SdcError
@@ -90,20 +91,21 @@ def plan_table_of(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     return pa.Table.from_pylist(rows, schema=pa.schema(fields))
 
 
-def open_dir(out_dir: Path, digest: str, resume: bool) -> dict | None:
+def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
     """The manifest of the sweep ``out_dir`` holds, checked to be ``digest``'s and resumable;
     None when ``out_dir`` is free for a new sweep (missing or empty)."""
     out_dir = Path(out_dir)
-    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
-    if manifest is not None:
+    plain = read_manifest(out_dir) if out_dir.is_dir() else None
+    if plain is not None:
+        manifest = SweepManifest.from_dict(plain)
         if not resume:
             raise SdcError(f"--out: {out_dir} already holds a sweep; pass --resume to "
                            "continue it, or choose another directory")
-        if manifest.get("plan_sha256") != digest:
+        if manifest.plan_sha256 != digest:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
-                           f"({manifest['sweep']['sweep']['name']!r}, another plan); "
+                           f"({manifest.sweep_name!r}, another plan); "
                            "resume it with the sweep file and options that started it")
-        changes = controller_changes(manifest) + network_file_changes(manifest)
+        changes = controller_changes(plain) + network_file_changes(plain)
         if changes:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
                            "it (restore it, or start a new sweep)")
@@ -128,34 +130,35 @@ def make_dir(out_dir: Path) -> None:
 
 
 def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
-                 specs: tuple = ()) -> dict:
+                 specs: tuple = ()) -> SweepManifest:
     """The manifest of a sweep that has not run yet (``specs``: its runs' scenario
     specs, for what it records of their SUMO configurations; default the base)."""
-    return {
-        "sweep": sweep.to_plain(),
-        "base_scenario": sweep.base.to_plain(),
-        "plan_sha256": digest,
-        "runs": runs,
-        "samples": samples,
-        "versions": package_versions(),
-        "traffic_model": traffic_model.description(),
+    return SweepManifest.new(
+        sweep=sweep.to_plain(),
+        base_scenario=sweep.base.to_plain(),
+        plan_sha256=digest,
+        runs=runs,
+        samples=samples,
+        versions=package_versions(),
+        traffic_model=traffic_model.description(),
         # sumo_config roads: the options of each configuration applied, overridden, not
-        "sumo_config": [entry for road, step_s in dict.fromkeys(
-                            (spec.road, spec.scenario.step_s) for spec in specs or (sweep.base,))
-                        if (entry := config_manifest(road, step_s)) is not None],
-        "controllers": controller_sources(sweep.controllers),
-        "files": {},  # what travels with the job: driver path -> field, sha256
-        "git": git_state(),
-        "started_at": now_iso(),
-        "ended_at": None,
-        "status": "running",
-        "counts": {},
-        "collisions": 0,
-        "sessions": [],
-    }
+        sumo_config=[entry for road, step_s in dict.fromkeys(
+                         (spec.road, spec.scenario.step_s) for spec in specs or (sweep.base,))
+                     if (entry := config_manifest(road, step_s)) is not None],
+        controllers=controller_sources(sweep.controllers),
+        files={},  # what travels with the job: driver path -> field, sha256
+        git=git_state(),
+        started_at=now_iso(),
+        ended_at=None,
+        status="running",
+        counts={},
+        collisions=0,
+        sessions=(),
+    )
 
 
-def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun], resume: bool) -> dict:
+def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun],
+                resume: bool) -> SweepManifest:
     """Check ``out_dir`` and return its manifest (a new one for a fresh sweep)."""
     digest = plan_sha256(plan)
     manifest = open_dir(out_dir, digest, resume)
@@ -175,30 +178,34 @@ def build_networks(tasks: list[RunTask], workers: int) -> None:
         list(pool.map(prepare_network, roads))
 
 
-def record_job_files(out_dir: Path, manifest: dict, session: dict,
-                     tasks: list[RunTask]) -> None:
-    """Record in the manifest (and the session) the files the runs read besides
+def record_job_files(out_dir: Path, manifest: SweepManifest,
+                     tasks: list[RunTask]) -> SweepManifest:
+    """Record in the manifest (and its session) the files the runs read besides
     their specs, by the driver's path, with their sha256: what travels with the
-    job. One the driver cannot read is left out here and makes its runs error rows."""
+    job. One the driver cannot read is left out here and makes its runs error rows.
+    Returns the manifest written."""
     catalog = FileCatalog()
     for task in tasks:
         with contextlib.suppress(SdcError):
             catalog.files(task.spec)
     entries = catalog.manifest_entries()
-    session["files"] = {**session.get("files", {}), **entries}
-    manifest["files"] = {**manifest.get("files", {}), **entries}
-    write_manifest(out_dir, manifest)
+    manifest = manifest.with_session(files={**(manifest.session.files or {}), **entries})
+    manifest = manifest.updated(files={**(manifest.files or {}), **entries})
+    write_manifest(out_dir, manifest.to_dict())
+    return manifest
 
 
-def record_warm_states(out_dir: Path, manifest: dict, session: dict, warm: dict,
-                       keys: dict[str, str]) -> None:
+def record_warm_states(out_dir: Path, manifest: SweepManifest, warm: dict,
+                       keys: dict[str, str]) -> SweepManifest:
     """Record how many distinct warm states the session's runs start from (and
     which failed to compute; the manifest keeps the largest count of a session), and
-    how their traffic settled (:data:`~scenarios.warm_state.SETTLING_FILE`)."""
-    session["warm_states"] = warm
-    manifest["warm_states"] = max(manifest.get("warm_states", 0), warm["distinct"])
+    how their traffic settled (:data:`~scenarios.warm_state.SETTLING_FILE`). Returns
+    the manifest (written with the job files, :func:`record_job_files`)."""
+    manifest = manifest.with_session(warm_states=warm)
+    manifest = manifest.updated(warm_states=max(manifest.warm_states or 0, warm["distinct"]))
     if keys:
         write_settling(out_dir / SETTLING_FILE, list(dict.fromkeys(keys.values())))
+    return manifest
 
 
 def _tally(table: pa.Table) -> tuple[Counter, Counter]:
@@ -230,7 +237,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                      traces=traces)
              for run in todo if run.spec is not None]
 
-    session = start_session(out_dir, manifest, executor, traces, len(todo))
+    manifest = start_session(out_dir, manifest, executor, traces, len(todo))
 
     statuses, outcomes = _tally(stored)
     reporter.start(total=len(plan), done=len(done), outcomes=outcomes,
@@ -246,8 +253,8 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
             build_networks(tasks, executor.workers)
             with executor:
                 warm, keys = prepare_warm_states(tasks, executor, reporter.warm_states)
-                record_warm_states(out_dir, manifest, session, warm, keys)
-                record_job_files(out_dir, manifest, session, tasks)
+                manifest = record_warm_states(out_dir, manifest, warm, keys)
+                manifest = record_job_files(out_dir, manifest, tasks)
                 for row in executor.map(tasks):
                     row = with_warm_state(row, keys)
                     store.add(row)
@@ -256,24 +263,23 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
         interrupted = True
     finally:
         reporter.stop()
-        summary, outcomes = end_session(out_dir, manifest, session, store.consolidate(),
-                                        len(plan))
+        summary, outcomes = end_session(out_dir, manifest, store.consolidate(), len(plan))
     return SweepOutcome(out_dir, len(plan), summary, outcomes, interrupted,
                         time.perf_counter() - wall_start)
 
 
-def start_session(out_dir: Path, manifest: dict, executor: Executor, traces: TraceMode,
-                  runs_to_do: int) -> dict:
-    """Record in the manifest that a session (this command) starts running ``out_dir``."""
-    session = {"started_at": now_iso(), "ended_at": None, "executor": executor.name,
-               "workers": executor.workers, "traces": traces, "runs_to_do": runs_to_do}
-    manifest["sessions"].append(session)
-    manifest["status"] = "running"
-    write_manifest(out_dir, manifest)
-    return session
+def start_session(out_dir: Path, manifest: SweepManifest, executor: Executor,
+                  traces: TraceMode, runs_to_do: int) -> SweepManifest:
+    """Record in the manifest that a session (this command) starts running ``out_dir``;
+    the manifest written, its last session this one."""
+    session = Session.new(started_at=now_iso(), ended_at=None, executor=executor.name,
+                          workers=executor.workers, traces=traces, runs_to_do=runs_to_do)
+    manifest = manifest.updated(sessions=(*manifest.sessions, session), status="running")
+    write_manifest(out_dir, manifest.to_dict())
+    return manifest
 
 
-def end_session(out_dir: Path, manifest: dict, session: dict, table: pa.Table,
+def end_session(out_dir: Path, manifest: SweepManifest, table: pa.Table,
                 planned: int, finished: bool | None = None
                 ) -> tuple[dict[str, int], dict[str, int]]:
     """Record the session's end and the rows' counts (``missing``: planned runs without
@@ -284,9 +290,9 @@ def end_session(out_dir: Path, manifest: dict, session: dict, table: pa.Table,
     summary["missing"] = planned - table.num_rows
     outcomes = {o: by_outcome.get(o, 0) for o in OUTCOMES}
     finished = not summary["missing"] if finished is None else finished
-    session["ended_at"] = now_iso()
-    manifest.update(ended_at=session["ended_at"], counts=summary,
-                    collisions=outcomes[COLLIDED], outcomes=outcomes,
-                    status="complete" if finished else "interrupted")
-    write_manifest(out_dir, manifest)
+    ended_at = now_iso()
+    manifest = manifest.with_session(ended_at=ended_at).updated(
+        ended_at=ended_at, counts=summary, collisions=outcomes[COLLIDED], outcomes=outcomes,
+        status="complete" if finished else "interrupted")
+    write_manifest(out_dir, manifest.to_dict())
     return summary, outcomes

@@ -74,7 +74,7 @@ def controller_class(name: str, field: str = "controller.name") -> type:
     """The class ``name`` refers to."""
     kind = controller_kind(name)
     if kind == "builtin":  # where the registry says its class lives
-        module_name, _, cls_name = BUILTIN_CONTROLLERS[name].partition(":")
+        module_name, _, cls_name = BUILTIN_CONTROLLERS[name].controller.partition(":")
         return _attribute(_import(module_name, field), cls_name, module_name, field)
     if kind == "entry_point":
         entry = installed_controllers().get(name)

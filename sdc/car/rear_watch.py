@@ -17,7 +17,7 @@ somewhere. The rule (``AvoidParams``):
   out of sight, as fast as the fastest seen in that lane so far (at least
   ``rear_unseen_speed_mps``), would still leave that gap.
 
-Positions are in the lane's frame (:class:`sdc.car.avoid.LaneFrame`); the
+Positions are in the lane's frame (:class:`sdc.car.lane_frame.LaneFrame`); the
 shadows are taken as straight lines in it.
 """
 

@@ -55,10 +55,12 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
+    from analysis.run.sweep_manifest import SweepManifest
     from scenarios.sweep_spec import expand, plan_sha256
     from sdc.batch.manifest import read_manifest
 
-    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
-    return (manifest is not None
-            and manifest.get("sweep", {}).get("sweep", {}).get("name") == spec.name
-            and manifest.get("plan_sha256") != plan_sha256(expand(spec)))
+    plain = read_manifest(out_dir) if out_dir.is_dir() else None
+    if plain is None:
+        return False
+    manifest = SweepManifest.from_dict(plain)
+    return manifest.sweep_name == spec.name and manifest.plan_sha256 != plan_sha256(expand(spec))

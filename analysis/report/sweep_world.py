@@ -1,0 +1,119 @@
+"""The sweep report's word on its world: the world audit (bodies other than the ego that
+overlapped), who moved into whom in each collision, the vehicle classes hit, the red
+lights crossed; the traffic model and the SUMO configurations the runs stepped."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from analysis.run.commands import replay_command
+from analysis.run.run_outcome import collided
+from analysis.run.world_audit import ROLE_TEXT
+from scenarios.bodies import PEDESTRIAN
+
+
+def world_summary(results: pd.DataFrame) -> dict:
+    """The world audit (runs with ``world_overlaps``) and, per controller, its
+    collisions by who moved into whom and the part of the ego hit (sweeps made before
+    these columns: not recorded)."""
+    if "world_overlaps" not in results.columns:
+        return {"recorded": False}
+    ok = results[results.status == "ok"]
+    overlaps = ok.world_overlaps.fillna(0)
+    hits = ok[collided(ok) & ok.collision_role.notna()]
+    classes = (hits[hits.collision_vclass.notna() & (hits.collision_vclass != PEDESTRIAN)]
+               if "collision_vclass" in hits.columns
+               else hits.iloc[:0].assign(collision_vclass=None))
+    sumo = ok.sumo_overlaps.fillna(0) if "sumo_overlaps" in ok.columns else overlaps * 0
+    return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
+            "overlap_steps": int(overlaps.sum()),
+            "first_overlap_run": _first_run(ok, overlaps),
+            "runs_with_sumo_overlaps": int((sumo > 0).sum()),
+            "sumo_overlap_steps": int(sumo.sum()),
+            "first_sumo_overlap_run": _first_run(ok, sumo),
+            "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
+                                                 by_role.collision_part.value_counts().items()}
+                                    for role, by_role in rows.groupby("collision_role")}
+                           for c, rows in hits.groupby("controller", sort=False)},
+            "vehicle_classes": {str(c): {str(k): int(n) for k, n in
+                                         rows.collision_vclass.value_counts().items()}
+                                for c, rows in classes.groupby("controller", sort=False)},
+            "red_lights": _red_lights(ok)}
+
+
+def _first_run(ok: pd.DataFrame, steps: pd.Series) -> str | None:
+    """The id of the first run with ``steps`` > 0 (None: none)."""
+    return str(ok.run_id[steps > 0].iloc[0]) if (steps > 0).any() else None
+
+
+def _red_lights(ok: pd.DataFrame) -> dict | None:
+    """Per controller: runs that crossed a red light, and the crossings (None: the
+    sweep predates the column, or no run met a traffic light's red)."""
+    if "red_light_violations" not in ok.columns:
+        return None
+    counts = ok.red_light_violations.fillna(0)
+    if not counts.any():
+        return None
+    return {str(c): {"runs": int((rows > 0).sum()), "crossings": int(rows.sum()),
+                     "of": int(len(rows))}
+            for c, rows in counts.groupby(ok.controller, sort=False)}
+
+
+def world_lines(world: dict, traffic_model: str | None = None,
+                sumo_config: list | None = None, sweep_dir: str | None = None) -> list[str]:
+    """The traffic model, the world audit (``world``: a :func:`world_summary`; a WARNING
+    when bodies other than the ego overlapped: a world that made something up), and
+    each controller's collisions split into those it ran into and those in which it
+    was hit. Its replay commands name ``sweep_dir`` (``DIR`` when not given)."""
+
+    def replay(run_id: str) -> str:
+        return replay_command(Path(sweep_dir) if sweep_dir else Path("DIR"), run_id)
+
+    lines = [f"Traffic model: {traffic_model or 'not recorded'}."]
+    for config in sumo_config or []:
+        overridden = ", ".join(f"{name} {value}" for name, value in config["overridden"].items())
+        step = (f"steps of {config['step_s']:g} s ({config['step_from']}); "
+                if "step_s" in config else "")
+        lines.append(f"SUMO configuration {config['file']}: its own demand from "
+                     f"{config['begin_s']:g} s; {step}overridden by the run: "
+                     f"{overridden or 'nothing'}; not applied: "
+                     f"{', '.join(config['not_applied']) or 'nothing'}.")
+    if not world["recorded"]:
+        return lines + ["World audit: not recorded (the sweep predates it)."]
+    if world["runs_with_overlaps"]:
+        lines.append(f"WARNING: in {plural(world['runs_with_overlaps'], 'run')} two bodies "
+                     f"other than the ego overlapped where SUMO's own lanes hold them apart "
+                     f"({world['overlap_steps']} steps in all, column world_overlaps): sdc's "
+                     "world made something up, and their verdicts are suspect; see one with "
+                     f"{replay(world.get('first_overlap_run'))} and report it.")
+    else:
+        lines.append("World audit: no two bodies other than the ego overlapped in any run "
+                     "where SUMO's own lanes hold them apart (world_overlaps 0).")
+    if world.get("runs_with_sumo_overlaps"):
+        lines.append(f"SUMO's own overlaps: in {plural(world['runs_with_sumo_overlaps'], 'run')}"
+                     " SUMO's own model held two bodies inside each other "
+                     f"({world['sumo_overlap_steps']} steps, column sumo_overlaps: vehicles "
+                     "waiting on a junction's crossing lanes, bicycles through pedestrians); "
+                     "that is SUMO's world as it is, not sdc's coupling, and the ego's verdicts "
+                     f"stand; to see one: {replay(world['first_sumo_overlap_run'])}.")
+    for controller, roles in world["collisions"].items():
+        parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
+                 + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
+                 for role, by_part in sorted(roles.items())]
+        lines.append(f"{controller}'s collisions by who moved into whom: {'; '.join(parts)}.")
+    for controller, classes in world.get("vehicle_classes", {}).items():
+        hit = ", ".join(f"{vclass} {n}" for vclass, n in sorted(classes.items()))
+        lines.append(f"{controller}'s collisions with vehicles by vehicle class: {hit}.")
+    red = world.get("red_lights")
+    if red:
+        lines.append("Red lights crossed (column red_light_violations: stop lines the front "
+                     "bumper crossed while the light showed red): " + "; ".join(
+                         f"{c} {v['crossings']} in {v['runs']} of {v['of']} runs"
+                         for c, v in red.items()) + ".")
+    return lines
+
+
+def plural(count: int, noun: str) -> str:
+    return f"{count} {noun}" + ("" if count == 1 else "s")
