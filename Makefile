@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench docs clean system-packages
 
-$(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/_road_kernels.c scenarios/*.h  # C builds at install (optional)
+$(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/scene/_road_kernels.c scenarios/scene/*.h  # C builds at install (optional)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'

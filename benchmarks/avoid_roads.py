@@ -34,7 +34,7 @@ import pandas as pd
 
 from analysis.stats.rates import wilson_interval
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from scenarios.world_backends import check_inputs
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter

@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from scenarios import CATALOG_DIR
-from scenarios.controller_ref import BUILTIN_CONTROLLERS
-from scenarios.toml_io import load_spec
+from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS
+from scenarios.spec.toml_io import load_spec
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import Command
 from sdc.car.controller_plugins import make_controller

@@ -19,8 +19,8 @@ import numpy as np
 
 import sdc.gym  # noqa: F401  (registers the environment)
 from scenarios import CATALOG_DIR
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.toml_io import read_toml
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import read_toml
 
 WARM_UP_STEPS, TIMED_STEPS, HIGHWAY_V0_STEPS = 700, 400, 150
 

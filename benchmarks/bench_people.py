@@ -25,8 +25,8 @@ import libsumo
 import traci.constants as tc
 
 from scenarios import CATALOG_DIR
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.toml_io import load_spec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import load_spec
 
 PAIRS = 3
 

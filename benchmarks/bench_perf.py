@@ -63,9 +63,9 @@ import numpy as np
 import traci.constants as tc
 
 from scenarios import CATALOG_DIR
-from scenarios.scenario_spec import LidarSpec, ScenarioSpec
-from scenarios.sumo_world import EGO_ID
-from scenarios.toml_io import load_spec, read_toml
+from scenarios.spec.scenario_spec import LidarSpec, ScenarioSpec
+from scenarios.spec.toml_io import load_spec, read_toml
+from scenarios.sumo.sumo_world import EGO_ID
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.sensors import Lidar

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter

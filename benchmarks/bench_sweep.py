@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.sweep_runner import run_sweep
 
@@ -87,7 +87,7 @@ def driver_peak_rss_kib(sweep_file: Path, out_dir: Path) -> int:
     """Peak RSS of a process that runs the sweep as its driver."""
     code = (
         "import resource, sys\n"
-        "from scenarios.sweep_spec import load_sweep\n"
+        "from scenarios.spec.sweep_spec import load_sweep\n"
         "from sdc.batch.executors import LocalExecutor\n"
         "from sdc.batch.progress import QuietReporter\n"
         "from sdc.batch.sweep_runner import run_sweep\n"

@@ -26,8 +26,8 @@ import time
 from pathlib import Path
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
-from scenarios.toml_io import load_spec
+from scenarios.spec.sweep_spec import load_sweep
+from scenarios.spec.toml_io import load_spec
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep

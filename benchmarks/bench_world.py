@@ -1,4 +1,4 @@
-"""What the one-world traffic model costs (scenarios/traffic_model.py), as ratios in one run.
+"""What the one-world traffic model costs (scenarios/scene/traffic_model.py), as ratios in one run.
 
 For each scenario, paired measurements with the model's SUMO options and without
 (``--lanechange.duration`` off: SUMO's one-step lane changes, the world before the
@@ -10,7 +10,7 @@ bare SUMO step of the same scenario with the same options (bench_perf.bare_sumo_
 - ``world.<name>.step_ratio``: our whole closed-loop step, with over without;
 - ``world.<name>.overhead_vs_bare_sumo``: our step over bare SUMO's, both with the
   model's options (``..._without``: both without);
-- ``world.audit_ms_per_step``: the world audit (analysis.run.world_audit) over a trace of
+- ``world.audit_ms_per_step``: the world audit (analysis.measures.world_audit) over a trace of
   the 100-vehicle highway, per step;
 - ``world.ego_pose_us``: telling SUMO where the ego is (``SumoWorld._ego_pose``: its
   lateral position by the model's rule), per step, with the options or without.
@@ -30,9 +30,9 @@ import time
 import bench_perf
 import numpy as np
 
-from analysis.run.world_audit import world_overlaps
-from scenarios import traffic_model
-from scenarios.sumo_world import SumoWorld
+from analysis.measures.world_audit import world_overlaps
+from scenarios.scene import traffic_model
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 from sdc.run.episode import run_episode
 

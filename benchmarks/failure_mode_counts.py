@@ -66,7 +66,7 @@ def _regions_found(rows: pd.DataFrame, truth: dict) -> set[str]:
 
 
 def sumo_part(seeds: int, search_runs: int) -> dict[str, float]:
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter

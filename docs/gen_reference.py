@@ -4,10 +4,10 @@ Three pages, none of them written by hand (docs/development.md, "The manual"):
 
 - ``reference/results.md``: every result column of ``sdc/run/result_row.py``
   (``COLUMNS``, ``ADAPTIVE_COLUMNS``: name, Arrow type, part, meaning) and the trace's
-  columns (``analysis/run/trace_file.py``);
+  columns (``analysis/measures/trace_file.py``);
 - ``reference/spec.md``: every field of the scenario spec classes
-  (``scenarios/scenario_spec.py``, from ``ScenarioSpec``'s tables down) and of the
-  sweep file (``scenarios/sweep_spec.py``), with type, default, bounds and the
+  (``scenarios/spec/scenario_spec.py``, from ``ScenarioSpec``'s tables down) and of the
+  sweep file (``scenarios/spec/sweep_spec.py``), with type, default, bounds and the
   description the code gives (its ``#:`` comment above the field or the comment
   after it);
 - ``reference/cli.md``: every command of ``sdc`` with its ``--help``, rendered by
@@ -38,9 +38,9 @@ from typing import Any, Literal
 
 import click
 
-from analysis.run import trace_file
-from scenarios import scenario_spec, sweep_spec
-from scenarios.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP
+from analysis.measures import trace_file
+from scenarios.spec import scenario_spec, sweep_spec
+from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP
 from sdc.cli import main as cli_main
 from sdc.run import result_row
 
@@ -100,10 +100,10 @@ def _where(column: result_row.Column) -> str:
 def results_page() -> str:
     parts = {result_row.IDENTITY: "which run", result_row.STATUS: "ok, error or timeout",
              result_row.OUTCOME: "what the run measured",
-             result_row.METRIC: "computed from the trace (analysis.run.metrics)",
+             result_row.METRIC: "computed from the trace (analysis.measures.metrics)",
              result_row.SWEEP: "the run's place in its sweep",
              result_row.ADAPTIVE: "a run drawn by sdc search or sdc estimate"}
-    out = [GENERATED.format(source="sdc/run/result_row.py and analysis/run/trace_file.py"),
+    out = [GENERATED.format(source="sdc/run/result_row.py and analysis/measures/trace_file.py"),
            "# Result columns\n\n",
            "One row per run. `sdc run --json` prints a run's row as one JSON object on its "
            "last line; a sweep directory's `results.parquet` holds one row per run with "
@@ -128,7 +128,7 @@ def results_page() -> str:
     out += [f"- **{name}**: {what}\n" for name, what in parts.items()]
     out.append("\n## Trace columns\n\n"
                "`sdc run --trace FILE.parquet` and a sweep's `traces/<run_id>.parquet` "
-               "hold one row per step (`analysis/run/trace_file.py`):\n\n"
+               "hold one row per step (`analysis/measures/trace_file.py`):\n\n"
                "| column | kind |\n| --- | --- |\n")
     kinds = [(name, "float64") for name in trace_file.FLOAT_COLUMNS]
     kinds.append(("phase", "string: the controller's phase"))
@@ -281,14 +281,15 @@ def scenario_tables() -> list[tuple[str, type, bool, bool]]:
 
 
 def spec_page() -> str:
-    out = [GENERATED.format(source="scenarios/scenario_spec.py and scenarios/sweep_spec.py"),
+    sources = "scenarios/spec/scenario_spec.py and scenarios/spec/sweep_spec.py"
+    out = [GENERATED.format(source=sources),
            "# Scenario and sweep fields\n\n",
            "A scenario file is TOML with the tables below; a sweep file one `[sweep]` table "
            "and its `[sweep.params]`. Every field is checked as the file loads: a bad key, "
            "type or range is bad input (exit 2) naming the field's path "
            "(`obstacles[0].lane`). *Bounds* are the range the field is checked against; "
            "fields and bounds are generated from the spec classes "
-           "(`scenarios/scenario_spec.py`, `scenarios/sweep_spec.py`), descriptions from "
+           "(`scenarios/spec/scenario_spec.py`, `scenarios/spec/sweep_spec.py`), descriptions from "
            "their comments. Names carry units: `_m` metres, `_s` seconds, `_mps` m/s, "
            "`_mps2` m/s², `_rad` radians, `_deg` degrees, `_vph` vehicles per hour.\n\n",
            prose(scenario_spec.__doc__), "\n\n## Scenario files\n\n"]

@@ -2,8 +2,8 @@
 
 from pathlib import Path
 
-from scenarios.errors import SdcError, SpecError
-from scenarios.scenario_spec import (
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.spec.scenario_spec import (
     AvoidParams,
     ControllerSpec,
     EgoSpec,
@@ -17,7 +17,7 @@ from scenarios.scenario_spec import (
     TrafficSpec,
     VehicleSpec,
 )
-from scenarios.toml_io import dumps_spec, load_spec
+from scenarios.spec.toml_io import dumps_spec, load_spec
 
 #: the scenarios shipped with sdc
 CATALOG_DIR = Path(__file__).resolve().parent / "catalog"

@@ -11,19 +11,19 @@ from typing import Protocol
 
 import numpy as np
 
-from scenarios.errors import SdcError
-from scenarios.road_geometry import RoadGeometry
-from scenarios.road_source import road_source
-from scenarios.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.snapshot import Snapshot
-from scenarios.warm_state import cached_path, uses_warm_state, warm_state_key
+from scenarios.common.errors import SdcError
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import Snapshot
+from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.sumo.warm_state import cached_path, uses_warm_state, warm_state_key
+from scenarios.sumo_net.road_source import road_source
 
 BACKENDS = ("sumo", "highway")
 
 
 class World(Protocol):
-    """What a run asks of a world backend (``scenarios/sumo_world.py``,
-    ``scenarios/highway_world.py``). The ego is a box ``[cx, cy, yaw, length, width]``
+    """What a run asks of a world backend (``scenarios/sumo/sumo_world.py``,
+    ``scenarios/highway/highway_world.py``). The ego is a box ``[cx, cy, yaw, length, width]``
     [m, rad] pushed in every step at its speed [m/s]; the world answers with what the
     car can see (a :class:`Snapshot`)."""
 
@@ -76,10 +76,10 @@ def warm_up_span_s(spec: ScenarioSpec) -> tuple[float, float]:
 
 def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None,
                     on_sample: Callable[[float], None] | None = None) -> bytes:
-    """The file of ``spec``'s warm state (``scenarios/warm_state.py``), from this
+    """The file of ``spec``'s warm state (``scenarios/sumo/warm_state.py``), from this
     machine's cache or computed into it (``on_sample``: called with SUMO's clock [s]
     as the warm-up goes on)."""
-    from scenarios.sumo_world import SumoWorld
+    from scenarios.sumo.sumo_world import SumoWorld
 
     with SumoWorld(spec, make_road(spec, cache_dir), cache_dir) as world:
         return world.warm_state(on_sample).to_bytes()
@@ -88,8 +88,8 @@ def warm_state_file(spec: ScenarioSpec, cache_dir: Path | None = None,
 def settling_series(spec: ScenarioSpec, duration_s: float, cache_dir: Path | None = None,
                     on_sample: Callable[[float], None] | None = None) -> dict[str, list]:
     """How ``spec``'s traffic settles over a warm-up of ``duration_s`` (SUMO, no ego):
-    the series a warm state records (``scenarios.warm_state.SETTLING_COLUMNS``)."""
-    from scenarios.sumo_world import SumoWorld
+    the series a warm state records (``scenarios.sumo.warm_state.SETTLING_COLUMNS``)."""
+    from scenarios.sumo.sumo_world import SumoWorld
 
     source = road_source(spec.road)  # a configuration's clock runs from its begin
     longer = {source.warm_up_field: source.warm_up_begin_s() + duration_s}
@@ -105,9 +105,9 @@ def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = 
     if spec.scenario.backend == "highway":
         if gui:
             raise SdcError("--gui: only the sumo backend has a GUI")
-        from scenarios.highway_world import HighwayWorld
+        from scenarios.highway.highway_world import HighwayWorld
 
         return HighwayWorld(spec, road)
-    from scenarios.sumo_world import SumoWorld
+    from scenarios.sumo.sumo_world import SumoWorld
 
     return SumoWorld(spec, road, cache_dir, gui, warm_state=warm_state)

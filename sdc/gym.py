@@ -35,10 +35,10 @@ import numpy as np
 from gymnasium import spaces
 
 from scenarios import CATALOG_DIR
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.seeding import draw_seeds
-from scenarios.toml_io import load_spec
+from scenarios.common.seeding import draw_seeds
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import load_spec
 from scenarios.world_backends import BACKENDS, make_road, make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import COLLISION, DURATION, Simulation
@@ -144,6 +144,7 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
 
 def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
     """sdc's drawing of the simulation's current step."""
+    from analysis.measures.metrics import central_range_m
     from analysis.report.render import (
         Scene,
         frame_rgb,
@@ -152,8 +153,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
         road_lines,
         standing_people_xy,
     )
-    from analysis.run.metrics import central_range_m
-    from scenarios.scenario_spec import beam_angles_rad
+    from scenarios.spec.scenario_spec import beam_angles_rad
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)

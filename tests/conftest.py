@@ -6,7 +6,7 @@ import os
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import read_toml
+from scenarios.spec.toml_io import read_toml
 
 
 @pytest.fixture

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, load_spec
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.scenario_spec import AvoidParams, ControllerSpec, beam_angles_rad
-from sdc.car.avoid import (
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import AvoidParams, ControllerSpec, beam_angles_rad
+from sdc.car.avoid.controller import (
     AVOID_LEFT,
     AVOID_RETURN,
     AVOID_RIGHT,

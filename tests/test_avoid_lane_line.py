@@ -1,4 +1,4 @@
-"""Where avoid holds its lane and how it steers there (sdc.car.lane_line): the inside
+"""Where avoid holds its lane and how it steers there (sdc.car.avoid.lane_line): the inside
 of a gentle bend, the line its body fits through a tight one, the speed a bend
 allows, pure pursuit toward the target. Lanes as arcs, fake returns, no SUMO."""
 
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from test_avoid_perception import LANE_W, MODEL, PARAMS, frame_of, seen
 
-from sdc.car.bend_room import track
-from sdc.car.lane_frame import LaneFrame
-from sdc.car.lane_line import (
+from sdc.car.avoid.bend_room import track
+from sdc.car.avoid.lane_frame import LaneFrame
+from sdc.car.avoid.lane_line import (
     LaneLine,
     bend_speed_mps,
     inside_of_bend_m,

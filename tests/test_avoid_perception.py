@@ -1,4 +1,4 @@
-"""What avoid perceives (sdc.car.lane_frame, sdc.car.avoid_perception): returns placed
+"""What avoid perceives (sdc.car.avoid.lane_frame, sdc.car.avoid.perception): returns placed
 in the lane's frame, the lanes watched, the leaders tracked, what is ahead. Fake
 observations: one return at each point asked for, no ray casting, no SUMO."""
 
@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.scenario_spec import AvoidParams
-from sdc.car.avoid_perception import (
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import AvoidParams
+from sdc.car.avoid.lane_frame import FACE_JOIN_M, LaneFrame
+from sdc.car.avoid.perception import (
     LEFT,
     OWN,
     RIGHT,
@@ -22,7 +23,6 @@ from sdc.car.avoid_perception import (
     look_ahead,
 )
 from sdc.car.controller_api import LanesBeside, Observation
-from sdc.car.lane_frame import FACE_JOIN_M, LaneFrame
 from sdc.car.lane_path import LanePath
 from sdc.car.sensors import LaneReading
 

@@ -1,4 +1,4 @@
-"""What avoid plans (sdc.car.avoid_plan, sdc.car.swerve): the phase's one transition
+"""What avoid plans (sdc.car.avoid.plan, sdc.car.avoid.swerve): the phase's one transition
 function, the swerve's kinematics, the side chosen, the pass followed and ended. Fake
 observations of test_avoid_perception (one return per point), no SUMO."""
 
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from test_avoid_perception import FRONT_M, LANE_W, MODEL, PARAMS, seen
 
-from scenarios.scenario_spec import AvoidParams
-from sdc.car.avoid_perception import LEFT, RIGHT, STRAIGHT_AHEAD, Perception, look_ahead
-from sdc.car.avoid_plan import (
+from scenarios.spec.scenario_spec import AvoidParams
+from sdc.car.avoid.perception import LEFT, RIGHT, STRAIGHT_AHEAD, Perception, look_ahead
+from sdc.car.avoid.plan import (
     AVOID_LEFT,
     AVOID_RETURN,
     AVOID_RIGHT,
@@ -22,9 +22,9 @@ from sdc.car.avoid_plan import (
     Maneuver,
     next_phase,
 )
+from sdc.car.avoid.swerve import sight_needed_m, swerve_distance_m, tightest_radius_m
 from sdc.car.controller_api import LanesBeside
 from sdc.car.lane_path import LanePath
-from sdc.car.swerve import sight_needed_m, swerve_distance_m, tightest_radius_m
 
 PHASES = (CRUISE, BRAKE, AVOID_LEFT, AVOID_RIGHT, AVOID_RETURN)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import expand, load_sweep
+from scenarios.spec.sweep_spec import expand, load_sweep
 from sdc.run.episode import run_episode
 
 

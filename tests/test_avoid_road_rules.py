@@ -1,4 +1,4 @@
-"""The rules that bind avoid (sdc.car.road_rules): lights, duties to give way,
+"""The rules that bind avoid (sdc.car.avoid.road_rules): lights, duties to give way,
 pedestrian crossings, queues at junctions, lanes that end. Fake observations of
 test_avoid_perception, no SUMO."""
 
@@ -10,8 +10,10 @@ import numpy as np
 import pytest
 from test_avoid_perception import FRONT_M, MODEL, PARAMS, frame_of, seen
 
-from scenarios.scenario_spec import AvoidParams
-from sdc.car.avoid_perception import LEFT, RIGHT, STRAIGHT_AHEAD
+from scenarios.spec.scenario_spec import AvoidParams
+from sdc.car.avoid.perception import LEFT, RIGHT, STRAIGHT_AHEAD
+from sdc.car.avoid.road_rules import RoadRules
+from sdc.car.avoid.speed_law import SpeedLaw
 from sdc.car.controller_api import (
     GREEN,
     NO_SIGNAL,
@@ -21,8 +23,6 @@ from sdc.car.controller_api import (
     LanesBeside,
     StopLine,
 )
-from sdc.car.road_rules import RoadRules
-from sdc.car.speed_law import SpeedLaw
 
 FREE = math.inf
 

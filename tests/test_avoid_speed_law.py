@@ -1,4 +1,4 @@
-"""How avoid holds its speed (sdc.car.speed_law): cruising, braking short of what is
+"""How avoid holds its speed (sdc.car.avoid.speed_law): cruising, braking short of what is
 ahead, following by the intelligent driver model, stopping short of a place. Fake
 observations of test_avoid_perception, no SUMO."""
 
@@ -9,8 +9,8 @@ import math
 import pytest
 from test_avoid_perception import MODEL, PARAMS, seen
 
-from scenarios.scenario_spec import AvoidParams
-from sdc.car.speed_law import SpeedLaw
+from scenarios.spec.scenario_spec import AvoidParams
+from sdc.car.avoid.speed_law import SpeedLaw
 
 FREE = math.inf  # nothing ahead, no bend
 

@@ -1,5 +1,5 @@
 """``avoid`` among traffic: it follows a moving leader, waits behind a queue, stops
-for red and passes only what stands (sdc.car.leader_watch, the stop line in the
+for red and passes only what stands (sdc.car.avoid.leader_watch, the stop line in the
 observation). Closed loops on the fake straight road of test_avoid: the boxes
 move, the car moves under its own commands."""
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
 
-from scenarios.scenario_spec import AvoidParams
-from sdc.car.avoid import AVOID_LEFT, AVOID_RIGHT, AvoidController
+from scenarios.spec.scenario_spec import AvoidParams
+from sdc.car.avoid.controller import AVOID_LEFT, AVOID_RIGHT, AvoidController
+from sdc.car.avoid.leader_watch import LeaderWatch
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, LanesBeside, StopLine
-from sdc.car.leader_watch import LeaderWatch
 from sdc.car.vehicle import Vehicle, VehicleState
 
 PASSING = (AVOID_LEFT, AVOID_RIGHT)

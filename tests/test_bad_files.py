@@ -19,12 +19,12 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from analysis.run.trace_file import Trace
+from analysis.measures.trace_file import Trace
 from scenarios import CATALOG_DIR
-from scenarios.errors import SdcError
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import MAX_STEPS, ScenarioSpec
-from scenarios.toml_io import dumps_plain, load_spec
+from scenarios.common.errors import SdcError
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.spec.scenario_spec import MAX_STEPS, ScenarioSpec
+from scenarios.spec.toml_io import dumps_plain, load_spec
 from sdc.cli import main
 
 LESSON = CATALOG_DIR / "seed-lesson.toml"

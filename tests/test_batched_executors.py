@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import load_spec
+from scenarios.spec.toml_io import load_spec
 from sdc.batch.batch_size import MAX_RUNS, BatchSizer
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.run_task import RunTask, execute

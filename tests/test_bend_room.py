@@ -1,4 +1,4 @@
-"""Room for the body through tight bends (sdc.car.bend_room), held to a
+"""Room for the body through tight bends (sdc.car.avoid.bend_room), held to a
 brute-force oracle: the body's rectangle placed at every pose and every offset,
 each kerb point tested against it; and `avoid` through the turns of a default
 ``netgenerate`` grid in libsumo, where the X5 does not fit the lane's centre."""
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from scenarios import ScenarioSpec
-from scenarios.bodies import VEHICLE_MODELS
+from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.sumo_net.build import sumo_binary
-from sdc.car.bend_room import bend_room, track
+from sdc.car.avoid.bend_room import bend_room, track
 from sdc.car.lane_path import LanePath
 from sdc.run.episode import run_episode
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.cache_dir import network_cache_dir, sdc_cache_dir
-from scenarios.scenario_spec import RoadSpec
+from scenarios.common.cache_dir import network_cache_dir, sdc_cache_dir
+from scenarios.spec.scenario_spec import RoadSpec
 from scenarios.sumo_net.build import build_network
 
 

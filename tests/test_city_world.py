@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scenarios import traffic_model
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scene import traffic_model
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.sumo_world import SumoWorld, lanes_blocked
 from scenarios.sumo_net.build import sumo_binary
-from scenarios.sumo_world import SumoWorld, lanes_blocked
 from scenarios.world_backends import make_road
 from sdc.car.geometry import box_gap_m
 from sdc.run.episode import run_episode

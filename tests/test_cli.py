@@ -8,7 +8,7 @@ from click.testing import CliRunner
 
 from analysis.report.sweep_report import COLLISION_TITLE, VERDICT_TITLE
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import dumps_plain
+from scenarios.spec.toml_io import dumps_plain
 from sdc.cli import main
 from sdc.run.result_row import JSON_COLUMNS
 

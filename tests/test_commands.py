@@ -1,4 +1,4 @@
-"""The commands sdc prints name the executable that ran (analysis/run/commands.py)."""
+"""The commands sdc prints name the executable that ran (analysis/measures/commands.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.run.commands import program_words, replay_command, sdc_command
+from analysis.measures.commands import program_words, replay_command, sdc_command
 
 
 def executable(path: Path) -> Path:

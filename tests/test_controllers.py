@@ -2,8 +2,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.scenario_spec import ControllerSpec, LaneKeepParams, beam_angles_rad
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ControllerSpec, LaneKeepParams, beam_angles_rad
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
 from sdc.car.controllers import (
@@ -82,8 +82,8 @@ def test_one_line_of_the_registry_makes_a_built_in_whole():
     plug-in machinery builds the class from it, with nothing listed anywhere else."""
     import dataclasses
 
-    from scenarios import scenario_spec
-    from scenarios.controller_ref import BUILTIN_CONTROLLERS, controller_kind
+    from scenarios.spec import scenario_spec
+    from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, controller_kind
     from sdc.car.controller_plugins import controller_class
 
     assert tuple(scenario_spec.CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)

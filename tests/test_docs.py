@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from scenarios import scenario_spec, sweep_spec
+from scenarios.spec import scenario_spec, sweep_spec
 from sdc.cli import main as cli_main
 from sdc.run import result_row
 

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from analysis.run.trace_file import read_trace
+from analysis.measures.trace_file import read_trace
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
 from sdc.run.episode import run_episode
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from analysis.run.failure_event import FAILURE, FailureEvent
+from analysis.measures.failure_event import FAILURE, FailureEvent
 
 OK = {"status": "ok", "collision": False, "min_gap_obstacle_m": 1.5,
       "min_road_edge_gap_m": 0.25, "min_ttc_s": 2.0}

@@ -12,9 +12,9 @@ import pytest
 import sumolib
 
 from scenarios import ScenarioSpec
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
-from scenarios.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 
 NODES = """<nodes>

@@ -8,7 +8,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import sdc.gym  # noqa: F401  (registers the environment)
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.gym import ENV_ID, MAX_STEER_RAD, ObstacleAvoidanceEnv
 
 pytestmark = pytest.mark.slow

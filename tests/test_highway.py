@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, load_spec
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.run.episode import run_episode
 
 pytestmark = pytest.mark.slow
@@ -56,7 +56,7 @@ def test_highway_traffic_reacts_to_a_stopped_ego(lesson_plain):
 
 @pytest.mark.parametrize("radius_m", [200.0, -200.0])
 def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
-    from scenarios.road_geometry import RoadGeometry
+    from scenarios.scene.road_geometry import RoadGeometry
 
     plain = copy.deepcopy(lesson_plain)
     plain["road"].update(kind="curve", curve_radius_m=radius_m, length_m=300.0,
@@ -80,7 +80,7 @@ def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
 
 def test_a_sweep_over_both_backends_reports_them_side_by_side(tmp_path):
     from analysis.report.sweep_report import COLLISION_TITLE, write_report
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter
     from sdc.batch.sweep_runner import run_sweep

@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import load_spec
 from scenarios.sumo_net.build import build_network
-from scenarios.toml_io import load_spec
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.job_files import FileCatalog
 from sdc.batch.run_task import RunTask, execute
@@ -158,8 +158,8 @@ def test_the_manifest_records_the_network_file_and_resume_refuses_a_changed_one(
     import json
     import shutil
 
-    from scenarios.errors import SdcError
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.common.errors import SdcError
+    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.progress import QuietReporter
     from sdc.batch.sweep_runner import run_sweep
 

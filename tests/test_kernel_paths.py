@@ -16,13 +16,13 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 PINNED = json.loads((Path(__file__).parent / "data" / "catalog_traces.json").read_text())["runs"]
-WHICH = ("from scenarios import road_kernels; from sdc.car import geometry_kernels; "
+WHICH = ("from scenarios.scene import road_kernels; from sdc.car import geometry_kernels; "
          "import sdc; print(road_kernels.KERNELS, geometry_kernels.KERNELS, sdc.__file__)")
 
 
 def built() -> bool:
     try:
-        from scenarios import _road_kernels  # noqa: F401
+        from scenarios.scene import _road_kernels  # noqa: F401
         from sdc.car import _geometry_kernels  # noqa: F401
     except ImportError:
         return False

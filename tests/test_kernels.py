@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
 from test_road import polyline_st
 
-from scenarios.road_geometry import RoadGeometry
-from scenarios.road_kernels import place_numpy
-from scenarios.scenario_spec import RoadSpec
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_kernels import place_numpy
+from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car import geometry_kernels as kernels
 
 try:

@@ -1,4 +1,4 @@
-"""Bodies laid along their lanes as SUMO holds them (scenarios/lane_bodies.py): on
+"""Bodies laid along their lanes as SUMO holds them (scenarios/scene/lane_bodies.py): on
 shapes with known answers, and against SUMO's own placement on its real scenarios
 (its front position, and its own conversion of the lane position a body's length
 behind the front to x, y)."""
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.boxes import box_corners
-from scenarios.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePath
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.toml_io import read_toml
+from scenarios.scene.boxes import box_corners
+from scenarios.scene.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePath
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import read_toml
 from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import initial_state
@@ -184,7 +184,7 @@ KINK_RAD = math.radians(20.0)
 
 def kink_near(sumo, chain: list[str], ends) -> bool:
     """Does the path of ``chain`` (SUMO's lane shapes) kink within
-    :data:`scenarios.lane_bodies.STRETCH_MIN_M` of one of the body's ``ends``?"""
+    :data:`scenarios.scene.lane_bodies.STRETCH_MIN_M` of one of the body's ``ends``?"""
     shape = np.vstack([sumo.lane.getShape(lane) for lane in chain])
     delta = np.diff(shape, axis=0)
     keep = np.hypot(*delta.T) > 1e-9

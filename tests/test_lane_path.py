@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import RoadSpec
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car.lane_path import LanePath
 from sdc.car.sensors import PATH_TOLERANCE_M, LaneReading, LaneSensor, simplified_polyline
 

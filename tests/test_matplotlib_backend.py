@@ -24,9 +24,9 @@ import analysis.report.sweep_report
 import sdc.cli
 import sdc.gym
 from analysis.report import plots
-from analysis.run.trace_file import read_trace
+from analysis.measures.trace_file import read_trace
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import load_spec
+from scenarios.spec.toml_io import load_spec
 from sdc.run.episode import run_episode
 
 env = gymnasium.make(sdc.gym.ENV_ID, render_mode="rgb_array")

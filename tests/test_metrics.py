@@ -2,7 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analysis.run.metrics import return_to_lane, trace_metrics
+from analysis.measures.metrics import return_to_lane, trace_metrics
 
 
 def test_return_needs_two_seconds_inside_half_a_metre_after_the_maneuver():

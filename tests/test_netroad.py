@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from scenarios import CATALOG_DIR, RoadSpec, ScenarioSpec, SpecError
-from scenarios.boxes import box_corners
-from scenarios.road_geometry import RoadGeometry
+from scenarios.scene.boxes import box_corners
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.spec.toml_io import load_spec
 from scenarios.sumo_net.build import build_network
 from scenarios.sumo_net.drivable_area import DrivableArea
 from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, read_net
@@ -22,7 +23,6 @@ from scenarios.sumo_net.route_road import (
     network_road,
     scenario_stream,
 )
-from scenarios.toml_io import load_spec
 from sdc.car.collision import ROAD_EDGE, collision_with
 from sdc.car.geometry_kernels import Contacts
 

@@ -13,14 +13,14 @@ import math
 import numpy as np
 import pytest
 
-import analysis.run.world_audit as world_audit
-from analysis.run.world_audit import pairs_overlap, world_overlaps
-from scenarios import traffic_model
-from scenarios.boxes import as_boxes
-from scenarios.errors import SpecError
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import Snapshot, passenger_classes
-from scenarios.sumo_world import TRAFFIC_WIDTH_M, SumoWorld, obstacle_lanes
+import analysis.measures.world_audit as world_audit
+from analysis.measures.world_audit import pairs_overlap, world_overlaps
+from scenarios.common.errors import SpecError
+from scenarios.scene import traffic_model
+from scenarios.scene.boxes import as_boxes
+from scenarios.scene.snapshot import Snapshot, passenger_classes
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.sumo_world import TRAFFIC_WIDTH_M, SumoWorld, obstacle_lanes
 from scenarios.world_backends import make_road
 from sdc.car.collision import FRONT, RAN_INTO, REAR, SIDE, WAS_HIT, describe, hit_part
 from sdc.car.geometry import box_gap_m, boxes_overlap
@@ -375,7 +375,7 @@ def test_the_traffic_family_leaves_a_way_past_its_obstacle():
     driver in the ego's place gets past the stopped car every time, without a
     collision and without stopping: it changes lanes early, while moving."""
     from scenarios import CATALOG_DIR
-    from scenarios.sweep_spec import expand, load_sweep
+    from scenarios.spec.sweep_spec import expand, load_sweep
 
     runs = [r for r in expand(load_sweep(CATALOG_DIR / "sweeps" / "avoid-roads-traffic.toml"))
             if r.spec.controller.label == "avoid"]

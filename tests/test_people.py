@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.run.world_audit import world_overlaps
-from scenarios.bodies import OBSTACLE_SIZES_M, PEDESTRIAN
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import Snapshot
+from analysis.measures.world_audit import world_overlaps
+from scenarios.scene.snapshot import Snapshot
+from scenarios.spec.bodies import OBSTACLE_SIZES_M, PEDESTRIAN
+from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import make_road, make_world
 from sdc.car.collision import OBSTACLE, RAN_INTO, VEHICLE, collision_with, describe
@@ -403,7 +403,7 @@ def test_traffic_sees_a_standing_person_or_bicycle_and_does_not_drive_through(le
 @pytest.fixture(scope="module")
 def person_sweep(tmp_path_factory):
     from scenarios import CATALOG_DIR
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter
     from sdc.batch.sweep_runner import run_sweep
@@ -493,7 +493,7 @@ def avoid_at_a_crosswalk(person_lateral_m: float | None, speed_mps: float = 10.0
     (the kerbs of a road of three 3.5 m lanes), a person standing at
     ``person_lateral_m`` across it (None: nobody) and the boxes ``more`` (their x from
     the crossing's near side): its states."""
-    from sdc.car.avoid import AvoidController
+    from sdc.car.avoid.controller import AvoidController
     from sdc.car.controller_api import Crosswalk
     from sdc.car.vehicle import Vehicle
     from tests.test_avoid import FRONT_AHEAD_M, MODEL, STEP_S, FakeRoad, at_speed

@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import dumps_plain, read_toml
+from scenarios.spec.toml_io import dumps_plain, read_toml
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "cautious.py"

@@ -18,12 +18,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from analysis.measures.commands import replay_command
+from analysis.measures.run_score import run_score
 from analysis.rare.rare_events import estimate_from_rows
 from analysis.report.rare_report import estimate_lines
-from analysis.run.commands import replay_command
-from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter

@@ -39,7 +39,7 @@ import pytest
 import ray.util
 
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep

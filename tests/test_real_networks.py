@@ -63,7 +63,7 @@ def real_net_spec(lesson_plain: dict, net: Path, **traffic) -> dict:
 
 
 def test_a_run_on_a_gzipped_network(lesson_plain):
-    from scenarios.scenario_spec import ScenarioSpec
+    from scenarios.spec.scenario_spec import ScenarioSpec
     from sdc.run.episode import run_episode
 
     spec = ScenarioSpec.from_plain(real_net_spec(lesson_plain,
@@ -73,7 +73,7 @@ def test_a_run_on_a_gzipped_network(lesson_plain):
 
 
 def test_a_broken_gzipped_network_is_bad_input_naming_the_file(tmp_path):
-    from scenarios.errors import FileError
+    from scenarios.common.errors import FileError
 
     broken = tmp_path / "x.net.xml.gz"
     broken.write_bytes((GAME_DIR / "fkk_in" / "ingolstadt.net.xml.gz").read_bytes()[:500])
@@ -123,7 +123,7 @@ X5_TURN_RADIUS_M = 2.995 / np.tan(0.75)  # wheelbase over the tangent of full lo
 def test_routes_on_real_networks_take_only_turns_and_lanes_a_car_can(name):
     """Drawn routes use lanes open to passenger cars only, and every turn on them is
     no tighter than the X5's turning circle."""
-    from scenarios.bodies import VEHICLE_MODELS
+    from scenarios.spec.bodies import VEHICLE_MODELS
     from scenarios.sumo_net.route_road import ROUTE, draw_route, scenario_stream
 
     net = read_net(GAME_DIR / name)
@@ -243,7 +243,7 @@ def test_a_pinned_route_is_driven_as_given():
     (("6272844#4", "151495018"), "edge '6272844#4' does not lead to edge '151495018'"),
 ])
 def test_a_pinned_route_a_car_cannot_drive_is_bad_input_naming_the_edge(edges, message):
-    from scenarios.errors import SpecError
+    from scenarios.common.errors import SpecError
     from scenarios.sumo_net.route_road import pinned_route
 
     net = read_net(GAME_DIR / "A10KW" / "osm.net.xml")
@@ -255,7 +255,7 @@ def test_a_pinned_route_a_car_cannot_drive_is_bad_input_naming_the_edge(edges, m
 def test_the_command_line_names_a_bad_pinned_route(tmp_path, lesson_plain):
     from click.testing import CliRunner
 
-    from scenarios.toml_io import dumps_plain
+    from scenarios.spec.toml_io import dumps_plain
     from sdc.cli import main
 
     plain = real_net_spec(lesson_plain, GAME_DIR / "A10KW" / "osm.net.xml")
@@ -297,8 +297,8 @@ def test_routes_drawn_on_the_motorway_start_where_the_car_can_take_the_bends():
     """On the A10 at 25 m/s the drawn route never starts on a ramp's loop; at walking
     pace any route will do."""
     from scenarios import ScenarioSpec
+    from scenarios.spec.toml_io import read_toml
     from scenarios.sumo_net.route_road import network_road, takes_its_start
-    from scenarios.toml_io import read_toml
 
     plain = read_toml(Path(__file__).parents[1] / "scenarios/catalog/real-scenarios.toml")
     plain["obstacles"] = []

@@ -15,10 +15,10 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
+from analysis.measures.trace_file import Trace, read_trace
 from analysis.report.render import frame_steps, scene_from_trace, script_json, write_html
-from analysis.run.trace_file import Trace, read_trace
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.manifest import package_versions
 from sdc.batch.progress import QuietReporter

@@ -19,16 +19,17 @@ import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
+from analysis.measures.commands import replay_command
 from analysis.report.look_at import LIST_FILE, SHOWN_PER_CLASS, ranked_runs
 from analysis.report.sweep_page import SECTIONS
 from analysis.report.sweep_report import COLLISION_TITLE, VERDICT_TITLE, write_report
 from analysis.report.sweep_words import NOT_RECORDED
 from analysis.report.sweep_world import world_lines, world_summary
-from analysis.run.commands import replay_command
 from analysis.stats.rates import wilson_interval
 from analysis.stats.verdicts import completed_runs, outcomes_by
-from scenarios import CATALOG_DIR, traffic_model
-from scenarios.sweep_spec import load_sweep
+from scenarios import CATALOG_DIR
+from scenarios.scene import traffic_model
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep

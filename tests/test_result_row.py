@@ -10,10 +10,10 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-import analysis.run.metrics
-from analysis.run.metrics import trace_metrics
+import analysis.measures.metrics
+from analysis.measures.metrics import trace_metrics
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import load_spec
+from scenarios.spec.toml_io import load_spec
 from sdc.batch.result_store import ResultStore
 from sdc.run import result_row
 from sdc.run.episode import run_episode
@@ -155,7 +155,7 @@ def test_a_metric_without_a_column_is_an_error_not_dropped():
 @pytest.mark.slow
 def test_an_episode_refuses_a_new_metric_that_has_no_column(monkeypatch):
     def with_a_new_metric(*args):
-        return {**analysis.run.metrics.trace_metrics(*args), "lap_time_s": 1.0}
+        return {**analysis.measures.metrics.trace_metrics(*args), "lap_time_s": 1.0}
 
     spec = load_spec(CATALOG_DIR / "seed-lesson.toml")
     assert tuple(run_episode(spec).row) == RUN_COLUMNS

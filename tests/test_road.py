@@ -7,12 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scenarios import RoadSpec, road_kernels
-from scenarios.road_geometry import RoadGeometry
+from scenarios import RoadSpec
+from scenarios.scene import road_kernels
+from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.sumo_net.build import EDGE_ID, build_network
 
 try:
-    from scenarios import _road_kernels as compiled
+    from scenarios.scene import _road_kernels as compiled
 except ImportError:  # built without a C compiler: only the numpy twins are there
     compiled = None
 

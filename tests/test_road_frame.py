@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import RoadSpec
-from scenarios.snapshot import NO_BOXES, Snapshot, passenger_classes
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import NO_BOXES, Snapshot, passenger_classes
+from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car.geometry_kernels import contacts_numpy
 from sdc.car.road_frame import RoadFrame
 
@@ -104,7 +104,7 @@ def test_lane_keeping_past_a_truck_on_a_curve_is_a_clean_pass(lesson_plain, radi
     """The real run of the issue: lane keeping past a truck in the next lane on an
     80 m curve, 0.8 to 1.3 m apart. The old straight-ahead extents read a TTC of
     0.001 s on the right-hand curve."""
-    from scenarios.scenario_spec import ScenarioSpec
+    from scenarios.spec.scenario_spec import ScenarioSpec
     from sdc.run.episode import run_episode
 
     lesson_plain["road"].update(kind="curve", curve_radius_m=radius_m, length_m=150.0, lanes=2)

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from scenarios import road_kernels
-from scenarios.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePath
+from scenarios.scene import road_kernels
+from scenarios.scene.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePath
 
 try:
-    from scenarios import _road_kernels as compiled
+    from scenarios.scene import _road_kernels as compiled
 except ImportError:  # built without a C compiler: only the numpy twins are there
     compiled = None
 

@@ -1,4 +1,4 @@
-"""One road source per kind (scenarios/road_source.py): every kind answers the same
+"""One road source per kind (scenarios/sumo_net/road_source.py): every kind answers the same
 questions, the warm-state identity is the same whoever asks, and no module outside
 the road's own asks a road its kind."""
 
@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.file_read import file_sha256, sha256_hex
-from scenarios.road_source import BuiltRoad, ConfigRoad, NetworkFileRoad, road_source
+from scenarios.common.file_read import file_sha256, sha256_hex
+from scenarios.spec.toml_io import load_spec
+from scenarios.sumo.warm_state import uses_warm_state, warm_key, warm_state_key
+from scenarios.sumo_net.road_source import BuiltRoad, ConfigRoad, NetworkFileRoad, road_source
 from scenarios.sumo_net.sumo_config import load_bundle
-from scenarios.toml_io import load_spec
-from scenarios.warm_state import uses_warm_state, warm_key, warm_state_key
 from sdc.batch.job_files import FileCatalog
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,10 +92,10 @@ def test_has_traffic_is_each_kinds_own_demand():
 
 #: where a road's kind may be named: the spec that defines the kinds, the one dispatch,
 #: and the built roads' own geometry (straight or curve)
-KIND_HOMES = {"scenarios/scenario_spec.py", "scenarios/road_source.py",
-              "scenarios/road_geometry.py", "scenarios/highway_world.py",
-              "scenarios/toml_io.py", "scenarios/sumo_net/route_road.py",
-              "scenarios/sumo_net/sumo_config.py", "analysis/run/safety.py"}
+KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/sumo_net/road_source.py",
+              "scenarios/scene/road_geometry.py", "scenarios/highway/highway_world.py",
+              "scenarios/spec/toml_io.py", "scenarios/sumo_net/route_road.py",
+              "scenarios/sumo_net/sumo_config.py", "analysis/measures/safety.py"}
 
 
 def test_no_module_outside_the_roads_own_asks_a_road_its_kind():

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.run import run_outcome
-from analysis.run.run_outcome import (
+from analysis.measures import run_outcome
+from analysis.measures.run_outcome import (
     COLLIDED,
     COMPLETED,
     STUCK,
@@ -20,7 +20,7 @@ from analysis.run.run_outcome import (
     time_lost_s,
 )
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
-from scenarios.sweep_spec import set_path
+from scenarios.spec.sweep_spec import set_path
 from sdc.run.episode import run_episode
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "cautious.py"

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from analysis.run.safety import road_edge_gaps_m, stop_gap_m, stop_possible
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.errors import SpecError
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
+from analysis.measures.safety import road_edge_gaps_m, stop_gap_m, stop_possible
+from scenarios.common.errors import SpecError
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
 
 
 def box(cx, cy, yaw=0.0, length=4.0, width=2.0):

@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
+from analysis.measures.commands import replay_command
 from analysis.rare.grid_probability import box_probability, grid_probability
-from analysis.run.commands import replay_command
 from scenarios import CATALOG_DIR
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.sweep_spec import expand, load_sweep, set_path
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.sweep_spec import expand, load_sweep, set_path
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"
 TRUTH = json.loads((CATALOG_DIR / "sweeps" / "seed-modes.truth.json").read_text())

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from scenarios import LidarSpec, RoadSpec
-from scenarios.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import RoadGeometry
 from sdc.car.sensors import LaneSensor, Lidar, beam_angles_rad
 
 NO_EDGES = np.zeros((0, 4))

@@ -24,10 +24,10 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from analysis.run.safety import lane_scale
-from scenarios.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.sumo_world import SumoWorld
+from analysis.measures.safety import lane_scale
+from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 from sdc.car.controllers import LaneKeepController
 from sdc.car.vehicle import Command

@@ -9,9 +9,9 @@ import libsumo
 import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec
-from scenarios.road_geometry import RouteStop
-from scenarios.sumo_world import EGO_ID
-from scenarios.toml_io import read_toml
+from scenarios.scene.road_geometry import RouteStop
+from scenarios.spec.toml_io import read_toml
+from scenarios.sumo.sumo_world import EGO_ID
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW
 from sdc.car.controller_plugins import make_controller
@@ -99,7 +99,7 @@ def test_avoid_stops_for_red_where_lane_keeping_runs_it():
 def test_sdc_run_says_how_many_red_lights_it_crossed(tmp_path):
     from click.testing import CliRunner
 
-    from scenarios.toml_io import dumps_spec
+    from scenarios.spec.toml_io import dumps_spec
     from sdc.cli import main
 
     spec_file = tmp_path / "grid.toml"

@@ -19,8 +19,9 @@ import pytest
 import sumo
 from click.testing import CliRunner
 
-from scenarios.errors import SpecError
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.common.errors import SpecError
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import dumps_plain, load_spec
 from scenarios.sumo_net.sumo_config import (
     STEP_FROM_CONFIG,
     STEP_FROM_SPEC,
@@ -32,7 +33,6 @@ from scenarios.sumo_net.sumo_config import (
     read_config,
     seconds,
 )
-from scenarios.toml_io import dumps_plain, load_spec
 from scenarios.world_backends import make_road
 from sdc.car.geometry import boxes_overlap
 from sdc.cli import main

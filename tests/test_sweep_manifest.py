@@ -8,7 +8,7 @@ import json
 
 import pytest
 
-from analysis.run.sweep_manifest import AdaptiveRecord, Session, SweepManifest
+from analysis.measures.sweep_manifest import AdaptiveRecord, Session, SweepManifest
 
 # a manifest as a search leaves it (keys in the order the runner writes them), with a
 # session that had warm states and job files, then another that did not get that far

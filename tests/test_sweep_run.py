@@ -16,10 +16,11 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from analysis.run.commands import program_words
-from analysis.run.sweep_manifest import SweepManifest
-from scenarios import CATALOG_DIR, traffic_model
-from scenarios.sweep_spec import expand, load_sweep
+from analysis.measures.commands import program_words
+from analysis.measures.sweep_manifest import SweepManifest
+from scenarios import CATALOG_DIR
+from scenarios.scene import traffic_model
+from scenarios.spec.sweep_spec import expand, load_sweep
 from sdc.batch.executors import LocalExecutor, RayExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.result_store import ResultStore
@@ -383,7 +384,7 @@ def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
 def test_a_ray_session_the_process_holds_is_used_and_left_running(tmp_path, ray_session):
     import ray
 
-    from scenarios.errors import SdcError
+    from scenarios.common.errors import SdcError
 
     run = expand(load_sweep(write(tmp_path, "one", TINY)))[0]
     with RayExecutor(2) as executor:

@@ -8,9 +8,9 @@ import pytest
 from click.testing import CliRunner
 
 from scenarios import CATALOG_DIR
-from scenarios.errors import SpecError
-from scenarios.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256, sample_values
-from scenarios.toml_io import dumps_plain
+from scenarios.common.errors import SpecError
+from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256, sample_values
+from scenarios.spec.toml_io import dumps_plain
 from sdc.cli import main
 
 BASE = str(CATALOG_DIR / "seed-lesson.toml")
@@ -281,7 +281,7 @@ def test_a_sweep_too_big_to_plan_is_refused_before_anything_is_planned(tmp_path,
     """10,000,000 samples x 2 controllers: exit 2 as the file is read, naming the field,
     the limit and what to do instead; nothing is planned (a plan of that size held
     the terminal silent for minutes, then ran out of memory)."""
-    import scenarios.sweep_spec as sweep_spec
+    import scenarios.spec.sweep_spec as sweep_spec
 
     def no_plan(*args, **kwargs):
         raise AssertionError("planned a sweep it should have refused")

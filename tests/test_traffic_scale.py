@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 import traci.constants as tc
 
-from scenarios import road_kernels
-from scenarios.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import in_start_zone, sensing_radius_m
+from scenarios.scene import road_kernels
+from scenarios.scene.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import in_start_zone, sensing_radius_m
+from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.world_backends import make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import Simulation, run_episode

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from scenarios.bodies import VEHICLE_MODELS
+from scenarios.spec.bodies import VEHICLE_MODELS
 from sdc.car.vehicle import GRAVITY_MPS2, Command, Vehicle, VehicleState
 
 LESSON = VEHICLE_MODELS["x5-lesson"]

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analysis.run.trace_file import read_trace
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.sumo_world import SumoWorld
+from analysis.measures.trace_file import read_trace
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation

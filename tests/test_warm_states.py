@@ -19,13 +19,13 @@ from click.testing import CliRunner
 from analysis.report.settling_report import TITLE as SETTLING_TITLE
 from analysis.report.sweep_report import write_report
 from scenarios import CATALOG_DIR
-from scenarios.errors import SdcError, SpecError
-from scenarios.file_read import file_sha256
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.sumo_world import SumoWorld
-from scenarios.sweep_spec import expand, load_sweep, warm_seeds
-from scenarios.toml_io import load_spec
-from scenarios.warm_state import WARM_FORMAT, WarmState, cached_path, warm_key
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.common.file_read import file_sha256
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.sweep_spec import expand, load_sweep, warm_seeds
+from scenarios.spec.toml_io import load_spec
+from scenarios.sumo.sumo_world import SumoWorld
+from scenarios.sumo.warm_state import WARM_FORMAT, WarmState, cached_path, warm_key
 from scenarios.world_backends import make_road
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
@@ -62,7 +62,7 @@ def fresh_cache(path: Path, monkeypatch) -> Path:
 def sha_in_fresh_process(spec: ScenarioSpec, tmp_path: Path) -> str:
     spec_file = tmp_path / "spec.json"
     spec_file.write_text(json.dumps(spec.to_plain()))
-    code = ("import json, sys; from scenarios.scenario_spec import ScenarioSpec; "
+    code = ("import json, sys; from scenarios.spec.scenario_spec import ScenarioSpec; "
             "from sdc.run.episode import run_episode; "
             "spec = ScenarioSpec.from_plain(json.load(open(sys.argv[1]))); "
             "print(run_episode(spec).row['trace_sha256'])")
@@ -343,7 +343,7 @@ def test_a_warm_state_is_the_same_whatever_ran_before_it_in_the_process(tmp_path
     """libsumo counts its route parser's random draws across simulations in one
     process and a saved state records that count: a warm state computed after another
     run held 670 draws where a fresh process holds 354, and runs from it drew other
-    numbers. Computed apart (scenarios/warm_up_process.py), it is the same."""
+    numbers. Computed apart (scenarios/sumo/warm_up_process.py), it is the same."""
     fresh_cache(tmp_path / "first", monkeypatch)
     alone = SumoWorld(highway(seed=2), make_road(highway(seed=2))).warm_state()
     fresh_cache(tmp_path / "after", monkeypatch)

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.toml_io import load_spec
+from scenarios.spec.toml_io import load_spec
 from scenarios.world_backends import warm_up_span_s
 from sdc.batch import warm_states, warm_up_clock
 from sdc.batch.local_executor import LocalExecutor

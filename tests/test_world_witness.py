@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from analysis.run.world_audit import overlap_steps, pairs_overlap
+from analysis.measures.world_audit import overlap_steps, pairs_overlap
 from scenarios import CATALOG_DIR
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.lane_bodies import BODY_PIECES, LanePath
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.scene.lane_bodies import BODY_PIECES, LanePath
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import read_toml
 from scenarios.sumo_net.build import input_path
-from scenarios.toml_io import read_toml
 from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import run_episode
@@ -72,7 +72,7 @@ def bare_sumo_boxes(spec: ScenarioSpec, times_s: list[float], ids: set[str]) -> 
     of ``times_s``."""
     import libsumo
 
-    from scenarios import traffic_model
+    from scenarios.scene import traffic_model
     libsumo.start(["sumo", "-c", str(input_path(spec.road.config_file)),
                    "--step-length", repr(spec.scenario.step_s), "--seed",
                    str(spec.scenario.seed), "--collision.action", "none",

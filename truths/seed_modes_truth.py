@@ -71,8 +71,8 @@ import numpy as np
 import pandas as pd
 from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # beside this script
 
+from analysis.measures.run_score import run_score
 from analysis.rare.grid_probability import Bracket, box_probability, grid_probability
-from analysis.run.run_score import run_score
 from scenarios import CATALOG_DIR
 
 SWEEPS = "scenarios/catalog/sweeps"

@@ -47,7 +47,7 @@ from truth_sweeps import normal_params, publish, read_sweep, sweep_record  # bes
 
 from analysis.rare.grid_probability import grid_probability, threshold_probability
 from scenarios import CATALOG_DIR
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-rare.toml"
 TRUTH_FILE = CATALOG_DIR / "sweeps" / "seed-rare.truth.json"

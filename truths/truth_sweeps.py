@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from scenarios.sweep_spec import load_sweep
+from scenarios.spec.sweep_spec import load_sweep
 
 
 def normal_params(path: Path, names: set[str]) -> dict[str, tuple[float, float]]:

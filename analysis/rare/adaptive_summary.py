@@ -14,14 +14,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from analysis.measures.commands import replay_command
+from analysis.measures.failure_event import FAILURE
+from analysis.measures.run_outcome import OUTCOMES, STUCK
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.rare.failure_modes import failure_modes, weighed_rows
 from analysis.rare.rare_events import Estimate, estimate_from_rows
-from analysis.run.commands import replay_command
-from analysis.run.failure_event import FAILURE
-from analysis.run.run_outcome import OUTCOMES, STUCK
-from analysis.run.sweep_manifest import SweepManifest
-from scenarios.file_read import read_json
-from scenarios.sweep_spec import Param, parse_param
+from scenarios.common.file_read import read_json
+from scenarios.spec.sweep_spec import Param, parse_param
 
 
 def sweep_params(manifest: SweepManifest) -> list[Param]:
@@ -97,7 +97,7 @@ def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> 
 
 
 def outcome_counts(results: pd.DataFrame) -> dict[str, int]:
-    """Runs per outcome (:data:`analysis.run.run_outcome.OUTCOMES`), and ``failed`` for the
+    """Runs per outcome (:data:`analysis.measures.run_outcome.OUTCOMES`), and ``failed`` for the
     runs without one (error, timeout)."""
     outcomes = results.get("outcome", pd.Series(index=results.index, dtype=object))
     counts = {o: int((outcomes[results.status == "ok"] == o).sum()) for o in OUTCOMES}
@@ -140,7 +140,7 @@ class RareSummary:
     state: str | None  # finished, interrupted, ...
     score: str
     batches: int
-    failures: int  # runs that failed (analysis.run.failure_event)
+    failures: int  # runs that failed (analysis.measures.failure_event)
     first_failure_run: int | None  # counted from 1
     first_failure_run_id: str | None
     outcomes: dict[str, int]  # completed, collided, stuck, unfinished, failed

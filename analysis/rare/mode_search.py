@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from analysis.measures.failure_event import FAILURE
 from analysis.rare.rare_events import (
     KernelMixture,
     Proposal,
@@ -44,7 +45,6 @@ from analysis.rare.rare_events import (
     standard_normal,
     wide_normal,
 )
-from analysis.run.failure_event import FAILURE
 
 #: a run this close to the origin has no direction (it lies in no cone)
 _TINY_NORM = 1e-12

@@ -2,7 +2,7 @@
 
 Each :class:`Problem` lives in standard-normal space ``z`` (the space of
 :mod:`analysis.rare.rare_events`) and fails where its vectorised score ``g(z) <= 0``
-(the failure event, :mod:`analysis.run.failure_event`).
+(the failure event, :mod:`analysis.measures.failure_event`).
 The bank holds the standard cases where a sampler that adapts to one failure
 region goes wrong: several regions of equal or unequal mass, regions on
 opposite sides, curved boundaries, and one region in ten dimensions.
@@ -28,10 +28,10 @@ import numpy as np
 import pandas as pd
 from scipy import special
 
-from analysis.run.failure_event import FAILURE
+from analysis.measures.failure_event import FAILURE
 from scenarios import CATALOG_DIR
-from scenarios.file_read import read_json
-from scenarios.sweep_spec import PARAM_PREFIX, Param
+from scenarios.common.file_read import read_json
+from scenarios.spec.sweep_spec import PARAM_PREFIX, Param
 
 ScoreFn = Callable[[np.ndarray], np.ndarray]
 RegionFn = Callable[[np.ndarray], np.ndarray]

@@ -3,7 +3,7 @@
 Runs live in standard-normal space ``z = Phi^-1(u)``, where the nominal density is
 ``N(0, I)``; :func:`unit_points` maps a batch back to the sweep's unit cube. A run's
 score is continuous and it fails when ``score <= 0`` (the failure event,
-:mod:`analysis.run.failure_event`). :class:`MultilevelIS` is
+:mod:`analysis.measures.failure_event`). :class:`MultilevelIS` is
 ask/tell (a caller evaluates each batch anywhere); :func:`estimate` is the loop for a
 batch score function; :func:`estimate_from_rows` recomputes an estimate from the
 weights stored in the rows.
@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 from scipy import special
 
-from analysis.run.failure_event import FAILURE
+from analysis.measures.failure_event import FAILURE
 
 Z_95 = 1.959963984540054  # two-sided 95 % normal quantile
 #: -ln(0.05): with no failure in n plain Monte Carlo runs, p < 3.0/n at 95 % (rule of three)

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from analysis.run.numbers import params_text
-from analysis.run.run_outcome import COLLIDED, STUCK, UNFINISHED, collided
+from analysis.measures.numbers import params_text
+from analysis.measures.run_outcome import COLLIDED, STUCK, UNFINISHED, collided
 from analysis.stats.verdicts import completed_runs
 
 #: the classes, in the order they are listed
@@ -128,8 +128,8 @@ def what_happened(row: Mapping[str, Any]) -> str:
 def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:
     """The decisive moment of a run whose trace the sweep kept, as a small PNG; None
     without a trace."""
+    from analysis.measures.trace_file import read_trace
     from analysis.report.render import decisive_step, scene_from_trace, thumbnail_png
-    from analysis.run.trace_file import read_trace
 
     path = Path(sweep_dir) / "traces" / f"{run_id}.parquet"
     if not path.exists():

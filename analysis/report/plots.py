@@ -13,8 +13,8 @@ import pandas as pd
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from analysis.measures.run_outcome import STUCK
 from analysis.rare.failure_modes import OTHER
-from analysis.run.run_outcome import STUCK
 from analysis.stats.rates import (
     HIT_ORDER,
     Method,

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from analysis.measures.commands import replay_command
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.rare.adaptive_summary import RareSummary, adaptive_summary, saved_summary
 from analysis.rare.failure_modes import mode_lines
 from analysis.report import rare_report
@@ -22,8 +24,6 @@ from analysis.report.page_parts import (
     table_html,
 )
 from analysis.report.report_files import MARKDOWN_FILE, Report, write_files
-from analysis.run.commands import replay_command
-from analysis.run.sweep_manifest import SweepManifest
 
 MAX_TERMINAL_MODES = 8  # failure modes printed by `sdc report`; all are in report.md
 #: what the stuck table of a search or estimate holds

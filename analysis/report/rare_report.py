@@ -14,13 +14,13 @@ import math
 
 import pandas as pd
 
+from analysis.measures.failure_event import FAILURE
+from analysis.measures.run_outcome import STUCK, failed_or_collided, outcomes_text
 from analysis.rare.adaptive_summary import RareSummary, convergence
 from analysis.rare.failure_modes import OTHER, region_words
 from analysis.rare.rare_events import unjudged
 from analysis.report import plots
-from analysis.run.failure_event import FAILURE
-from analysis.run.run_outcome import STUCK, failed_or_collided, outcomes_text
-from scenarios.sweep_spec import PARAM_PREFIX
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 
 MAX_LISTED = 50  # runs listed by a search's or estimate's report; all are in results.parquet
 LOOK_AT = ("Runs with no outcome (error, timeout) first, then collisions and stuck runs: "

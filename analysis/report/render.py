@@ -24,14 +24,14 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from analysis.run.metrics import central_range_m
-from analysis.run.run_outcome import rest_step
-from analysis.run.trace_file import Trace
-from scenarios.bodies import are_people
-from scenarios.boxes import box_corners
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec, beam_angles_rad
-from scenarios.snapshot import obstacle_boxes
+from analysis.measures.metrics import central_range_m
+from analysis.measures.run_outcome import rest_step
+from analysis.measures.trace_file import Trace
+from scenarios.scene.boxes import box_corners
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import obstacle_boxes
+from scenarios.spec.bodies import are_people
+from scenarios.spec.scenario_spec import ScenarioSpec, beam_angles_rad
 
 VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
 #: a person's marker, drawn over its box whatever the frame's scale: colour, area [pt^2]

@@ -11,12 +11,12 @@ from xml.etree import ElementTree
 
 import pandas as pd
 
+from analysis.measures.sweep_manifest import MANIFEST_FILE, SweepManifest
 from analysis.report.page_parts import row_outcome
-from analysis.run.sweep_manifest import MANIFEST_FILE, SweepManifest
 from analysis.stats.gate import Gate
-from scenarios.errors import SpecError
-from scenarios.file_read import read_json, read_parquet, require_keys
-from scenarios.plain_json import json_plain, json_scalar
+from scenarios.common.errors import SpecError
+from scenarios.common.file_read import read_json, read_parquet, require_keys
+from scenarios.common.plain_json import json_plain, json_scalar
 
 #: the result columns the report reads (a results file without one is another version's)
 RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",

@@ -2,7 +2,7 @@
 
 A sweep whose runs start from warm states keeps how the traffic settled in up to
 20 of them (``warm-states.json``: per warm state, the series
-``scenarios.warm_state.SETTLING_COLUMNS`` over its warm-up). The warm-up truncation
+``scenarios.sumo.warm_state.SETTLING_COLUMNS`` over its warm-up). The warm-up truncation
 rule of :mod:`analysis.stats.settling` is applied to their mean: where it finds the
 traffic not settled by the end of the warm-up (the warm-up too short for it to tell),
 the runs may have started in transient traffic, and the report says so as a
@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from analysis.report.plots import png_bytes
 from analysis.stats.settling import suggest_warm_up_s
-from scenarios.warm_state import SETTLING_FILE
+from scenarios.sumo.warm_state import SETTLING_FILE
 
 PANELS = (("vehicles", "vehicles"), ("mean_speed_mps", "mean speed [m/s]"),
           ("halting", "halting (< 0.1 m/s)"))

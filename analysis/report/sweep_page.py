@@ -13,6 +13,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from analysis.measures.commands import replay_command
+from analysis.measures.numbers import params_text
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.report import plots
 from analysis.report.look_at import (
     LIST_FILE,
@@ -59,12 +62,9 @@ from analysis.report.sweep_words import (
     warm_state_lines,
     warning_lines,
 )
-from analysis.run.commands import replay_command
-from analysis.run.numbers import params_text
-from analysis.run.sweep_manifest import SweepManifest
 from analysis.stats.rates import Method
 from analysis.stats.verdicts import outcomes_recorded, percent, shared_samples
-from scenarios.plain_json import json_scalar
+from scenarios.common.plain_json import json_scalar
 
 #: what the runs-to-look-at tables hold
 SHOWN_WORDS = (f"Of each controller's runs of a class the first {SHOWN_PER_CLASS} are "

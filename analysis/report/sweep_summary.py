@@ -8,9 +8,9 @@ import itertools
 
 import pandas as pd
 
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.report.report_files import ReportError
 from analysis.report.sweep_world import world_summary
-from analysis.run.sweep_manifest import SweepManifest
 from analysis.stats.gate import Gate, gate
 from analysis.stats.rates import (
     CollisionRate,
@@ -28,8 +28,8 @@ from analysis.stats.rates import (
     warm_state_summary,
 )
 from analysis.stats.verdicts import Verdicts, verdict_summary
-from scenarios.plain_json import json_scalar
-from scenarios.sweep_spec import PARAM_PREFIX
+from scenarios.common.plain_json import json_scalar
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 
 SPEED = f"{PARAM_PREFIX}ego.speed_mps"
 

@@ -5,11 +5,11 @@ what ``sdc report`` prints."""
 
 from __future__ import annotations
 
+from analysis.measures.safety import REACTION_TIME_S
 from analysis.report.page_parts import is_warning
 from analysis.report.settling_report import settling_lines
 from analysis.report.sweep_summary import SweepSummary
 from analysis.report.sweep_world import plural, world_lines
-from analysis.run.safety import REACTION_TIME_S
 from analysis.stats.gate import gate_bounds_line
 from analysis.stats.rates import HIT_ORDER, CollisionRate, Method, PairedTest, SafeEnvelope
 from analysis.stats.verdicts import NO_OUTCOME, completes_rarely, percent, verdict_sentence

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.run.commands import replay_command
-from analysis.run.run_outcome import collided
-from analysis.run.world_audit import ROLE_TEXT
-from scenarios.bodies import PEDESTRIAN
+from analysis.measures.commands import replay_command
+from analysis.measures.run_outcome import collided
+from analysis.measures.world_audit import ROLE_TEXT
+from scenarios.spec.bodies import PEDESTRIAN
 
 
 def world_summary(results: pd.DataFrame) -> dict:

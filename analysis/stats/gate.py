@@ -16,10 +16,10 @@ import dataclasses
 
 import pandas as pd
 
-from analysis.run.run_outcome import STATUSES
+from analysis.measures.run_outcome import STATUSES
 from analysis.stats.rates import Method, flag_interval, upper_bound_counting_failures
 from analysis.stats.verdicts import completed_runs, percent
-from scenarios.bodies import PEDESTRIAN
+from scenarios.spec.bodies import PEDESTRIAN
 
 
 @dataclasses.dataclass(frozen=True)

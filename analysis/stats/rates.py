@@ -23,9 +23,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from analysis.run.numbers import number_text
-from analysis.run.run_outcome import STATUSES, failed_or_collided
-from scenarios.bodies import PEDESTRIAN
+from analysis.measures.numbers import number_text
+from analysis.measures.run_outcome import STATUSES, failed_or_collided
+from scenarios.spec.bodies import PEDESTRIAN
 
 Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
@@ -262,7 +262,7 @@ def hits_by_kind(collision_with: pd.Series) -> dict[str, int]:
 
 def counted_failures(rows: pd.DataFrame) -> pd.Series:
     """Per run of the rows with a known status: did it fail or collide
-    (:func:`analysis.run.run_outcome.failed_or_collided`)?"""
+    (:func:`analysis.measures.run_outcome.failed_or_collided`)?"""
     return failed_or_collided(rows[rows.status.isin(STATUSES)])
 
 

@@ -2,7 +2,7 @@
 
 The headline rate is *completed without collision* over **every** run of a
 controller: an error or a timeout is a run that did not complete, never a safe
-one. Each outcome's rate (:mod:`analysis.run.run_outcome`) has a Wilson 95% interval
+one. Each outcome's rate (:mod:`analysis.measures.run_outcome`) has a Wilson 95% interval
 over the same runs, with the runs without an outcome (error, timeout) beside
 them, so the rates add up to one. Runs that started from the same warm state
 count as a cluster (:func:`analysis.stats.rates.clustered_counts`), which widens the
@@ -17,7 +17,7 @@ import itertools
 
 import pandas as pd
 
-from analysis.run.run_outcome import COLLIDED, COMPLETED, OUTCOMES
+from analysis.measures.run_outcome import COLLIDED, COMPLETED, OUTCOMES
 from analysis.stats.rates import (
     Method,
     PairedTest,

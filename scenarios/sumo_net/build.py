@@ -1,7 +1,7 @@
 """SUMO road networks built with ``netconvert`` and cached by content hash.
 
 The road is one edge ``road`` from node ``start`` to node ``end`` whose shape is
-the centre line of :mod:`scenarios.road_geometry`; ``spreadType="center"`` puts the lanes
+the centre line of :mod:`scenarios.scene.road_geometry`; ``spreadType="center"`` puts the lanes
 on both sides of it, so SUMO's lane ``road_i`` is our lane ``i``.
 """
 
@@ -15,10 +15,10 @@ import tempfile
 from importlib import metadata
 from pathlib import Path
 
-from scenarios.cache_dir import network_cache_dir
-from scenarios.errors import SdcError
-from scenarios.road_geometry import EDGE_ID, RoadGeometry
-from scenarios.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
+from scenarios.common.cache_dir import network_cache_dir
+from scenarios.common.errors import SdcError
+from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
+from scenarios.spec.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
 
 
 def sumo_binary(name: str) -> str:
@@ -96,7 +96,7 @@ def network_file_name(road: RoadSpec) -> str:
 
 def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
     """Path of the ``.net.xml`` for ``road``, built on first use and cached (in
-    ``cache_dir``, by default :func:`~scenarios.cache_dir.network_cache_dir`,
+    ``cache_dir``, by default :func:`~scenarios.common.cache_dir.network_cache_dir`,
     as :func:`network_file_name`).
 
     Concurrent builders of the same network are safe: each writes a temporary

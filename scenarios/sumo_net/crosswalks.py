@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from scenarios.road_geometry import RoadGeometry, RouteCrosswalk
+from scenarios.scene.road_geometry import RoadGeometry, RouteCrosswalk
 from scenarios.sumo_net.grade_separation import intersections
 from scenarios.sumo_net.net_xml import NetFile
 

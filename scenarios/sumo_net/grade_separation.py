@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.road_geometry import NO_CROSSINGS, Crossings
+from scenarios.scene.road_geometry import NO_CROSSINGS, Crossings
 from scenarios.sumo_net.drivable_area import in_polygon, polyline_segments, segment_distance_m
 from scenarios.sumo_net.net_xml import NetFile
 

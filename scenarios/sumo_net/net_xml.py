@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.errors import FileError
-from scenarios.file_read import read_bytes, unzipped
+from scenarios.common.errors import FileError
+from scenarios.common.file_read import read_bytes, unzipped
 
 DEFAULT_LANE_WIDTH_M = 3.2  # SUMO's default when a lane names none
 STRAIGHT, U_TURN = "s", "t"  # SUMO's connection directions (dir) straight on and turnaround

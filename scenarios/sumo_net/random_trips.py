@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.errors import SpecError
+from scenarios.common.errors import SpecError
 from scenarios.sumo_net.net_xml import NetFile
 
 

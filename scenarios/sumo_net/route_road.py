@@ -10,7 +10,7 @@ Never a U-turn, a lane closed to passenger cars (rail, footway, bike or bus
 lanes), or a turn tighter than the car's turning circle (its model's
 ``min_turn_radius_m``, measured on the turn's lanes over
 :data:`TURN_WINDOW_M` stretches). Along it, the ego's lane is the road of
-:class:`~scenarios.road_geometry.RoadGeometry` (one lane: ``s`` along the route, ``d``
+:class:`~scenarios.scene.road_geometry.RoadGeometry` (one lane: ``s`` along the route, ``d``
 from its centre), so lane sensing, positions and route end work as on the
 built-in roads; road edges come from the whole network
 (:class:`~scenarios.sumo_net.drivable_area.DrivableArea`).
@@ -26,18 +26,18 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.atomic_write import write_atomic
-from scenarios.bodies import GRAVITY_MPS2, VEHICLE_MODELS
-from scenarios.cache_dir import network_cache_dir
-from scenarios.errors import SdcError, SpecError
-from scenarios.road_geometry import (
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.cache_dir import network_cache_dir
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.scene.road_geometry import (
     Crossings,
     RoadGeometry,
     RouteCrosswalk,
     RouteStop,
     merged_stretches,
 )
-from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.spec.bodies import GRAVITY_MPS2, VEHICLE_MODELS
+from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo_net.build import input_path
 from scenarios.sumo_net.crosswalks import route_crosswalks
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea

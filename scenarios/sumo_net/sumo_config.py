@@ -31,8 +31,8 @@ import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
 
-from scenarios.errors import FileError, SpecError
-from scenarios.file_read import read_bytes, unzipped
+from scenarios.common.errors import FileError, SpecError
+from scenarios.common.file_read import read_bytes, unzipped
 from scenarios.sumo_net.build import input_path, process_problem
 
 FIELD = "road.config_file"

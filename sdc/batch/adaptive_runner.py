@@ -2,7 +2,7 @@
 
 ``sdc search`` and ``sdc estimate`` read a sweep's ``[sweep.params]`` as the
 nominal distribution and let a sampler draw each batch from what the previous
-ones scored (:mod:`analysis.run.run_score`): the mode-finding search of
+ones scored (:mod:`analysis.measures.run_score`): the mode-finding search of
 :mod:`analysis.rare.mode_search`, the multilevel importance sampler of
 :mod:`analysis.rare.rare_events`.
 The batches run on the sweep executors.
@@ -33,19 +33,19 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
+from analysis.measures.failure_event import FailureEvent
+from analysis.measures.run_score import ScoreKind
+from analysis.measures.sweep_manifest import AdaptiveRecord, SweepManifest
 from analysis.rare.adaptive_summary import described_modes, stuck_modes, summary_path
 from analysis.rare.failure_modes import OTHER
 from analysis.rare.mode_search import ModeSearch
 from analysis.rare.rare_events import EstimationLoop, unit_points
-from analysis.run.failure_event import FailureEvent
-from analysis.run.run_score import ScoreKind
-from analysis.run.sweep_manifest import AdaptiveRecord, SweepManifest
-from scenarios.atomic_write import write_atomic
-from scenarios.controller_ref import controller_label
-from scenarios.errors import SdcError, SpecError
-from scenarios.plain_json import json_plain
-from scenarios.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
-from scenarios.sweep_spec import PlannedRun, SweepSpec, plan_samples
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.common.plain_json import json_plain
+from scenarios.common.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
+from scenarios.spec.controller_ref import controller_label
+from scenarios.spec.sweep_spec import PlannedRun, SweepSpec, plan_samples
 from sdc.batch.executors import Executor
 from sdc.batch.result_store import ResultStore
 from sdc.batch.run_task import RunTask, TraceMode
@@ -91,7 +91,7 @@ class AdaptiveOutcome:
     out_dir: Path
     runs: int  # runs drawn (rows)
     counts: dict[str, int]
-    outcomes: dict[str, int]  # ok rows by outcome (analysis.run.run_outcome.OUTCOMES)
+    outcomes: dict[str, int]  # ok rows by outcome (analysis.measures.run_outcome.OUTCOMES)
     interrupted: bool
     wall_time_s: float
     summary: dict  # what estimate.json or search.json holds

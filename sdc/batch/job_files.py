@@ -19,17 +19,17 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from scenarios.controller_ref import controller_kind
-from scenarios.errors import SdcError
-from scenarios.file_read import read_bytes, sha256_hex
-from scenarios.road_source import road_source
-from scenarios.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.common.errors import SdcError
+from scenarios.common.file_read import read_bytes, sha256_hex
+from scenarios.spec.controller_ref import controller_kind
+from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.sumo.warm_state import cached_path, uses_warm_state, warm_key
+from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import edges_cache_path
-from scenarios.warm_state import cached_path, uses_warm_state, warm_key
 
 #: JobFile.field of the files a run finds in its cache directory, by name
 CACHED_FIELDS = ("network", "road edges")
-#: JobFile.field of the warm state a run starts from (scenarios/warm_state.py)
+#: JobFile.field of the warm state a run starts from (scenarios/sumo/warm_state.py)
 WARM_STATE_FIELD = "warm state"
 
 
@@ -56,7 +56,7 @@ class FileCatalog:
     """The driver's side: the files of runs, each read and hashed once for the
     catalog's lifetime (an executor's ``with`` block), and their bytes by sha256.
 
-    A file that cannot be read is an :class:`~scenarios.errors.SdcError` naming it.
+    A file that cannot be read is an :class:`~scenarios.common.errors.SdcError` naming it.
     """
 
     def __init__(self, cache_dir: Path | None = None):

@@ -23,7 +23,7 @@ import time
 from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
 
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
 from sdc.batch.job_files import FileCatalog, with_files
 from sdc.batch.run_task import RunTask, execute, task_error_row
 from sdc.batch.timeouts import next_deadline_s, timeout_row

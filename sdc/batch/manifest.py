@@ -10,10 +10,10 @@ import subprocess
 from importlib import metadata
 from pathlib import Path
 
-from scenarios.atomic_write import write_atomic
-from scenarios.controller_ref import controller_label
-from scenarios.errors import SdcError
-from scenarios.file_read import read_json, require_keys
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.errors import SdcError
+from scenarios.common.file_read import read_json, require_keys
+from scenarios.spec.controller_ref import controller_label
 from sdc.car.controller_plugins import controller_source
 
 MANIFEST = "manifest.json"
@@ -98,7 +98,7 @@ _MANIFEST_KEYS = {"sweep.sweep.name": str, "plan_sha256": str, "versions": dict,
 
 def read_manifest(out_dir: Path) -> dict | None:
     """``out_dir``'s manifest, None when it has none; one that cannot be read or was
-    written by another sdc version is a :class:`~scenarios.errors.FileError`."""
+    written by another sdc version is a :class:`~scenarios.common.errors.FileError`."""
     path = Path(out_dir) / MANIFEST
     if not path.exists():
         return None

@@ -16,7 +16,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from analysis.run.run_outcome import outcomes_text
+from analysis.measures.run_outcome import outcomes_text
 
 #: plans that take under a few seconds to build show no bar [runs]
 PLANNING_SHOWN_RUNS = 5000

@@ -33,7 +33,7 @@ import os
 import time
 from collections.abc import Iterable, Iterator
 
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
 from sdc.batch.batch_size import BatchSizer
 from sdc.batch.job_files import FileCatalog, with_files
 from sdc.batch.local_executor import WARM_MODULES

@@ -17,10 +17,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from analysis.run.trace_file import FLOAT_COLUMNS, Trace
-from scenarios.errors import FileError, SdcError, SpecError
-from scenarios.file_read import read_parquet
-from scenarios.scenario_spec import ScenarioSpec
+from analysis.measures.trace_file import FLOAT_COLUMNS, Trace
+from scenarios.common.errors import FileError, SdcError, SpecError
+from scenarios.common.file_read import read_parquet
+from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.manifest import controller_changes, package_versions, read_manifest
 
 _PLAN_COLUMNS = ("run_id", "spec_json", "error")

@@ -15,9 +15,9 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from scenarios.atomic_write import write_atomic
-from scenarios.errors import FileError
-from scenarios.file_read import read_parquet
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.errors import FileError
+from scenarios.common.file_read import read_parquet
 from sdc.run.result_row import check_keys
 
 

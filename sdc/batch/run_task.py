@@ -11,9 +11,9 @@ import traceback
 from pathlib import Path
 from typing import Literal
 
-from analysis.run.run_outcome import COMPLETED
-from scenarios.atomic_write import write_atomic
-from scenarios.scenario_spec import ScenarioSpec
+from analysis.measures.run_outcome import COMPLETED
+from scenarios.common.atomic_write import write_atomic
+from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.job_files import JobFile
 from sdc.batch.warm_up_clock import ClockWriter
 from sdc.run.result_row import SweepColumns, error_row, sweep_row, timeout_row

@@ -21,14 +21,14 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from analysis.run.run_outcome import COLLIDED, OUTCOMES, STATUSES
-from analysis.run.sweep_manifest import Session, SweepManifest
-from scenarios import traffic_model
-from scenarios.atomic_write import write_atomic
-from scenarios.errors import SdcError
+from analysis.measures.run_outcome import COLLIDED, OUTCOMES, STATUSES
+from analysis.measures.sweep_manifest import Session, SweepManifest
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.errors import SdcError
+from scenarios.scene import traffic_model
+from scenarios.spec.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.sumo.warm_state import SETTLING_FILE
 from scenarios.sumo_net.sumo_config import config_manifest
-from scenarios.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
-from scenarios.warm_state import SETTLING_FILE
 from scenarios.world_backends import prepare_network
 from sdc.batch.executors import Executor
 from sdc.batch.job_files import FileCatalog
@@ -65,7 +65,7 @@ class SweepOutcome:
     out_dir: Path
     runs: int  # in the plan
     counts: dict[str, int]  # rows by status; "missing" for runs without a row
-    outcomes: dict[str, int]  # ok rows by outcome (analysis.run.run_outcome.OUTCOMES)
+    outcomes: dict[str, int]  # ok rows by outcome (analysis.measures.run_outcome.OUTCOMES)
     interrupted: bool
     wall_time_s: float
 
@@ -199,7 +199,7 @@ def record_warm_states(out_dir: Path, manifest: SweepManifest, warm: dict,
                        keys: dict[str, str]) -> SweepManifest:
     """Record how many distinct warm states the session's runs start from (and
     which failed to compute; the manifest keeps the largest count of a session), and
-    how their traffic settled (:data:`~scenarios.warm_state.SETTLING_FILE`). Returns
+    how their traffic settled (:data:`~scenarios.sumo.warm_state.SETTLING_FILE`). Returns
     the manifest (written with the job files, :func:`record_job_files`)."""
     manifest = manifest.with_session(warm_states=warm)
     manifest = manifest.updated(warm_states=max(manifest.warm_states or 0, warm["distinct"]))

@@ -1,6 +1,6 @@
 """The warm states of a batch of runs, each computed once before the runs.
 
-Runs with a traffic warm-up start from a warm state (``scenarios/warm_state.py``).
+Runs with a traffic warm-up start from a warm state (``scenarios/sumo/warm_state.py``).
 Before a batch's runs, every distinct state they need that the driver's cache
 lacks is computed by one ``warm_up`` task on the executor (a worker of any node),
 whose file comes back like a trace and lands in the driver's cache; from there it
@@ -17,9 +17,9 @@ import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-from scenarios.atomic_write import write_atomic
-from scenarios.errors import SdcError
-from scenarios.warm_state import (
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.errors import SdcError
+from scenarios.sumo.warm_state import (
     WarmState,
     cached_path,
     warm_state_dir,

@@ -17,10 +17,10 @@ import dataclasses
 from collections.abc import Callable
 from pathlib import Path
 
-from scenarios.atomic_write import write_atomic
-from scenarios.cache_dir import sdc_cache_dir
-from scenarios.errors import SdcError
-from scenarios.file_read import sha256_hex
+from scenarios.common.atomic_write import write_atomic
+from scenarios.common.cache_dir import sdc_cache_dir
+from scenarios.common.errors import SdcError
+from scenarios.common.file_read import sha256_hex
 from sdc.batch.job_files import WARM_STATE_FIELD, JobFile
 from sdc.batch.run_task import RunTask
 

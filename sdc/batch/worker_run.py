@@ -13,7 +13,7 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from scenarios.atomic_write import write_atomic
+from scenarios.common.atomic_write import write_atomic
 from sdc.batch.run_task import RunTask, task_error_row
 from sdc.batch.worker_files import Fetch, FileLost, WorkerFiles
 

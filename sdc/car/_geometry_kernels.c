@@ -7,11 +7,11 @@
  * two to the same bits.
  *
  * Arrays arrive as C-contiguous float64 buffers (the Python wrappers in
- * sdc/car/geometry_kernels.py make sure of that; scenarios/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
+ * sdc/car/geometry_kernels.py make sure of that; scenarios/scene/_buffers.h takes them): boxes are rows [cx, cy, yaw, length, width],
  * segments rows [x0, y0, x1, y1], all in metres and radians.
  */
-#include "../../scenarios/_buffers.h"
-#include "../../scenarios/_polyline.h"
+#include "../../scenarios/scene/_buffers.h"
+#include "../../scenarios/scene/_polyline.h"
 #include <math.h>
 
 /* maximum/minimum for non-NaN input, the first argument on ties (0.0 against -0.0),
@@ -266,7 +266,7 @@ static double touch(const double *a, const double *obstacles, Py_ssize_t n_o,
 }
 
 /* one body in the road frame of a lane lane_scale times as long as the polyline
- * (place_numpy of scenarios/road_kernels.py): [x along the lane, d, yaw relative
+ * (place_numpy of scenarios/scene/road_kernels.py): [x along the lane, d, yaw relative
  * to the road, length, width] and [velocity along, velocity across] */
 static void road_frame_place(const Polyline *line, const double *headings, double curvature,
                              double lane_scale, const double *b, double speed, double *out,

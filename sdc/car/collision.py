@@ -11,10 +11,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.bodies import PEDESTRIAN, are_people
-from scenarios.boxes import box_corners
-from scenarios.road_geometry import RoadGeometry
-from scenarios.snapshot import Snapshot
+from scenarios.scene.boxes import box_corners
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import Snapshot
+from scenarios.spec.bodies import PEDESTRIAN, are_people
 from sdc.car.geometry import boxes_overlap, one_box_corners
 from sdc.car.geometry_kernels import Contacts
 

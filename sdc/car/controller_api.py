@@ -21,7 +21,7 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
-from scenarios.bodies import VehicleModel
+from scenarios.spec.bodies import VehicleModel
 from sdc.car.sensors import LaneReading
 from sdc.car.vehicle import Command
 

@@ -1,10 +1,10 @@
 """Finding a controller's class by its name, in any of the four forms of
-``scenarios.controller_ref``, and making one for a run.
+``scenarios.spec.controller_ref``, and making one for a run.
 
 A file controller is loaded from its bytes as a module of its own (named after
 the file's hash, so two versions of a file never share a module); a module or
 entry-point controller is imported the usual way. Every failure to find or
-build one is a :class:`~scenarios.errors.SpecError` naming the field.
+build one is a :class:`~scenarios.common.errors.SpecError` naming the field.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from scenarios.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP, controller_kind
-from scenarios.errors import SpecError
-from scenarios.scenario_spec import ControllerSpec
+from scenarios.common.errors import SpecError
+from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP, controller_kind
+from scenarios.spec.scenario_spec import ControllerSpec
 from sdc.car.controller_api import Controller
 
 

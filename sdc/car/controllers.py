@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.scenario_spec import LaneKeepParams, SeedParams
-from scenarios.spec_fields import build
+from scenarios.spec.scenario_spec import LaneKeepParams, SeedParams
+from scenarios.spec.spec_fields import build
 from sdc.car.controller_api import Command, Observation
 from sdc.car.sensors import LaneReading
 

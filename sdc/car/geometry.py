@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from scenarios.boxes import as_boxes, box_corners, one_box_corners
+from scenarios.scene.boxes import as_boxes, box_corners, one_box_corners
 
 __all__ = ["box_corners", "one_box_corners"]  # the world's boxes, re-exported beside the kernels
 

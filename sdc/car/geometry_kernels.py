@@ -1,13 +1,13 @@
 """The car's per-step geometry, called like numpy: compiled (``sdc/car/_geometry_kernels.c``)
 where it was built, else its numpy twins below, chosen once at import
-(:mod:`scenarios.compiled_kernels`; ``SDC_KERNELS=numpy`` forces the twins).
+(:mod:`scenarios.scene.compiled_kernels`; ``SDC_KERNELS=numpy`` forces the twins).
 
 The twins take the compiled functions' arguments and compose the numpy functions
 of :mod:`sdc.car.geometry`: the lidar scan is :func:`~sdc.car.geometry.ray_box_ranges`
 and :func:`~sdc.car.geometry.ray_segment_ranges` and their minimum; a step's
 contacts and conflicts along the road (:func:`step`) are the contacts
 (:func:`~sdc.car.geometry.boxes_overlap`, :func:`~sdc.car.geometry.box_gap_m`), the
-bodies placed in the road frame (``place_numpy`` of :mod:`scenarios.road_kernels`)
+bodies placed in the road frame (``place_numpy`` of :mod:`scenarios.scene.road_kernels`)
 and their conflicts (:func:`~sdc.car.geometry.first_contact_s`,
 :func:`~sdc.car.geometry.leader_measures`). Both paths agree bit for bit
 (``tests/test_kernels.py``); the compiled one avoids numpy's per-call cost, which
@@ -20,10 +20,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.compiled_kernels import COMPILED, NUMPY, compiled_extension
-from scenarios.road_geometry import RoadGeometry
-from scenarios.road_kernels import place_numpy
-from scenarios.snapshot import NO_BOXES
+from scenarios.scene.compiled_kernels import COMPILED, NUMPY, compiled_extension
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_kernels import place_numpy
+from scenarios.scene.snapshot import NO_BOXES
 from sdc.car.geometry import (
     box_gap_m,
     boxes_overlap,
@@ -75,7 +75,7 @@ def step_numpy(box: np.ndarray, speed_mps: float, obstacle_boxes: np.ndarray,
                ) -> tuple[int, int, float, float, float, float]:
     """The fields of :class:`Contacts` and :class:`Conflicts` of a step (:func:`step`),
     one numpy question at a time: the contacts, the bodies placed in the road frame
-    (``place_numpy`` of :mod:`scenarios.road_kernels`), their conflicts, 0 on contact
+    (``place_numpy`` of :mod:`scenarios.scene.road_kernels`), their conflicts, 0 on contact
     and the world frame's first contact where the unrolled boxes touch but the
     world's do not. ``polyline_and_frame``: the road's polyline (starts, directions,
     lengths, start_s, headings), its curvature and the ego lane's scale."""

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from scenarios.polyline_frame import PolylineFrame
+from scenarios.scene.polyline_frame import PolylineFrame
 
 #: the arc a reading without a path stands for: this many points ...
 ARC_POINTS = 41
@@ -55,7 +55,7 @@ def arc_path(lane, look_ahead_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 class LanePath:
     """The lane around the car, from a lane reading (see the module): a frame of its
-    centre line (:class:`scenarios.polyline_frame.PolylineFrame`), in the car's frame."""
+    centre line (:class:`scenarios.scene.polyline_frame.PolylineFrame`), in the car's frame."""
 
     def __init__(self, xy: np.ndarray, s_m: np.ndarray):
         self.frame = PolylineFrame(xy, s_m, min_segment_m=1e-9)

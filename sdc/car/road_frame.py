@@ -2,7 +2,7 @@
 
 SUMO's Surrogate Safety Measures device measures gaps along the lanes, so a car
 ahead in the ego's lane on a curve is ahead, not off to one side. This does the
-same for oriented boxes (``place_numpy`` of :mod:`scenarios.road_kernels`): each
+same for oriented boxes (``place_numpy`` of :mod:`scenarios.scene.road_kernels`): each
 body is placed in the road frame, x its position along the ego's lane,
 y its offset ``d`` from the centre line, its yaw relative to the road's heading
 there, and its velocity split along and across the road. In that frame a curve
@@ -28,8 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.road_geometry import RoadGeometry
-from scenarios.snapshot import Snapshot
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import Snapshot
 from sdc.car.geometry_kernels import Conflicts, Contacts, step
 
 

@@ -10,9 +10,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import LidarSpec, beam_angles_rad
-from scenarios.snapshot import NO_BOXES
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import NO_BOXES
+from scenarios.spec.scenario_spec import LidarSpec, beam_angles_rad
 from sdc.car.geometry_kernels import lidar_ranges_m
 
 

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from scenarios.bodies import GRAVITY_MPS2, VehicleModel
+from scenarios.spec.bodies import GRAVITY_MPS2, VehicleModel
 
 __all__ = ["GRAVITY_MPS2", "Command", "Vehicle", "VehicleState"]
 

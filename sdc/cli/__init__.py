@@ -10,8 +10,8 @@ import sys
 
 import click
 
-from scenarios.compiled_kernels import kernel_choice
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
+from scenarios.scene.compiled_kernels import kernel_choice
 from sdc.cli import demo, estimate, replay, report, run, search, settle, sweep
 from sdc.cli.common import EXIT_INTERRUPTED, bad_input
 

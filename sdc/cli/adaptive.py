@@ -6,9 +6,9 @@ from pathlib import Path
 
 import click
 
-from analysis.run.commands import sdc_command
-from scenarios.controller_ref import resolve_file
-from scenarios.errors import SdcError, SpecError
+from analysis.measures.commands import sdc_command
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.spec.controller_ref import resolve_file
 from sdc.cli.common import (
     bad_input,
     check_controllers,
@@ -24,7 +24,7 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
                      batch_size: int, target_rhw: float | None = None,
                      stop_after: int | None = None):
     """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.spec.sweep_spec import load_sweep
     from scenarios.world_backends import check_inputs
     from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 
@@ -53,8 +53,8 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
 
 def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
     """The counts and where the summary is, then the exit code of a batch of runs."""
+    from analysis.measures.run_outcome import outcomes_text
     from analysis.rare.adaptive_summary import summary_path
-    from analysis.run.run_outcome import outcomes_text
 
     counts = outcome.counts
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "

@@ -14,8 +14,8 @@ from typing import NoReturn
 
 import click
 
-from scenarios.errors import SdcError, SpecError
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.spec.scenario_spec import ScenarioSpec
 
 #: a warm-up's progress off a terminal (a log): a line at most this often [s]
 PROGRESS_EVERY_S = 10.0

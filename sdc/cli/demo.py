@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from scenarios import CATALOG_DIR
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
 from sdc.cli.common import bad_input, exit_after_runs, exit_interrupted
 from sdc.cli.report import write_sweep_report
 
@@ -25,7 +25,7 @@ from sdc.cli.report import write_sweep_report
               show_default="all cores", help="Worker processes.")
 def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     """Sweep the catalog's seed-envelope on all cores and write its collision report."""
-    from scenarios.sweep_spec import load_sweep
+    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import RichReporter
     from sdc.batch.sweep_runner import run_sweep
@@ -55,8 +55,8 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
-    from analysis.run.sweep_manifest import SweepManifest
-    from scenarios.sweep_spec import expand, plan_sha256
+    from analysis.measures.sweep_manifest import SweepManifest
+    from scenarios.spec.sweep_spec import expand, plan_sha256
     from sdc.batch.manifest import read_manifest
 
     plain = read_manifest(out_dir) if out_dir.is_dir() else None

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
 from sdc.cli.common import (
     EXIT_RUN_ERROR,
     a_finite_number,
@@ -76,7 +76,7 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
     when DIR kept the run's trace). With TRACE.parquet, the recorded run is drawn
     without SUMO (default --out: TRACE.html beside it).
     """
-    from analysis.run.trace_file import read_trace
+    from analysis.measures.trace_file import read_trace
 
     if out is not None and out.suffix not in (".gif", ".mp4", ".html", ".png"):
         bad_input(f"--out: {out} must end in .gif, .mp4, .html or .png")
@@ -115,7 +115,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
                 at_s: float | None = None) -> bool | None:
     """Re-simulate, compare, report and draw; True when the replay is not identical
     (None: a run that failed in the sweep, not shown as far as it went)."""
-    from analysis.run.trace_file import read_trace
+    from analysis.measures.trace_file import read_trace
     from sdc.batch.replay_check import load_recorded_run, replay_verdict, version_warnings
     from sdc.run.episode import run_episode
 
@@ -146,8 +146,8 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
     """A run that raised or timed out in its sweep: what it was and how it ended
     (one line), the replay's own end, and the run drawn as far as it went. True:
     the replay ended otherwise; None: it failed alike and nothing was drawn."""
-    from analysis.run.numbers import params_text
-    from scenarios.sweep_spec import PARAM_PREFIX
+    from analysis.measures.numbers import params_text
+    from scenarios.spec.sweep_spec import PARAM_PREFIX
     from sdc.run.episode import Stopped, run_as_far_as_it_goes
 
     row = recorded.row

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from scenarios.errors import SdcError
+from scenarios.common.errors import SdcError
 from sdc.cli.common import EXIT_RUN_ERROR, a_number, bad_input
 
 

@@ -8,12 +8,12 @@ from pathlib import Path
 
 import click
 
-from analysis.run.world_audit import ROLE_TEXT
-from scenarios.controller_ref import resolve_file
-from scenarios.errors import SdcError, SpecError
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.seeding import SEED_LIMIT
-from scenarios.toml_io import load_spec
+from analysis.measures.world_audit import ROLE_TEXT
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.common.seeding import SEED_LIMIT
+from scenarios.spec.controller_ref import resolve_file
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import load_spec
 from sdc.cli.common import EXIT_RUN_ERROR, bad_input, exit_interrupted, warm_up_first
 
 

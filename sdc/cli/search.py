@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from analysis.run.commands import sdc_command
+from analysis.measures.commands import sdc_command
 from sdc.cli.adaptive import adaptive_exit, adaptive_outcome
 from sdc.cli.common import adaptive_options
 

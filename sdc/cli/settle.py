@@ -8,9 +8,9 @@ from pathlib import Path
 
 import click
 
-from scenarios.errors import SdcError, SpecError
-from scenarios.seeding import SEED_LIMIT
-from scenarios.toml_io import load_spec
+from scenarios.common.errors import SdcError, SpecError
+from scenarios.common.seeding import SEED_LIMIT
+from scenarios.spec.toml_io import load_spec
 from sdc.cli.common import a_number, bad_input, exit_interrupted, progress_bar
 
 
@@ -46,7 +46,7 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
 
     from analysis.report.settling_report import settling_figure
     from analysis.stats.settling import suggest_warm_up_s
-    from scenarios.road_source import road_source
+    from scenarios.sumo_net.road_source import road_source
     from scenarios.world_backends import check_inputs, settling_series
 
     if out is not None and out.suffix != ".png":

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import click
 
-from analysis.run.commands import program_words
-from scenarios.errors import SdcError
-from scenarios.warm_state import uses_warm_state
+from analysis.measures.commands import program_words
+from scenarios.common.errors import SdcError
+from scenarios.sumo.warm_state import uses_warm_state
 from sdc.cli.common import (
     bad_input,
     check_controllers,
@@ -70,8 +70,8 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     travels with the job, identified by sha256 (recorded in the manifest):
     workers, local or on any Ray node, never open the driver's paths.
     """
-    from analysis.run.run_outcome import outcomes_text
-    from scenarios.sweep_spec import expand, load_sweep
+    from analysis.measures.run_outcome import outcomes_text
+    from scenarios.spec.sweep_spec import expand, load_sweep
     from scenarios.world_backends import check_inputs
     from sdc.batch.sweep_runner import run_sweep
 

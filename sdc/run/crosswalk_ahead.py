@@ -6,7 +6,7 @@ ahead is the first whose far side the front bumper has not passed.
 
 from __future__ import annotations
 
-from scenarios.road_geometry import RouteCrosswalk
+from scenarios.scene.road_geometry import RouteCrosswalk
 from sdc.car.controller_api import Crosswalk
 
 

@@ -18,16 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.run import run_outcome
-from analysis.run.metrics import trace_metrics
-from analysis.run.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
-from analysis.run.trace_file import Trace
-from analysis.run.world_audit import overlap_steps
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.road_geometry import RoadGeometry
-from scenarios.scenario_spec import ScenarioSpec
-from scenarios.snapshot import Snapshot
-from scenarios.warm_state import warm_state_id
+from analysis.measures import run_outcome
+from analysis.measures.metrics import trace_metrics
+from analysis.measures.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
+from analysis.measures.trace_file import Trace
+from analysis.measures.world_audit import overlap_steps
+from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.snapshot import Snapshot
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.warm_state import warm_state_id
 from scenarios.world_backends import World, make_road, make_world
 from sdc.car.collision import Collision, collision_with, describe
 from sdc.car.controller_api import Crosswalk, LanesBeside, Observation, StopLine

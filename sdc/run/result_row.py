@@ -6,7 +6,7 @@ columns come in parts, each filled by one party:
 - ``identity``: which run (the task or ``sdc run`` names it; the spec gives the rest)
 - ``status``: ok | error | timeout, and why a run has no outcome
 - ``outcome``: what the episode measured (None when the run produced no outcome)
-- ``metric``: the outcome columns that :func:`analysis.run.metrics.trace_metrics` computes
+- ``metric``: the outcome columns that :func:`analysis.measures.metrics.trace_metrics` computes
 - ``sweep``: where the run sits in its sweep, with one ``p.<path>`` column per
   swept parameter; only in a sweep's ``results.parquet``
 - ``adaptive``: the batch, phase, importance weight and score of a run drawn by
@@ -28,9 +28,9 @@ from typing import Any
 
 import pyarrow as pa
 
-from analysis.run.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
-from scenarios.plain_json import json_scalar
-from scenarios.sweep_spec import PARAM_PREFIX
+from analysis.measures.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
+from scenarios.common.plain_json import json_scalar
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 
 IDENTITY, STATUS, OUTCOME, METRIC, SWEEP = "identity", "status", "outcome", "metric", "sweep"
 ADAPTIVE = "adaptive"
@@ -76,7 +76,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle or person overlapped another one or an "
            "obstacle within the sensing radius, two persons aside "
-           "(analysis.run.world_audit), where SUMO's own placement of the two (along their "
+           "(analysis.measures.world_audit), where SUMO's own placement of the two (along their "
            "lanes) does not overlap: what the coupling made up (sdc.run.world_witness); 0 in "
            "a consistent world"),
     Column("sumo_overlaps", pa.int64(), OUTCOME,
@@ -87,7 +87,7 @@ COLUMNS: tuple[Column, ...] = (
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),
     Column("outcome", pa.string(), OUTCOME,
-           "how the run ended (analysis/run/run_outcome.py): completed (passed every obstacle "
+           "how the run ended (analysis/measures/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under "
            f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more) | unfinished "
            "(neither; still moving when it ended)"),
@@ -122,8 +122,8 @@ COLUMNS: tuple[Column, ...] = (
     Column("stop_possible", pa.bool_(), OUTCOME,
            "braking alone could stop the car before it: start speed^2 / (2 * min(the "
            "vehicle model's max_decel_mps2, friction_mu * g)) <= stop_gap_m, braking from "
-           "the first step (analysis.run.safety.REACTION_TIME_S = 0); None: no obstacle in the "
-           "path"),
+           "the first step (analysis.measures.safety.REACTION_TIME_S = 0); None: no obstacle "
+           "in the path"),
     Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
     Column("detection_range_m", pa.float64(), METRIC,
            "shortest central lidar range as the maneuver started [m]"),
@@ -169,7 +169,7 @@ def _names(*parts: str) -> tuple[str, ...]:
 RUN_COLUMNS = _names(IDENTITY, STATUS, OUTCOME, METRIC)
 #: what ``sdc run --json`` prints: the run's row but its traceback (which goes to stderr)
 JSON_COLUMNS = tuple(n for n in RUN_COLUMNS if n != "traceback")
-#: the columns :func:`analysis.run.metrics.trace_metrics` returns
+#: the columns :func:`analysis.measures.metrics.trace_metrics` returns
 METRIC_COLUMNS = _names(METRIC)
 _IDENTITY_COLUMNS = _names(IDENTITY)
 _ARROW_TYPES = {float: pa.float64(), int: pa.int64(), bool: pa.bool_(), str: pa.string()}

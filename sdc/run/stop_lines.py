@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from scenarios.road_geometry import RouteStop
+from scenarios.scene.road_geometry import RouteStop
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, StopLine
 
 #: SUMO's link states read as a driver reads the light: (signal, gives way)

@@ -13,8 +13,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
-from scenarios.bodies import VEHICLE_MODELS
-from scenarios.scenario_spec import ScenarioSpec
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import initial_state

@@ -1,10 +1,11 @@
-"""Collecting a run's trace rows step by step (the trace itself: :mod:`analysis.run.trace_file`)."""
+"""Collecting a run's trace rows step by step (the trace itself:
+:mod:`analysis.measures.trace_file`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from analysis.run.trace_file import FLOAT_COLUMNS, Trace
+from analysis.measures.trace_file import FLOAT_COLUMNS, Trace
 
 
 class TraceRecorder:

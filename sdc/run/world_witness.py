@@ -1,11 +1,11 @@
-"""Whose overlap is it? The world's audit (:mod:`analysis.run.world_audit`) finds the
+"""Whose overlap is it? The world's audit (:mod:`analysis.measures.world_audit`) finds the
 steps in which two bodies other than the ego overlap; here each such step is judged
 against SUMO's own placement of the bodies.
 
 The run's SUMO is run once more, the ego pushed where the trace has it (same spec, same
 seed, the same pushes: the same world, step for step, checked against the trace), and
 at each such step the overlapping bodies are laid along their lanes as SUMO's own model
-holds them (:meth:`scenarios.sumo_world.SumoWorld.placed_by_sumo`). Where those overlap
+holds them (:meth:`scenarios.sumo.sumo_world.SumoWorld.placed_by_sumo`). Where those overlap
 too, SUMO's own model put them through each other (its junctions let vehicles on
 crossing lanes wait inside one another, its bicycles ride through its pedestrians):
 ``sumo_overlaps``. Where they do not, what we made of SUMO's world did (a rigid box
@@ -20,9 +20,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from analysis.run.trace_file import Trace
-from analysis.run.world_audit import overlapping_pairs, pairs_overlap
-from scenarios.sumo_world import OBSTACLE_PREFIX
+from analysis.measures.trace_file import Trace
+from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
+from scenarios.sumo.sumo_world import OBSTACLE_PREFIX
 from sdc.car.vehicle import Vehicle, VehicleState
 
 

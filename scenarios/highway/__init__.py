@@ -1,0 +1,1 @@
+"""The highway-env world backend."""

@@ -1,0 +1,1 @@
+"""The SUMO world backend: the simulation, its vehicle types, warm states."""

@@ -1,0 +1,802 @@
+"""The SUMO world backend: road, traffic and obstacles in libsumo, the ego pushed in.
+
+libsumo holds one simulation per process; a :class:`SumoWorld` owns it from
+:meth:`start` to :meth:`close`. SUMO places a vehicle by its front-bumper centre
+and measures angles in degrees clockwise from north; this module converts to and
+from our boxes (body centre, yaw counter-clockwise from +x).
+
+SUMO's traffic sees the ego and each obstacle where they stand, the part of a body
+reaching into a neighbouring lane included, and changes lanes over time
+(:mod:`scenarios.scene.traffic_model`); collisions are ours. Traffic enters one step
+after the ego, so SUMO's insertion checks see it; after a warm-up, the traffic that
+could not stop behind the entering ego is taken off.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import traci.constants as tc  # plain numbers, shared by libsumo and traci
+
+from scenarios.common.errors import SdcError
+from scenarios.scene import road_kernels, traffic_model
+from scenarios.scene.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
+from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
+from scenarios.scene.snapshot import (
+    Snapshot,
+    in_start_zone,
+    near_obstacles,
+    obstacle_boxes,
+    sensing_radius_m,
+)
+from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.spec.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
+from scenarios.sumo.vehicle_types import VehicleTypes
+from scenarios.sumo.warm_state import (
+    HALTING_SPEED_MPS,
+    SAVE_OPTIONS,
+    SETTLING_COLUMNS,
+    SETTLING_SAMPLE_S,
+    WarmState,
+    cached_path,
+    uses_warm_state,
+    warm_seed,
+    warm_state_key,
+)
+from scenarios.sumo.warm_up_process import computed_apart
+from scenarios.sumo_net.build import sumo_binary
+from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
+from scenarios.sumo_net.random_trips import RandomTrips
+from scenarios.sumo_net.road_source import road_source
+from scenarios.sumo_net.route_road import DEMAND, scenario_stream
+
+EGO_ID = "ego"
+EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
+OBSTACLE_PREFIX = "obstacle."
+TRAFFIC_PREFIX = "traffic."
+TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
+#: what is read of each nearby body every step (each variable read costs, and a step
+#: may read dozens); its size and class are read once (scenarios.sumo.vehicle_types)
+_BODY_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
+#: of a vehicle, also where SUMO holds it on its lane (its lateral offset, its lane
+#: position, its lane), to lay its body there (scenarios.scene.lane_bodies)
+_TRAFFIC_VARS = (*_BODY_VARS, tc.VAR_LANEPOSITION_LAT, tc.VAR_LANEPOSITION, tc.VAR_LANE_ID)
+#: and of a person: the vehicle it rides in ("" on foot: a person riding is inside
+#: that vehicle's body, not a body of its own); SUMO places a person by its front
+#: too, and angles it as a vehicle
+_PERSON_VARS = (*_BODY_VARS, tc.VAR_VEHICLE)
+
+
+def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
+    """SUMO measures the context radius between front bumpers: a body centre within
+    the sensing radius has its front bumper within it plus half of each body's length
+    (the longest vehicle type's for the other's) [m]."""
+    return 1.0 + (longest_m + ego_length_m) / 2
+
+
+#: a warm state's flows run on past any run's end (the state must not know the run's
+#: duration) [s]
+WARM_FLOW_END_S = 1e7
+
+
+def _flows(spec: ScenarioSpec, route: str, end_s: float, begin_s: float = 0.0) -> list[str]:
+    """A flow per lane entering at the road's start, from ``begin_s`` until ``end_s``."""
+    traffic = spec.traffic
+    if traffic.flow_vph_per_lane == 0:
+        return []
+    return [
+        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="{route}" begin="{begin_s!r}" '
+        f'end="{end_s}" '
+        f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
+        for lane in range(spec.road.lane_count)
+    ]
+
+
+def _trips(trips: list[tuple[str, str]], depart_s: float = 0.0) -> list[str]:
+    """The first random trips across the network, all leaving at ``depart_s``."""
+    return [
+        f'  <trip id="{TRAFFIC_PREFIX}{k}" type="traffic" depart="{depart_s!r}" from="{start}" '
+        f'to="{end}" departLane="random" departPos="random_free" departSpeed="0"/>'
+        for k, (start, end) in enumerate(trips)
+    ]
+
+
+def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    traffic = spec.traffic
+    factor = (traffic.speed_mean_mps / spec.road.speed_limit_mps
+              if road_source(spec.road).flows else 1.0)  # a network: its own limits
+    lo, hi = SPEED_FACTOR_BOUNDS
+    return (f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
+            f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
+
+
+def _ego_types(spec: ScenarioSpec) -> list[str]:
+    """The ego's vType (its size, acceleration and braking, so followers keep gaps for
+    the car it is) and the obstacles'."""
+    model = VEHICLE_MODELS[spec.vehicle.model]
+    decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
+    return [f'  <vType id="{EGO_TYPE}" length="{model.length_m}" width="{model.width_m}" '
+            f'accel="{model.max_accel_mps2}" decel="{decel!r}" emergencyDecel="{decel!r}"/>'] + [
+        f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
+        for kind, (length, width) in OBSTACLE_SIZES_M.items()
+    ]
+
+
+def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    ego_front_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
+    return f'  <route id="r0" edges="{" ".join(road.route_edges(ego_front_m))}"/>'
+
+
+def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
+                  traffic_width_m: float) -> list[int]:
+    """The lanes beside ``lane`` (-1 on its right, +1 on its left) that a body standing
+    at ``box`` reaches into too far for traffic ``traffic_width_m`` wide to pass
+    (:func:`scenarios.scene.traffic_model.sides_blocked`), each lane as wide as it is there."""
+    (s_m,), (d_m,) = road.to_frenet(box[None, :2])
+    lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
+    width_m, beside_m = road.lane_widths_m(s_m, lane)
+    right, left = traffic_model.sides_blocked(lo_m, hi_m, road.lane_center_d_m(lane), width_m,
+                                              traffic_width_m, beside_m)
+    return [step for step, blocked in ((-1, right), (1, left)) if blocked]
+
+
+def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
+    """The lanes of a built-in road in which SUMO must see an obstacle standing at
+    ``box``: the lane of its centre first, then each neighbouring lane it blocks
+    (:func:`lanes_blocked`, for the built-in traffic)."""
+    (_,), (d_m,) = road.to_frenet(box[None, :2])
+    own = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
+    return [own] + [own + step for step in lanes_blocked(road, box, own, TRAFFIC_WIDTH_M)
+                    if 0 <= own + step < road.lanes]
+
+
+def _across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:
+    """How far across the road (lowest, highest ``d``) a box centred at ``d_m`` reaches,
+    the road heading ``heading_rad`` there."""
+    _, _, yaw_rad, length_m, width_m = box.tolist()
+    psi = yaw_rad - heading_rad
+    half_m = abs(length_m / 2 * math.sin(psi)) + abs(width_m / 2 * math.cos(psi))
+    return d_m - half_m, d_m + half_m
+
+
+def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
+               checks: str = "all") -> list[str]:
+    """The obstacles as vehicles stopped for good where they stand, entering at
+    ``depart`` with SUMO's insertion ``checks``. On a built-in road an obstacle that
+    blocks a neighbouring lane stands there too, as a second vehicle
+    (``obstacle.<i>.<lane>``)."""
+    lines = []
+    checked = "" if checks == "all" else f' insertionChecks="{checks}"'
+    for i, (obstacle, box) in enumerate(zip(spec.obstacles, obstacle_boxes(spec, road),
+                                            strict=True)):
+        length_m = obstacle.size_m[0]
+        s_m = road.place_s_m(obstacle.position_m, length_m)
+        # on a network, a second body beside it waits for SUMO's types (_show_obstacles_beside)
+        lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
+        for k, spec_lane in enumerate(lanes):
+            edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
+            vid = f"{OBSTACLE_PREFIX}{i}" if k == 0 else f"{OBSTACLE_PREFIX}{i}.{lane}"
+            route = "r0" if edge == EDGE_ID else vid
+            if route != "r0":
+                lines.append(f'  <route id="{route}" edges="{edge}"/>')
+            lines += [
+                f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.kind}" '
+                f'route="{route}" depart="{depart}" departLane="{lane}" '
+                f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
+                f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
+                "  </vehicle>",
+            ]
+    return lines
+
+
+def _routes(lines: list[str]) -> str:
+    return "\n".join(["<routes>", *lines, "</routes>"]) + "\n"
+
+
+def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+               trips: list[tuple[str, str]] = ()) -> str:
+    """The ``.rou.xml`` text of a run without a warm state: vehicle types, the ego's
+    route, obstacles as stopped vehicles, and the background traffic (flows, or on a
+    network the ``trips`` (from edge, to edge) leaving at 0 s)."""
+    flows = road_source(spec.road).flows
+    end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
+    enter_s = spec.scenario.step_s  # after the ego, which enters in the first step
+    return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
+                    *_obstacles(spec, road),
+                    *(_flows(spec, "r0", end_s, enter_s) if flows
+                      else _trips(trips, enter_s))])
+
+
+def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+                       trips: list[tuple[str, str]] = ()) -> str:
+    """The ``.rou.xml`` text of a warm-up: the background traffic alone."""
+    if not road_source(spec.road).flows:
+        return _routes([_traffic_type(spec, road), *_trips(trips)])
+    return _routes([_traffic_type(spec, road), f'  <route id="traffic" edges="{EDGE_ID}"/>',
+                    *_flows(spec, "traffic", WARM_FLOW_END_S)])
+
+
+def warm_run_routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
+    """The ``.rou.xml`` text loaded beside a warm state: the ego's types and route,
+    and the obstacles entering as the run begins, wherever the traffic stands
+    (the traffic on their spots is taken off first)."""
+    return _routes([*_ego_types(spec), _ego_route(spec, road),
+                    *_obstacles(spec, road, depart="begin", checks="none")])
+
+
+def _is_traffic(vehicle_id: str) -> bool:
+    """Background traffic: neither the ego nor an obstacle."""
+    return vehicle_id != EGO_ID and not vehicle_id.startswith(OBSTACLE_PREFIX)
+
+
+def _is_person(values: dict) -> bool:
+    """Are these subscription results a person's (not a vehicle's)?"""
+    return tc.VAR_VEHICLE in values
+
+
+def _riding(nearby: dict) -> frozenset[str]:
+    """The persons of ``nearby`` riding in a vehicle (inside its body)."""
+    return frozenset(pid for pid, values in nearby.items() if values.get(tc.VAR_VEHICLE))
+
+
+def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
+    """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
+    cx, cy, yaw, length, _ = box.tolist()
+    return (cx + length / 2 * math.cos(yaw), cy + length / 2 * math.sin(yaw),
+            90.0 - math.degrees(yaw))
+
+
+class SumoWorld:
+    """One run of a scenario in libsumo."""
+
+    backend = "sumo"
+
+    def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
+                 gui: bool = False, sumo_options: tuple[str, ...] = (),
+                 warm_state: Path | None = None):
+        """``sumo_options``: more of SUMO's command-line options, after ours (its
+        outputs and devices, for example ``--device.ssm.*``). ``warm_state``: the
+        file of the spec's warm state when the caller has it (a job's copy); without
+        it, a run with a warm-up finds it in the cache or computes it there."""
+        self.spec = spec
+        self.gui = gui
+        self.sumo_options = tuple(sumo_options)
+        self.road = road
+        self.cache_dir = cache_dir
+        self.warm_state_path = warm_state
+        self._obstacle_boxes = obstacle_boxes(spec, road)
+        self._crossings = road.crossings()
+        self._demand: RandomTrips | None = None
+        self._trips_made = 0
+        self._radius_m = sensing_radius_m(spec)
+        self._model = VEHICLE_MODELS[spec.vehicle.model]
+        self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
+        self._types = VehicleTypes()
+        self._subscribed_m = 0.0  # the context subscription's radius
+        self.people_subscribed = False  # the persons around the ego are read too
+        #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``), for
+        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
+        self.keep_ids = False
+        self.last_ids: list[str] = []
+        self._source = road_source(spec.road)
+        # a sumo_config road's configuration (its files are written into the scratch
+        # folder), its enter_s checked before any SUMO
+        self._config = self._source.configuration(spec)
+        self._config_paths: dict[str, Path] | None = None
+        self._tmp: tempfile.TemporaryDirectory | None = None
+        self._sumo = None
+        self._paths: LanePaths | None = None  # the lanes' shapes, read as bodies are laid
+        self.warm_state_key: str | None = None  # the key of the warm state it started from
+
+    def twin(self) -> SumoWorld:
+        """An unstarted world of the same scenario, road, options and warm state: pushed
+        the same ego, it is the same world, step for step."""
+        return SumoWorld(self.spec, self.road, self.cache_dir, sumo_options=self.sumo_options,
+                         warm_state=self.warm_state_path)
+
+    def net_path(self) -> Path:
+        """The network file SUMO runs on."""
+        if self._config is not None:
+            return self._written_config()[self._config.net_name]
+        return self._source.network_file(self.cache_dir)
+
+    def _written_config(self) -> dict[str, Path]:
+        """The configuration's files, written into the scratch folder: their paths."""
+        if self._config_paths is None:
+            self._config_paths = self._config.write(self._scratch() / "config")
+        return self._config_paths
+
+    def warm_key(self) -> str:
+        """The key of the spec's warm state (``scenarios/sumo/warm_state.py``)."""
+        return warm_state_key(self.spec, self.cache_dir)
+
+    def _new_demand(self, seed: int) -> RandomTrips | None:
+        """The random trips of a network's traffic, drawn from ``seed``'s stream."""
+        if self._source.flows or not self.spec.traffic.vehicles:
+            return None
+        return RandomTrips(self.road.net, scenario_stream(seed, DEMAND))
+
+    def _scratch(self) -> Path:
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="sdc-")
+        return Path(self._tmp.name)
+
+    def _start_sumo(self, sim, command: list[str], routes: str | None, *options: str,
+                    seed: int | None = None, fresh: bool = True) -> None:
+        """Start SUMO on the road's network with ``routes`` (text; a configuration's
+        own files before them) and ``options``, its random generators seeded with
+        ``seed`` (default: the scenario's); ``fresh``: from the configuration's begin
+        (not from a saved state)."""
+        path = None
+        if routes is not None:
+            path = self._scratch() / "scenario.rou.xml"
+            path.write_text(routes)
+        ours = [
+            # a random trip with no way to its end is dropped, not fatal
+            *([] if self._source.flows else ["--ignore-route-errors", "true"]),
+            "--step-length", repr(self.spec.scenario.step_s),
+            "--seed", str(self.spec.scenario.seed if seed is None else seed),
+            "--collision.action", "none", "--time-to-teleport", "-1",
+            *traffic_model.sumo_options(self.spec.traffic.lane_change_s),
+            "--no-step-log", "true", "--no-warnings", "true",
+            *options,
+        ]
+        if self._config is not None:
+            inputs = self._config.sumo_arguments(self._written_config(), path, fresh,
+                                                 set_already=ours)
+        else:
+            inputs = ["--net-file", str(self.net_path()), "--route-files", str(path)]
+        sim.start([*command, *inputs, *ours])
+        self._sumo = sim
+        self._paths = LanePaths(sim.lane, self._lanes_behind)
+
+    def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
+        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
+
+        With a warm-up, SUMO starts afresh on the warm state (:meth:`warm_state`),
+        the obstacles entering as the run begins. With ``gui``, the same simulation
+        runs in ``sumo-gui`` through traci (libsumo has no GUI); its API and its
+        results are the same.
+        """
+        if self.gui:
+            import traci as sim  # a socket to sumo-gui
+            command = [sumo_binary("sumo-gui"), "--start", "--quit-on-end",
+                       "--delay", str(round(1000 * self.spec.scenario.step_s))]
+        else:
+            import libsumo as sim  # imported here: only this backend needs the simulator
+            command = ["sumo"]
+        if uses_warm_state(self.spec):
+            state = self.warm_state()
+            state_file = self._scratch() / "warm-state.xml.gz"
+            state_file.write_bytes(state.sumo_state)
+            self._start_sumo(sim, command, warm_run_routes_xml(self.spec, self.road),
+                             "--load-state", str(state_file), *self.sumo_options, fresh=False)
+            self._demand = self._new_demand(warm_seed(self.spec))
+            if self._demand is not None:  # it goes on where the warm-up left it
+                self._demand.restore(state.demand["rng"])
+                self._trips_made = state.demand["trips_made"]
+            self.warm_state_key = state.key
+            self._clear_start(obstacles=True)
+        else:
+            self._demand = self._new_demand(self.spec.scenario.seed)
+            trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
+            self._trips_made = len(trips)
+            self._start_sumo(sim, command, routes_xml(self.spec, self.road, trips),
+                             *self.sumo_options)
+        ego = self.spec.ego
+        # inserted where it starts, so traffic knows of it from the first step
+        _, lane, front_m = self.road.sumo_place(ego.start_m + self._model.length_m / 2,
+                                                   ego.lane)
+        sim.vehicle.add(EGO_ID, "r0", typeID=EGO_TYPE, depart="now", departLane=str(lane),
+                        departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
+        sim.vehicle.setSpeedMode(EGO_ID, 0)
+        sim.vehicle.setLaneChangeMode(EGO_ID, 0)
+        for tl in sorted({stop.tl for stop in self.road.stops() if stop.tl is not None}):
+            sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
+        self._watch_types()
+        self._show_obstacles_beside()
+        self._push(ego_box, ego_speed_mps)
+        # what departed in this step entered beside the ego, not after it: checked here
+        taken = self._clear_start(among=self._sumo.simulation.getDepartedIDList())
+        return self._snapshot(ego_box, taken)
+
+    def _watch_types(self) -> None:
+        """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles
+        around the ego (only those are read, whatever the size of the network) within a
+        radius that holds the longest type's, and to the persons too from the step SUMO
+        has loaded any (its count holds them before they depart, so none is missed)."""
+        self._types.refresh(self._sumo.vehicletype, (EGO_TYPE, OBSTACLE_TYPE_PREFIX))
+        radius_m = self._radius_m + subscription_slack_m(self._types.longest_m,
+                                                         self._model.length_m)
+        people = self.people_subscribed or self._sumo.person.getIDCount() > 0
+        if radius_m > self._subscribed_m or people != self.people_subscribed:
+            # libsumo hands both back in one dict (vehicle.getContextSubscriptionResults)
+            self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE, radius_m,
+                                                _TRAFFIC_VARS)
+            if people:
+                self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE,
+                                                    radius_m, _PERSON_VARS)
+            self._subscribed_m, self.people_subscribed = radius_m, people
+
+    def warm_state(self, on_sample: Callable[[float], None] | None = None) -> WarmState:
+        """The spec's warm state: the one given, else the cached one, else computed
+        now (and cached; ``on_sample`` is called with SUMO's clock as it goes). A given
+        or cached file made for other traffic is an :class:`SdcError`, never a run on
+        it."""
+        key = self.warm_key()
+        path = self.warm_state_path or cached_path(key)
+        if self.warm_state_path is None and not path.is_file():
+            # apart: SUMO's state would hold what ran before it in this process
+            return computed_apart(self.spec, key, self.cache_dir, self._scratch(), on_sample)
+        state = WarmState.read(path)
+        if state.key != key:
+            raise SdcError(f"warm state {path}: made for other traffic (key "
+                           f"{state.key[:12]}..., this run's {key[:12]}...)")
+        return state
+
+    def compute_warm_state(self, key: str,
+                           on_sample: Callable[[float], None] | None = None) -> WarmState:
+        """Warm the traffic up in a SUMO of its own (libsumo, also for a GUI run) and
+        save it, recording how the network's traffic settles on the way (each
+        sample's time goes to ``on_sample``, for progress)."""
+        import libsumo
+
+        spec = self.spec
+        demand = self._new_demand(warm_seed(spec))
+        trips = demand.draw(spec.traffic.vehicles) if demand else []
+        self._demand, self._trips_made = demand, len(trips)
+        own = None if self._config is not None else warm_up_routes_xml(spec, self.road, trips)
+        self._start_sumo(libsumo, ["sumo"], own, *SAVE_OPTIONS, seed=warm_seed(spec))
+        try:
+            steps = self._source.warm_up_steps(spec)
+            every = max(1, round(SETTLING_SAMPLE_S / spec.scenario.step_s))
+            settling: dict[str, list[float]] = {c: [] for c in SETTLING_COLUMNS}
+            for k in range(1, steps + 1):
+                self._advance()
+                if k % every == 0 or k == steps:
+                    self._record_settling(settling)
+                    if on_sample is not None:
+                        on_sample(settling["t_s"][-1])
+            saved = self._scratch() / "saved-state.xml.gz"
+            libsumo.simulation.saveState(str(saved))
+            state = WarmState(
+                key, libsumo.simulation.getTime(), saved.read_bytes(),
+                None if demand is None else {"rng": demand.state(),
+                                             "trips_made": self._trips_made},
+                settling)
+        finally:
+            libsumo.close()
+            self._sumo = None
+        return state
+
+    def _record_settling(self, settling: dict[str, list[float]]) -> None:
+        vehicle = self._sumo.vehicle
+        speeds = np.array([vehicle.getSpeed(v) for v in vehicle.getIDList()])
+        settling["t_s"].append(self._sumo.simulation.getTime())
+        settling["vehicles"].append(len(speeds))
+        settling["mean_speed_mps"].append(float(speeds.mean()) if len(speeds) else 0.0)
+        settling["halting"].append(int((speeds < HALTING_SPEED_MPS).sum()))
+
+    def _clear_start(self, obstacles: bool = False,
+                     among: list[str] | None = None) -> frozenset[str]:
+        """Take the traffic (``among`` those, default all) off the ego's entry
+        (:func:`~scenarios.scene.snapshot.in_start_zone`: on or near it, or too close to stop
+        for it or for it to stop), and with ``obstacles`` off the obstacles' spots too;
+        the ids taken off."""
+        vehicle = self._sumo.vehicle
+        ids = [v for v in (vehicle.getIDList() if among is None else among) if _is_traffic(v)]
+        fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
+        lengths = np.array([vehicle.getLength(v) for v in ids])
+        yaws = np.radians(90.0 - np.array([vehicle.getAngle(v) for v in ids]))
+        centers = fronts - (lengths / 2)[:, None] * np.column_stack([np.cos(yaws), np.sin(yaws)])
+        speeds = np.array([vehicle.getSpeed(v) for v in ids])
+        taken = in_start_zone(self.spec, self.road, centers, lengths, speeds)
+        if obstacles:
+            taken |= near_obstacles(self.spec, self.road, fronts)
+        removed = frozenset(str(vid) for vid in np.array(ids)[taken])
+        for vid in sorted(removed, key=ids.index):
+            vehicle.remove(vid)
+        return removed
+
+    def _ego_pose(self, box: np.ndarray) -> tuple[float, float, float]:
+        """SUMO's front-bumper x, y and angle for the ego at ``box``: its front bumper
+        moved across the road to the lateral position SUMO is to see
+        (:func:`scenarios.scene.traffic_model.sumo_lateral_m`: the whole body, or just
+        inside its lane where what reaches over a lane line leaves room to pass)."""
+        x, y, angle_deg = _sumo_pose(box)
+        road, model = self.road, self._model
+        s_m, d_m = road.locate_near(float(box[0]), float(box[1]), self._ego_s_m)
+        self._ego_s_m = s_m
+        heading = road.heading_at_s(s_m)
+        lane = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
+        lane_d_m = road.lane_center_d_m(lane)
+        width_m, beside_m = road.lane_widths_m(s_m, lane)
+        if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
+            return x, y, angle_deg
+        lo_m, hi_m = _across_m(box, heading, d_m)
+        lateral_m = traffic_model.sumo_lateral_m(lo_m, hi_m, lane_d_m, width_m, model.width_m,
+                                                 self._traffic_width_m(), beside_m)
+        front_d_m = d_m + model.length_m / 2 * math.sin(float(box[2]) - heading)
+        shift_m = lateral_m - front_d_m
+        return x - shift_m * math.sin(heading), y + shift_m * math.cos(heading), angle_deg
+
+    def _traffic_width_m(self) -> float:
+        """The widest traffic that may pass a body in a lane beside it: of the types
+        SUMO has loaded, or the built-in traffic's before any [m]."""
+        return self._types.widest_m or TRAFFIC_WIDTH_M
+
+    def _show_obstacles_beside(self) -> None:
+        """On a network, an obstacle standing in a lane beside its own too far for
+        the traffic to pass (:func:`lanes_blocked`, for the widest type SUMO has loaded)
+        stands there too, as a second stopped vehicle (``obstacle.<i>.<lane>``)."""
+        road = self.road
+        if self._source.flows:  # a built road's obstacles stand beside from the start
+            return
+        vehicle = self._sumo.vehicle
+        for i, (obstacle, box) in enumerate(zip(self.spec.obstacles, self._obstacle_boxes,
+                                                strict=True)):
+            s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
+            edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
+            own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
+            for step in lanes_blocked(road, box, 0, self._traffic_width_m()):
+                beside = road.net.lanes.get(f"{edge}_{own + step}")
+                if beside is None:  # its front is on an edge without that lane
+                    continue
+                pos_m = front_m * beside.sumo_length_m / own_length_m
+                vid = f"{OBSTACLE_PREFIX}{i}.{beside.index}"
+                self._sumo.route.add(vid, [edge])
+                vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
+                            depart="now", departLane=str(beside.index),
+                            departPos=f"{pos_m:.6f}", departSpeed="0")
+                vehicle.setStop(vid, edge, pos=pos_m, laneIndex=beside.index, duration=1e9)
+
+    def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
+        """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
+        self._push(ego_box, ego_speed_mps)
+        return self._snapshot(ego_box)
+
+    def _push(self, ego_box: np.ndarray, ego_speed_mps: float) -> None:
+        """Place the ego at ``ego_box`` and advance SUMO one step."""
+        x, y, angle_deg = self._ego_pose(ego_box)
+        sumo = self._sumo
+        sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
+        sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
+        sumo.simulationStep()
+        self._renew_trips()
+
+    def _snapshot(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()) -> Snapshot:
+        """The state after a step, without the vehicles ``taken`` off since."""
+        boxes, speeds, classes, bodies = self._traffic(ego_box, taken)
+        self._watch_types()
+        signals = {tl: values[tc.TL_RED_YELLOW_GREEN_STATE] for tl, values
+                   in self._sumo.trafficlight.getAllSubscriptionResults().items()}
+        return Snapshot(self._sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds,
+                        classes, signals, bodies)
+
+    def _advance(self) -> None:
+        """One SUMO step of the warm-up, before the ego enters."""
+        self._sumo.simulationStep()
+        self._renew_trips()
+
+    def _renew_trips(self) -> None:
+        """On a network, every car that arrived in the last step starts a new trip."""
+        if self._demand is None:
+            return
+        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if _is_traffic(v)]
+        if not arrived:
+            return
+        for start, end in self._demand.draw(len(arrived)):
+            vid = f"{TRAFFIC_PREFIX}{self._trips_made}"
+            self._trips_made += 1
+            # two edges not joined make a trip: SUMO routes it as the car enters
+            self._sumo.route.add(vid, [start, end])
+            self._sumo.vehicle.add(vid, vid, typeID="traffic", depart="now",
+                                   departLane="random", departPos="random_free",
+                                   departSpeed="0")
+
+    def _traffic(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        """Boxes, speeds and vehicle classes of the vehicles and the persons on foot
+        within the sensing radius, ego and obstacles aside, in SUMO's order; each one's
+        size and class its type's, a person's class ``pedestrian``
+        (:mod:`scenarios.sumo.vehicle_types`); and which body each box is of (None: each
+        its own).
+
+        A vehicle's body is laid along its lane where SUMO holds it (its lane
+        position, its lateral offset: :mod:`scenarios.scene.lane_bodies`), in as many boxes
+        as its path bends under it; SUMO's angle, which swings with a lane change,
+        only says which vehicles are near (a body centre half a length behind the front
+        bumper, within the sensing radius) and how a person on foot stands. The read
+        of the dict of dicts libsumo and traci hand over, with the one-box bodies, is
+        :func:`scenarios.scene.road_kernels.traffic` (compiled where built: in Python it cost
+        more than the step's geometry); the rest are laid here (:meth:`_lay`).
+        """
+        nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
+        # the results are the step's, from before they were taken off
+        hidden = taken | self._on_other_levels(nearby, ego_box)
+        if self.people_subscribed:
+            hidden |= _riding(nearby)
+        if hidden:
+            nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
+        n = len(nearby)
+        boxes, speeds, kinds, laid = np.empty((n, 5)), np.empty(n), np.empty(n), np.empty(n)
+        try:
+            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
+        except KeyError:  # vehicles or persons met for the first time
+            new = [v for v in nearby if v not in self._types.sizes and _is_traffic(v)]
+            self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
+            self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
+            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
+        boxes, speeds, kinds = boxes[:count], speeds[:count], kinds[:count]
+        bodies = None
+        if laid_count:
+            boxes, bodies = self._lay(nearby, boxes, laid[:count])
+            if bodies is not None:
+                speeds, kinds = speeds[bodies], kinds[bodies]
+        if self.keep_ids:
+            ids = road_kernels.traffic_ids(
+                nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX, self._types.sizes,
+                float(ego_box[0]), float(ego_box[1]), self._radius_m)
+            self.last_ids = ids if bodies is None else [ids[b] for b in bodies]
+        return boxes, speeds, self._types.names(kinds), bodies
+
+    def _lay(self, nearby: dict, boxes: np.ndarray, laid: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``boxes`` with each vehicle whose ``laid`` entry names it (its index in
+        ``nearby``: one on a lane met for the first time, reaching back off its lane or
+        in several boxes) laid along its lane where SUMO holds it
+        (:class:`scenarios.scene.lane_bodies.LanePath`); and which body each box is of, None
+        if every one is still one box."""
+        ids = list(nearby)
+        pieces: dict[int, list] = {}
+        for row in np.flatnonzero(laid >= 0).tolist():
+            vid = ids[int(laid[row])]
+            values = nearby[vid]
+            length_m, width_m = float(boxes[row, 3]), float(boxes[row, 4])
+            pos_m = values[tc.VAR_LANEPOSITION]
+            path = self._paths.path(vid, values[tc.VAR_LANE_ID], length_m - pos_m)
+            if path.segments:
+                pieces[row] = path.body(pos_m, values[tc.VAR_LANEPOSITION_LAT], length_m,
+                                        width_m)
+        if all(len(body) == 1 for body in pieces.values()):
+            for row, body in pieces.items():
+                boxes[row] = body[0]
+            return boxes, None
+        counts = np.ones(len(boxes), np.intp)
+        for row, body in pieces.items():
+            counts[row] = len(body)
+        bodies = np.repeat(np.arange(len(boxes)), counts)
+        out = boxes[bodies]
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        for row, body in pieces.items():
+            out[first[row]:first[row] + len(body)] = body
+        return out, bodies
+
+    def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles) -> list[np.ndarray]:
+        """The bodies of the last snapshot's traffic ``rows`` (indices into its
+        ``traffic_boxes``; needs ``keep_ids``) and of the spec's ``obstacles`` (indices)
+        as SUMO's own lanes hold them: each (P, 5) boxes laid along its lane in
+        :data:`scenarios.scene.lane_bodies.BODY_PIECES` boxes, an obstacle with the vehicles
+        it stands as in lanes beside, a person on foot (no lane holds it) as its own
+        box."""
+        vehicle = self._sumo.vehicle
+        standing = vehicle.getIDList()
+        people = frozenset(self._sumo.person.getIDList()) if self.people_subscribed else ()
+
+        def laid(vid: str) -> np.ndarray:
+            lane_id, length_m = vehicle.getLaneID(vid), vehicle.getLength(vid)
+            pos_m = vehicle.getLanePosition(vid)
+            path = self._paths.path(vid, lane_id, length_m - pos_m)
+            return np.array(path.body(pos_m, vehicle.getLateralLanePosition(vid), length_m,
+                                      vehicle.getWidth(vid), BODY_PIECES))
+
+        bodies = []
+        for row in rows:
+            vid = self.last_ids[row]
+            bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
+        for i in obstacles:
+            own = f"{OBSTACLE_PREFIX}{i}"
+            bodies.append(np.vstack([laid(vid) for vid in standing
+                                     if vid == own or vid.startswith(own + ".")]))
+        return bodies
+
+    def _lanes_behind(self, vid: str, lane_id: str, reach_m: float) -> list[str]:
+        """The lanes a vehicle on ``lane_id`` came by, in driving order, as far back as
+        ``reach_m`` behind the lane's start: the lanes of the edges before on its
+        route that lead into it and the junctions' lanes between (from SUMO's links;
+        as many as are found)."""
+        vehicle, lane = self._sumo.vehicle, self._sumo.lane
+        route, index = vehicle.getRoute(vid), vehicle.getRouteIndex(vid)
+        before = index if lane_id.startswith(":") else index - 1
+        lanes: list[str] = []
+        while reach_m > 0 and 0 <= before < len(route):
+            chain = self._lanes_into(route[before], lane_id)
+            if not chain:
+                break
+            lanes[:0] = chain
+            reach_m -= sum(lane.getLength(k) for k in chain)
+            lane_id, before = chain[0], before - 1
+        return lanes
+
+    def _lanes_into(self, edge: str, lane_id: str) -> list[str]:
+        """The lane of ``edge`` that leads into ``lane_id`` and the junction's lanes
+        between them (SUMO may split one in two), in driving order; [] if none."""
+        lane = self._sumo.lane
+        for k in range(self._sumo.edge.getLaneNumber(edge)):
+            from_id = f"{edge}_{k}"
+            for link in lane.getLinks(from_id):
+                chain, via = [from_id], link[4]
+                while via and via != lane_id:
+                    chain.append(via)
+                    onward = lane.getLinks(via)
+                    via = onward[0][0] if onward and onward[0][0].startswith(":") else ""
+                if via == lane_id or link[0] == lane_id:
+                    return chain
+        return []
+
+    def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
+        """The vehicles around the ego on a road that crosses its route without a
+        junction (a bridge or a tunnel: :meth:`RoadGeometry.crossings`), their front
+        bumpers within ``LEVEL_REACH_M`` of where it crosses."""
+        points, lanes = self._crossings.points_xy, self._crossings.lanes
+        if not nearby or not len(points):
+            return frozenset()
+        if np.min(np.hypot(*(points - ego_box[:2]).T)) > self._radius_m + LEVEL_REACH_M:
+            return frozenset()
+        hidden = []
+        for vid, values in nearby.items():
+            x_m, y_m = values[tc.VAR_POSITION]
+            near = np.min(np.hypot(points[:, 0] - x_m, points[:, 1] - y_m)) <= LEVEL_REACH_M
+            domain = self._sumo.person if _is_person(values) else self._sumo.vehicle
+            if near and _is_traffic(vid) and domain.getLaneID(vid) in lanes:
+                hidden.append(vid)
+        return frozenset(hidden)
+
+    def _read_traffic(self, nearby: dict, ego_box: np.ndarray, boxes: np.ndarray,
+                      speeds: np.ndarray, kinds: np.ndarray, laid: np.ndarray
+                      ) -> tuple[int, int]:
+        return road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
+                                    self._types.sizes, self._paths.flat, float(ego_box[0]),
+                                    float(ego_box[1]), self._radius_m, PIECE_TOLERANCE_M,
+                                    STRETCH_MIN_M, boxes, speeds, kinds, laid)
+
+    def hand_ego_to_sumo(self, max_speed_mps: float) -> None:
+        """From now on SUMO's own driver models drive the ego (its safe speeds and
+        lane changes, up to ``max_speed_mps``): the world's driver in the ego's place,
+        a reference for what the world leaves a controller (:mod:`sdc.run.sumo_driver`)."""
+        vehicle = self._sumo.vehicle
+        vehicle.setSpeedMode(EGO_ID, 31)
+        vehicle.setLaneChangeMode(EGO_ID, 1621)
+        vehicle.setMaxSpeed(EGO_ID, max_speed_mps)
+        vehicle.setSpeed(EGO_ID, -1)
+
+    def step_sumo_ego(self) -> tuple[float, float, float, bool]:
+        """One step with SUMO driving the ego (:meth:`hand_ego_to_sumo`): its front
+        bumper's x and y [m], its speed [m/s], and whether SUMO saw it collide."""
+        self._advance()
+        vehicle = self._sumo.vehicle
+        x_m, y_m = vehicle.getPosition(EGO_ID)
+        collided = EGO_ID in self._sumo.simulation.getCollidingVehiclesIDList()
+        return x_m, y_m, vehicle.getSpeed(EGO_ID), collided
+
+    def vehicle_count(self) -> int:
+        """Traffic vehicles in the whole network (not only within the sensing radius)."""
+        return sum(1 for v in self._sumo.vehicle.getIDList() if _is_traffic(v))
+
+    def close(self) -> None:
+        if self._sumo is not None:
+            self._sumo.close()
+            self._sumo = None
+        if self._tmp is not None:
+            self._tmp.cleanup()
+            self._tmp = None
+
+    def __enter__(self) -> SumoWorld:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,2 @@
+"""The avoid-then-return controller (``avoid``) and its parts, one job each
+(:mod:`sdc.car.avoid.controller` composes them)."""
