@@ -65,7 +65,7 @@ import traci.constants as tc
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import LidarSpec, ScenarioSpec
 from scenarios.spec.toml_io import load_spec, read_toml
-from scenarios.sumo.sumo_world import EGO_ID
+from scenarios.sumo.routes_xml import EGO_ID
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.sensors import Lidar

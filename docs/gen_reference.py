@@ -39,7 +39,7 @@ from typing import Any, Literal
 import click
 
 from analysis.measures import trace_file
-from scenarios.spec import scenario_spec, sweep_spec
+from scenarios.spec import controller_params, scenario_spec, sweep_spec
 from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP
 from sdc.cli import main as cli_main
 from sdc.run import result_row
@@ -317,7 +317,7 @@ def controller_section() -> str:
            "checked here, against its class below; a plug-in's are kept as plain values "
            "(numbers, strings, booleans, arrays and tables of them) for its constructor "
            "to judge.\n\n"]
-    for name, cls in scenario_spec.CONTROLLER_PARAMS.items():
+    for name, cls in controller_params.CONTROLLER_PARAMS.items():
         out.append(f"#### `{name}`: `{cls.__name__}`\n\n{prose(cls.__doc__)}\n\n")
         out.append(field_table(cls) + "\n")
     return "".join(out)

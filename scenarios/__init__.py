@@ -3,17 +3,15 @@
 from pathlib import Path
 
 from scenarios.common.errors import SdcError, SpecError
+from scenarios.spec.controller_params import AvoidParams, LaneKeepParams, SeedParams
 from scenarios.spec.scenario_spec import (
-    AvoidParams,
     ControllerSpec,
     EgoSpec,
-    LaneKeepParams,
     LidarSpec,
     ObstacleSpec,
     RoadSpec,
     ScenarioMeta,
     ScenarioSpec,
-    SeedParams,
     TrafficSpec,
     VehicleSpec,
 )

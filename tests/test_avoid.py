@@ -10,7 +10,8 @@ import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, load_spec
 from scenarios.spec.bodies import VEHICLE_MODELS
-from scenarios.spec.scenario_spec import AvoidParams, ControllerSpec, beam_angles_rad
+from scenarios.spec.controller_params import AvoidParams
+from scenarios.spec.scenario_spec import ControllerSpec, beam_angles_rad
 from sdc.car.avoid.controller import (
     AVOID_LEFT,
     AVOID_RETURN,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from scenarios.spec.bodies import VEHICLE_MODELS
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from sdc.car.avoid.lane_frame import FACE_JOIN_M, LaneFrame
 from sdc.car.avoid.perception import (
     LEFT,

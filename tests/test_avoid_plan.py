@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from test_avoid_perception import FRONT_M, LANE_W, MODEL, PARAMS, seen
 
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from sdc.car.avoid.perception import LEFT, RIGHT, STRAIGHT_AHEAD, Perception, look_ahead
 from sdc.car.avoid.plan import (
     AVOID_LEFT,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from test_avoid_perception import FRONT_M, MODEL, PARAMS, frame_of, seen
 
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from sdc.car.avoid.perception import LEFT, RIGHT, STRAIGHT_AHEAD
 from sdc.car.avoid.road_rules import RoadRules
 from sdc.car.avoid.speed_law import SpeedLaw

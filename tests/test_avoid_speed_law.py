@@ -9,7 +9,7 @@ import math
 import pytest
 from test_avoid_perception import MODEL, PARAMS, seen
 
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from sdc.car.avoid.speed_law import SpeedLaw
 
 FREE = math.inf  # nothing ahead, no bend

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
 
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from sdc.car.avoid.controller import AVOID_LEFT, AVOID_RIGHT, AvoidController
 from sdc.car.avoid.leader_watch import LeaderWatch
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, LanesBeside, StopLine

@@ -17,7 +17,8 @@ import pytest
 
 from scenarios.scene import traffic_model
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.sumo.sumo_world import SumoWorld, lanes_blocked
+from scenarios.sumo.routes_xml import lanes_blocked
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import make_road
 from sdc.car.geometry import box_gap_m

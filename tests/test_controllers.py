@@ -3,7 +3,8 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.spec.bodies import VEHICLE_MODELS
-from scenarios.spec.scenario_spec import ControllerSpec, LaneKeepParams, beam_angles_rad
+from scenarios.spec.controller_params import LaneKeepParams
+from scenarios.spec.scenario_spec import ControllerSpec, beam_angles_rad
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
 from sdc.car.controllers import (
@@ -82,14 +83,14 @@ def test_one_line_of_the_registry_makes_a_built_in_whole():
     plug-in machinery builds the class from it, with nothing listed anywhere else."""
     import dataclasses
 
-    from scenarios.spec import scenario_spec
+    from scenarios.spec import controller_params, scenario_spec
     from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, controller_kind
     from sdc.car.controller_plugins import controller_class
 
-    assert tuple(scenario_spec.CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)
+    assert tuple(controller_params.CONTROLLER_PARAMS) == tuple(BUILTIN_CONTROLLERS)
     for name, builtin in BUILTIN_CONTROLLERS.items():
-        params = scenario_spec.CONTROLLER_PARAMS[name]
-        assert params.__name__ == builtin.params and params.__module__ == scenario_spec.__name__
+        params = controller_params.CONTROLLER_PARAMS[name]
+        assert params.__name__ == builtin.params and params.__module__ == controller_params.__name__
         assert controller_kind(name) == "builtin"
         cls = controller_class(name)
         assert f"{cls.__module__}:{cls.__name__}" == builtin.controller

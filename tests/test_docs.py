@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.spec import scenario_spec, sweep_spec
+from scenarios.spec import controller_params, scenario_spec, sweep_spec
 from sdc.cli import main as cli_main
 from sdc.run import result_row
 
@@ -88,7 +88,7 @@ def test_the_reference_lists_every_spec_field_api_field_and_command_option(site)
     generator = _generator()
     classes = [cls for _, cls, _, _ in generator.scenario_tables()
                if cls is not scenario_spec.ControllerSpec]
-    classes += [*scenario_spec.CONTROLLER_PARAMS.values(), sweep_spec._SweepTable]
+    classes += [*controller_params.CONTROLLER_PARAMS.values(), sweep_spec._SweepTable]
     for cls in classes:
         for field in dataclasses.fields(cls):
             if field.name != "params":  # the sweep's [sweep.params], a table of its own

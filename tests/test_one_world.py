@@ -20,7 +20,8 @@ from scenarios.scene import traffic_model
 from scenarios.scene.boxes import as_boxes
 from scenarios.scene.snapshot import Snapshot, passenger_classes
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.sumo.sumo_world import TRAFFIC_WIDTH_M, SumoWorld, obstacle_lanes
+from scenarios.sumo.routes_xml import TRAFFIC_WIDTH_M, obstacle_lanes
+from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 from sdc.car.collision import FRONT, RAN_INTO, REAR, SIDE, WAS_HIT, describe, hit_part
 from sdc.car.geometry import box_gap_m, boxes_overlap

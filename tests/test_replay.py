@@ -15,6 +15,7 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.measures.trace_file import Trace, read_trace
 from analysis.report.render import frame_steps, scene_from_trace, script_json, write_html
 from scenarios import CATALOG_DIR
@@ -229,8 +230,8 @@ def test_replay_bad_inputs_exit_2(sweep_dir, tmp_path):
 
 def test_versions_other_than_the_sweeps_are_warned_about():
     now = package_versions()
-    assert version_warnings({"versions": now}) == []
-    lines = version_warnings({"versions": {**now, "numpy": "0.0.1"}})
+    assert version_warnings(SweepManifest.from_dict({"versions": now})) == []
+    lines = version_warnings(SweepManifest.from_dict({"versions": {**now, "numpy": "0.0.1"}}))
     assert lines == [f"warning: the sweep ran with numpy 0.0.1, this is {now['numpy']}"]
 
 

@@ -6,7 +6,7 @@ import tomllib
 import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, dumps_spec, load_spec
-from scenarios.spec.scenario_spec import LaneKeepParams, SeedParams
+from scenarios.spec.controller_params import LaneKeepParams, SeedParams
 
 
 @pytest.mark.parametrize("name", ["seed-lesson", "highway-obstacle", "seed-rare"])

@@ -11,7 +11,7 @@ import pytest
 from scenarios import CATALOG_DIR, ScenarioSpec
 from scenarios.scene.road_geometry import RouteStop
 from scenarios.spec.toml_io import read_toml
-from scenarios.sumo.sumo_world import EGO_ID
+from scenarios.sumo.routes_xml import EGO_ID
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW
 from sdc.car.controller_plugins import make_controller

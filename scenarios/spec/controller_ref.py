@@ -32,7 +32,7 @@ class Builtin(NamedTuple):
 
 
 #: the built-in controllers, the one registry: adding one is adding its line here
-#: (``scenario_spec.CONTROLLER_PARAMS`` and ``sdc.car.controller_plugins`` read it)
+#: (``controller_params.CONTROLLER_PARAMS`` and ``sdc.car.controller_plugins`` read it)
 BUILTIN_CONTROLLERS: dict[str, Builtin] = {
     "seed": Builtin("sdc.car.controllers:SeedController", "SeedParams"),
     "lane-keep": Builtin("sdc.car.controllers:LaneKeepController", "LaneKeepParams"),

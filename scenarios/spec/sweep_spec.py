@@ -36,8 +36,9 @@ from scenarios.common.seeding import (
     stream_rng,
     warm_rng,
 )
+from scenarios.spec.controller_params import CONTROLLER_PARAMS
 from scenarios.spec.controller_ref import controller_label, resolve_file
-from scenarios.spec.scenario_spec import CONTROLLER_PARAMS, ControllerSpec, ScenarioSpec
+from scenarios.spec.scenario_spec import ControllerSpec, ScenarioSpec
 from scenarios.spec.spec_fields import Spec, build, num
 from scenarios.spec.toml_io import load_spec, read_toml
 

@@ -25,7 +25,7 @@ import traci.constants as tc  # plain numbers, shared by libsumo and traci
 from scenarios.common.errors import SdcError
 from scenarios.scene import road_kernels, traffic_model
 from scenarios.scene.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
-from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
+from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import (
     Snapshot,
     in_start_zone,
@@ -33,8 +33,21 @@ from scenarios.scene.snapshot import (
     obstacle_boxes,
     sensing_radius_m,
 )
-from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
-from scenarios.spec.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
+from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo.routes_xml import (
+    EGO_ID,
+    EGO_TYPE,
+    OBSTACLE_PREFIX,
+    OBSTACLE_TYPE_PREFIX,
+    TRAFFIC_PREFIX,
+    TRAFFIC_WIDTH_M,
+    across_m,
+    lanes_blocked,
+    routes_xml,
+    warm_run_routes_xml,
+    warm_up_routes_xml,
+)
 from scenarios.sumo.vehicle_types import VehicleTypes
 from scenarios.sumo.warm_state import (
     HALTING_SPEED_MPS,
@@ -54,11 +67,6 @@ from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import DEMAND, scenario_stream
 
-EGO_ID = "ego"
-EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
-OBSTACLE_PREFIX = "obstacle."
-TRAFFIC_PREFIX = "traffic."
-TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
 #: what is read of each nearby body every step (each variable read costs, and a step
 #: may read dozens); its size and class are read once (scenarios.sumo.vehicle_types)
 _BODY_VARS = (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED)
@@ -76,156 +84,6 @@ def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
     the sensing radius has its front bumper within it plus half of each body's length
     (the longest vehicle type's for the other's) [m]."""
     return 1.0 + (longest_m + ego_length_m) / 2
-
-
-#: a warm state's flows run on past any run's end (the state must not know the run's
-#: duration) [s]
-WARM_FLOW_END_S = 1e7
-
-
-def _flows(spec: ScenarioSpec, route: str, end_s: float, begin_s: float = 0.0) -> list[str]:
-    """A flow per lane entering at the road's start, from ``begin_s`` until ``end_s``."""
-    traffic = spec.traffic
-    if traffic.flow_vph_per_lane == 0:
-        return []
-    return [
-        f'  <flow id="{TRAFFIC_PREFIX}{lane}" type="traffic" route="{route}" begin="{begin_s!r}" '
-        f'end="{end_s}" '
-        f'vehsPerHour="{traffic.flow_vph_per_lane}" departLane="{lane}" departSpeed="desired"/>'
-        for lane in range(spec.road.lane_count)
-    ]
-
-
-def _trips(trips: list[tuple[str, str]], depart_s: float = 0.0) -> list[str]:
-    """The first random trips across the network, all leaving at ``depart_s``."""
-    return [
-        f'  <trip id="{TRAFFIC_PREFIX}{k}" type="traffic" depart="{depart_s!r}" from="{start}" '
-        f'to="{end}" departLane="random" departPos="random_free" departSpeed="0"/>'
-        for k, (start, end) in enumerate(trips)
-    ]
-
-
-def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
-    traffic = spec.traffic
-    factor = (traffic.speed_mean_mps / spec.road.speed_limit_mps
-              if road_source(spec.road).flows else 1.0)  # a network: its own limits
-    lo, hi = SPEED_FACTOR_BOUNDS
-    return (f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
-            f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
-
-
-def _ego_types(spec: ScenarioSpec) -> list[str]:
-    """The ego's vType (its size, acceleration and braking, so followers keep gaps for
-    the car it is) and the obstacles'."""
-    model = VEHICLE_MODELS[spec.vehicle.model]
-    decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
-    return [f'  <vType id="{EGO_TYPE}" length="{model.length_m}" width="{model.width_m}" '
-            f'accel="{model.max_accel_mps2}" decel="{decel!r}" emergencyDecel="{decel!r}"/>'] + [
-        f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
-        for kind, (length, width) in OBSTACLE_SIZES_M.items()
-    ]
-
-
-def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
-    ego_front_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
-    return f'  <route id="r0" edges="{" ".join(road.route_edges(ego_front_m))}"/>'
-
-
-def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
-                  traffic_width_m: float) -> list[int]:
-    """The lanes beside ``lane`` (-1 on its right, +1 on its left) that a body standing
-    at ``box`` reaches into too far for traffic ``traffic_width_m`` wide to pass
-    (:func:`scenarios.scene.traffic_model.sides_blocked`), each lane as wide as it is there."""
-    (s_m,), (d_m,) = road.to_frenet(box[None, :2])
-    lo_m, hi_m = _across_m(box, float(road.heading_at(s_m)), d_m)
-    width_m, beside_m = road.lane_widths_m(s_m, lane)
-    right, left = traffic_model.sides_blocked(lo_m, hi_m, road.lane_center_d_m(lane), width_m,
-                                              traffic_width_m, beside_m)
-    return [step for step, blocked in ((-1, right), (1, left)) if blocked]
-
-
-def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
-    """The lanes of a built-in road in which SUMO must see an obstacle standing at
-    ``box``: the lane of its centre first, then each neighbouring lane it blocks
-    (:func:`lanes_blocked`, for the built-in traffic)."""
-    (_,), (d_m,) = road.to_frenet(box[None, :2])
-    own = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
-    return [own] + [own + step for step in lanes_blocked(road, box, own, TRAFFIC_WIDTH_M)
-                    if 0 <= own + step < road.lanes]
-
-
-def _across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:
-    """How far across the road (lowest, highest ``d``) a box centred at ``d_m`` reaches,
-    the road heading ``heading_rad`` there."""
-    _, _, yaw_rad, length_m, width_m = box.tolist()
-    psi = yaw_rad - heading_rad
-    half_m = abs(length_m / 2 * math.sin(psi)) + abs(width_m / 2 * math.cos(psi))
-    return d_m - half_m, d_m + half_m
-
-
-def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
-               checks: str = "all") -> list[str]:
-    """The obstacles as vehicles stopped for good where they stand, entering at
-    ``depart`` with SUMO's insertion ``checks``. On a built-in road an obstacle that
-    blocks a neighbouring lane stands there too, as a second vehicle
-    (``obstacle.<i>.<lane>``)."""
-    lines = []
-    checked = "" if checks == "all" else f' insertionChecks="{checks}"'
-    for i, (obstacle, box) in enumerate(zip(spec.obstacles, obstacle_boxes(spec, road),
-                                            strict=True)):
-        length_m = obstacle.size_m[0]
-        s_m = road.place_s_m(obstacle.position_m, length_m)
-        # on a network, a second body beside it waits for SUMO's types (_show_obstacles_beside)
-        lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
-        for k, spec_lane in enumerate(lanes):
-            edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
-            vid = f"{OBSTACLE_PREFIX}{i}" if k == 0 else f"{OBSTACLE_PREFIX}{i}.{lane}"
-            route = "r0" if edge == EDGE_ID else vid
-            if route != "r0":
-                lines.append(f'  <route id="{route}" edges="{edge}"/>')
-            lines += [
-                f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.kind}" '
-                f'route="{route}" depart="{depart}" departLane="{lane}" '
-                f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
-                f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
-                "  </vehicle>",
-            ]
-    return lines
-
-
-def _routes(lines: list[str]) -> str:
-    return "\n".join(["<routes>", *lines, "</routes>"]) + "\n"
-
-
-def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
-               trips: list[tuple[str, str]] = ()) -> str:
-    """The ``.rou.xml`` text of a run without a warm state: vehicle types, the ego's
-    route, obstacles as stopped vehicles, and the background traffic (flows, or on a
-    network the ``trips`` (from edge, to edge) leaving at 0 s)."""
-    flows = road_source(spec.road).flows
-    end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
-    enter_s = spec.scenario.step_s  # after the ego, which enters in the first step
-    return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
-                    *_obstacles(spec, road),
-                    *(_flows(spec, "r0", end_s, enter_s) if flows
-                      else _trips(trips, enter_s))])
-
-
-def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
-                       trips: list[tuple[str, str]] = ()) -> str:
-    """The ``.rou.xml`` text of a warm-up: the background traffic alone."""
-    if not road_source(spec.road).flows:
-        return _routes([_traffic_type(spec, road), *_trips(trips)])
-    return _routes([_traffic_type(spec, road), f'  <route id="traffic" edges="{EDGE_ID}"/>',
-                    *_flows(spec, "traffic", WARM_FLOW_END_S)])
-
-
-def warm_run_routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
-    """The ``.rou.xml`` text loaded beside a warm state: the ego's types and route,
-    and the obstacles entering as the run begins, wherever the traffic stands
-    (the traffic on their spots is taken off first)."""
-    return _routes([*_ego_types(spec), _ego_route(spec, road),
-                    *_obstacles(spec, road, depart="begin", checks="none")])
 
 
 def _is_traffic(vehicle_id: str) -> bool:
@@ -517,7 +375,7 @@ class SumoWorld:
         width_m, beside_m = road.lane_widths_m(s_m, lane)
         if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
             return x, y, angle_deg
-        lo_m, hi_m = _across_m(box, heading, d_m)
+        lo_m, hi_m = across_m(box, heading, d_m)
         lateral_m = traffic_model.sumo_lateral_m(lo_m, hi_m, lane_d_m, width_m, model.width_m,
                                                  self._traffic_width_m(), beside_m)
         front_d_m = d_m + model.length_m / 2 * math.sin(float(box[2]) - heading)

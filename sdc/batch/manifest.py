@@ -10,13 +10,13 @@ import subprocess
 from importlib import metadata
 from pathlib import Path
 
+from analysis.measures.sweep_manifest import MANIFEST_FILE, SweepManifest
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError
 from scenarios.common.file_read import read_json, require_keys
 from scenarios.spec.controller_ref import controller_label
 from sdc.car.controller_plugins import controller_source
 
-MANIFEST = "manifest.json"
 _PACKAGES = ("sdc", "libsumo", "eclipse-sumo", "numpy", "scipy", "pandas", "pyarrow", "ray")
 
 
@@ -54,11 +54,11 @@ def controller_sources(names) -> dict[str, dict]:
     return {controller_label(name): controller_source(name) for name in names}
 
 
-def controller_changes(manifest: dict) -> list[str]:
+def controller_changes(manifest: SweepManifest) -> list[str]:
     """One line per plug-in controller whose file is gone or differs from the one
     the sweep recorded (manifests without controllers: none)."""
     lines = []
-    for label, recorded in (manifest.get("controllers") or {}).items():
+    for label, recorded in (manifest.controllers or {}).items():
         if not isinstance(recorded, dict) or "sha256" not in recorded:
             continue
         try:
@@ -73,11 +73,11 @@ def controller_changes(manifest: dict) -> list[str]:
     return lines
 
 
-def network_file_changes(manifest: dict) -> list[str]:
+def network_file_changes(manifest: SweepManifest) -> list[str]:
     """One line per network file (``road.net_file``) of the sweep that is gone or
     differs from the bytes its runs ran on (manifests without files: none)."""
     lines = []
-    for path, recorded in (manifest.get("files") or {}).items():
+    for path, recorded in (manifest.files or {}).items():
         if not isinstance(recorded, dict) or recorded.get("field") != "road.net_file":
             continue
         try:
@@ -96,17 +96,17 @@ _MANIFEST_KEYS = {"sweep.sweep.name": str, "plan_sha256": str, "versions": dict,
                   "sessions": list}
 
 
-def read_manifest(out_dir: Path) -> dict | None:
+def read_manifest(out_dir: Path) -> SweepManifest | None:
     """``out_dir``'s manifest, None when it has none; one that cannot be read or was
     written by another sdc version is a :class:`~scenarios.common.errors.FileError`."""
-    path = Path(out_dir) / MANIFEST
+    path = Path(out_dir) / MANIFEST_FILE
     if not path.exists():
         return None
-    return require_keys(read_json(path, "the sweep manifest"), _MANIFEST_KEYS, path,
-                        "the sweep manifest")
+    return SweepManifest.from_dict(require_keys(read_json(path, "the sweep manifest"),
+                                                _MANIFEST_KEYS, path, "the sweep manifest"))
 
 
-def write_manifest(out_dir: Path, manifest: dict) -> None:
+def write_manifest(out_dir: Path, manifest: SweepManifest) -> None:
     """Write atomically, so a kill never leaves half a manifest."""
-    text = json.dumps(manifest, indent=2) + "\n"
-    write_atomic(Path(out_dir) / MANIFEST, lambda tmp: tmp.write_text(text))
+    text = json.dumps(manifest.to_dict(), indent=2) + "\n"
+    write_atomic(Path(out_dir) / MANIFEST_FILE, lambda tmp: tmp.write_text(text))

@@ -17,6 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
+from analysis.measures.sweep_manifest import SweepManifest
 from analysis.measures.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.common.errors import FileError, SdcError, SpecError
 from scenarios.common.file_read import read_parquet
@@ -45,7 +46,7 @@ class RecordedRun:
     spec: ScenarioSpec
     row: dict | None  # its result row; None when the sweep has not run it yet
     trace_path: Path | None  # the recorded trace, when the sweep kept it
-    manifest: dict
+    manifest: SweepManifest
 
 
 def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
@@ -90,11 +91,11 @@ def _planned_spec(spec_json: str, plan_path: Path, run_id: str) -> ScenarioSpec:
                                    f"of {run_id}: {e})") from None
 
 
-def version_warnings(manifest: dict) -> list[str]:
+def version_warnings(manifest: SweepManifest) -> list[str]:
     """One line per package whose version differs from the sweep's, and per
     plug-in controller whose file changed since."""
     now = package_versions()
-    recorded = manifest.get("versions", {})
+    recorded = manifest.versions or {}
     return ([f"warning: the sweep ran with {name} {recorded[name]}, this is {now.get(name)}"
              for name in recorded if name != "ray" and recorded[name] != now.get(name)]
             + [f"warning: {line}" for line in controller_changes(manifest)])

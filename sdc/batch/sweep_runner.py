@@ -95,9 +95,8 @@ def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
     """The manifest of the sweep ``out_dir`` holds, checked to be ``digest``'s and resumable;
     None when ``out_dir`` is free for a new sweep (missing or empty)."""
     out_dir = Path(out_dir)
-    plain = read_manifest(out_dir) if out_dir.is_dir() else None
-    if plain is not None:
-        manifest = SweepManifest.from_dict(plain)
+    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
+    if manifest is not None:
         if not resume:
             raise SdcError(f"--out: {out_dir} already holds a sweep; pass --resume to "
                            "continue it, or choose another directory")
@@ -105,7 +104,7 @@ def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest.sweep_name!r}, another plan); "
                            "resume it with the sweep file and options that started it")
-        changes = controller_changes(plain) + network_file_changes(plain)
+        changes = controller_changes(manifest) + network_file_changes(manifest)
         if changes:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
                            "it (restore it, or start a new sweep)")
@@ -191,7 +190,7 @@ def record_job_files(out_dir: Path, manifest: SweepManifest,
     entries = catalog.manifest_entries()
     manifest = manifest.with_session(files={**(manifest.session.files or {}), **entries})
     manifest = manifest.updated(files={**(manifest.files or {}), **entries})
-    write_manifest(out_dir, manifest.to_dict())
+    write_manifest(out_dir, manifest)
     return manifest
 
 
@@ -275,7 +274,7 @@ def start_session(out_dir: Path, manifest: SweepManifest, executor: Executor,
     session = Session.new(started_at=now_iso(), ended_at=None, executor=executor.name,
                           workers=executor.workers, traces=traces, runs_to_do=runs_to_do)
     manifest = manifest.updated(sessions=(*manifest.sessions, session), status="running")
-    write_manifest(out_dir, manifest.to_dict())
+    write_manifest(out_dir, manifest)
     return manifest
 
 
@@ -294,5 +293,5 @@ def end_session(out_dir: Path, manifest: SweepManifest, table: pa.Table,
     manifest = manifest.with_session(ended_at=ended_at).updated(
         ended_at=ended_at, counts=summary, collisions=outcomes[COLLIDED], outcomes=outcomes,
         status="complete" if finished else "interrupted")
-    write_manifest(out_dir, manifest.to_dict())
+    write_manifest(out_dir, manifest)
     return summary, outcomes

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.spec.scenario_spec import LaneKeepParams, SeedParams
+from scenarios.spec.controller_params import LaneKeepParams, SeedParams
 from scenarios.spec.spec_fields import build
 from sdc.car.controller_api import Command, Observation
 from sdc.car.sensors import LaneReading

@@ -55,12 +55,10 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
-    from analysis.measures.sweep_manifest import SweepManifest
     from scenarios.spec.sweep_spec import expand, plan_sha256
     from sdc.batch.manifest import read_manifest
 
-    plain = read_manifest(out_dir) if out_dir.is_dir() else None
-    if plain is None:
+    manifest = read_manifest(out_dir) if out_dir.is_dir() else None
+    if manifest is None:
         return False
-    manifest = SweepManifest.from_dict(plain)
     return manifest.sweep_name == spec.name and manifest.plan_sha256 != plan_sha256(expand(spec))

@@ -22,7 +22,7 @@ import numpy as np
 
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
-from scenarios.sumo.sumo_world import OBSTACLE_PREFIX
+from scenarios.sumo.routes_xml import OBSTACLE_PREFIX
 from sdc.car.vehicle import Vehicle, VehicleState
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 
-from scenarios.spec.scenario_spec import AvoidParams
+from scenarios.spec.controller_params import AvoidParams
 from scenarios.spec.spec_fields import build
 from sdc.car.avoid.lane_frame import LaneFrame
 from sdc.car.avoid.lane_line import LaneLine, Line, pursuit_steer_rad
