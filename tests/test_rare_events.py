@@ -8,17 +8,14 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from analysis.rare.rare_events import (
-    EstimationLoop,
-    MultilevelIS,
-    estimate,
-    estimate_from_rows,
+from analysis.rare.proposals import (
     gaussian_proposal,
     nominal_log_density,
     nominal_proposal,
     unit_points,
     weights_from_log_densities,
 )
+from analysis.rare.rare_events import EstimationLoop, MultilevelIS, estimate, estimate_from_rows
 
 REPEATS = 120
 

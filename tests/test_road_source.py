@@ -51,9 +51,12 @@ def test_each_kind_has_one_source_and_one_warm_state_identity(kind, cls, tmp_pat
     if kind == "sumo_config":
         assert source.identity_sha256() == load_bundle(SQUARE).sha256
         assert source.configuration(spec) is load_bundle(SQUARE)
+        entry = source.manifest_entry(spec.scenario.step_s)
+        assert (entry["file"], entry["step_s"]) == (SQUARE, spec.scenario.step_s)
     else:
         assert source.identity_sha256(tmp_path) == file_sha256(source.network_file(tmp_path))
         assert source.configuration(spec) is None
+        assert source.manifest_entry(spec.scenario.step_s) is None
     # a job ships the file the identity is of (a configuration: as one bundle)
     shipped = source.shipped(tmp_path)
     assert shipped.field == {"straight": "network", "sumo_net": "road.net_file",
@@ -95,7 +98,7 @@ def test_has_traffic_is_each_kinds_own_demand():
 KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/sumo_net/road_source.py",
               "scenarios/scene/road_geometry.py", "scenarios/highway/highway_world.py",
               "scenarios/spec/toml_io.py", "scenarios/sumo_net/route_road.py",
-              "scenarios/sumo_net/sumo_config.py", "analysis/measures/safety.py"}
+              "analysis/measures/safety.py"}
 
 
 def test_no_module_outside_the_roads_own_asks_a_road_its_kind():

@@ -92,7 +92,7 @@ def test_a_configuration_steps_as_it_asks_unless_the_spec_sets_step_s(tmp_path, 
     (tmp_path / "own.toml").write_text(dumps_plain(plain))
     own = load_spec(tmp_path / "own.toml")
     assert own.scenario.step_s == asked_s == config_step_s(plain["road"]["config_file"])
-    entry = config_manifest(own.road, own.scenario.step_s)
+    entry = config_manifest(own.road.config_file, own.scenario.step_s)
     assert (entry["step_s"], entry["step_from"]) == (asked_s, STEP_FROM_CONFIG)
     assert "step-length" not in entry["overridden"]
     assert seconds(entry["applied"]["step-length"]) == asked_s
@@ -100,7 +100,7 @@ def test_a_configuration_steps_as_it_asks_unless_the_spec_sets_step_s(tmp_path, 
     (tmp_path / "set.toml").write_text(dumps_plain(plain))
     spec = load_spec(tmp_path / "set.toml")
     assert spec.scenario.step_s == 0.25
-    entry = config_manifest(spec.road, spec.scenario.step_s)
+    entry = config_manifest(spec.road.config_file, spec.scenario.step_s)
     assert entry["step_from"] == STEP_FROM_SPEC
     assert seconds(entry["overridden"]["step-length"]) == asked_s
 

@@ -4,7 +4,7 @@ Each batch, in standard-normal space ``z``, has four parts with fixed run counts
 (largest remainders), its rows shuffled:
 
 * **the descent** (50 % once a mode is found, 80 % before): a weighted Gaussian-kernel
-  mixture (:func:`~analysis.rare.rare_events.kernel_mixture_fit`) on the elites, the
+  mixture (:func:`~analysis.rare.proposals.kernel_mixture_fit`) on the elites, the
   lowest-scoring runs so far that did not fail and lie in no found mode's cone, as
   many as it takes for their weights to be worth ``elites`` runs (Kish ESS), each
   score divided by ``1 - k`` (``k``: its closeness to a found cone, clipped to [0, 1]);
@@ -33,18 +33,15 @@ import math
 import numpy as np
 
 from analysis.measures.failure_event import FAILURE
-from analysis.rare.rare_events import (
+from analysis.rare.proposals import (
     KernelMixture,
     Proposal,
-    check_budget,
-    check_dims,
-    check_kernels,
-    checked_batch,
     kernel_mixture_fit,
     nominal_proposal,
     standard_normal,
     wide_normal,
 )
+from analysis.rare.rare_events import check_budget, check_dims, check_kernels, checked_batch
 
 #: a run this close to the origin has no direction (it lies in no cone)
 _TINY_NORM = 1e-12
@@ -149,7 +146,7 @@ class ModeSearch:
     * ``explore_share`` (0.1) and ``explore_scale`` (2.0): the wide part, as
       the estimator's (:class:`~analysis.rare.rare_events.MultilevelIS`).
     * ``shrinkage`` (0.4), ``bandwidth_scale`` (1.0): the kernels', as in
-      :func:`~analysis.rare.rare_events.kernel_mixture_fit` (0.4 is the estimator's).
+      :func:`~analysis.rare.proposals.kernel_mixture_fit` (0.4 is the estimator's).
     * ``revisit_kernels`` (30): at most this many failures (the heaviest) per
       mode carry its revisit kernels, which bounds the cost of a large mode.
 

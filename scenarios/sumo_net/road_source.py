@@ -77,6 +77,9 @@ class RoadSource(Protocol):
     def configuration(self, spec: ScenarioSpec):
         """The configuration a run loads (a ``ConfigBundle``; None: none), ``spec``'s
         ``traffic.enter_s`` checked against its demand first."""
+    def manifest_entry(self, step_s: float) -> dict | None:
+        """What a sweep's manifest records of its configuration, run in steps of
+        ``step_s`` (None: it has none)."""
 
 
 class _WarmsUpFromZero:
@@ -94,6 +97,9 @@ class _WarmsUpFromZero:
         return round(spec.traffic.warm_up_s / spec.scenario.step_s)
 
     def configuration(self, spec: ScenarioSpec):
+        return None
+
+    def manifest_entry(self, step_s: float) -> dict | None:
         return None
 
 
@@ -231,6 +237,11 @@ class ConfigRoad(_NetworkRoad):
 
         check_enter_s(self.road.config_file, spec.traffic.enter_s)
         return self._bundle()
+
+    def manifest_entry(self, step_s: float) -> dict | None:
+        from scenarios.sumo_net.sumo_config import config_manifest
+
+        return config_manifest(self.road.config_file, step_s)
 
 
 _BY_KIND: dict[str, type] = {"straight": BuiltRoad, "curve": BuiltRoad,

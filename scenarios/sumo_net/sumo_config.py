@@ -289,20 +289,19 @@ def config_step_s(config_file: str) -> float | None:
 STEP_FROM_CONFIG, STEP_FROM_SPEC = "the configuration's step-length", "scenario.step_s"
 
 
-def config_manifest(road, step_s: float) -> dict | None:
-    """What a manifest records of a road's configuration (None: not a ``sumo_config``
-    road): its file, begin, the run's step (``step_s``) and where it came from
+def config_manifest(config_file: str, step_s: float) -> dict:
+    """What a manifest records of the configuration a ``sumo_config`` road names
+    (``config_file``, as the spec names it): its file, begin, the run's step
+    (``step_s``) and where it came from
     (:data:`STEP_FROM_CONFIG` where it is the one the configuration asks for, else
     :data:`STEP_FROM_SPEC`), and the options a run applies, overrides, leaves out (the
     step length among the overridden ones only where the run's differs)."""
-    if road.kind != "sumo_config":
-        return None
-    manifest = load_bundle(road.config_file).description["manifest"]
+    manifest = load_bundle(config_file).description["manifest"]
     overridden, applied = dict(manifest["overridden"]), dict(manifest["applied"])
-    from_config = config_step_s(road.config_file) == step_s
+    from_config = config_step_s(config_file) == step_s
     if from_config:
         applied["step-length"] = overridden.pop("step-length")
-    return {**manifest, "file": road.config_file, "applied": applied, "overridden": overridden,
+    return {**manifest, "file": config_file, "applied": applied, "overridden": overridden,
             "step_s": step_s, "step_from": STEP_FROM_CONFIG if from_config else STEP_FROM_SPEC}
 
 

@@ -39,7 +39,8 @@ from analysis.measures.sweep_manifest import AdaptiveRecord, SweepManifest
 from analysis.rare.adaptive_summary import described_modes, stuck_modes, summary_path
 from analysis.rare.failure_modes import OTHER
 from analysis.rare.mode_search import ModeSearch
-from analysis.rare.rare_events import EstimationLoop, unit_points
+from analysis.rare.proposals import unit_points
+from analysis.rare.rare_events import EstimationLoop
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.plain_json import json_plain

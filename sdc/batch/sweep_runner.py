@@ -28,7 +28,7 @@ from scenarios.common.errors import SdcError
 from scenarios.scene import traffic_model
 from scenarios.spec.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
 from scenarios.sumo.warm_state import SETTLING_FILE
-from scenarios.sumo_net.sumo_config import config_manifest
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import prepare_network
 from sdc.batch.executors import Executor
 from sdc.batch.job_files import FileCatalog
@@ -143,7 +143,7 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
         # sumo_config roads: the options of each configuration applied, overridden, not
         sumo_config=[entry for road, step_s in dict.fromkeys(
                          (spec.road, spec.scenario.step_s) for spec in specs or (sweep.base,))
-                     if (entry := config_manifest(road, step_s)) is not None],
+                     if (entry := road_source(road).manifest_entry(step_s)) is not None],
         controllers=controller_sources(sweep.controllers),
         files={},  # what travels with the job: driver path -> field, sha256
         git=git_state(),
