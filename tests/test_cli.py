@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from analysis.report.sweep_report import COLLISION_TITLE, VERDICT_TITLE
+from analysis.report.sweep_words import COLLISION_TITLE, VERDICT_TITLE
 from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import dumps_plain
 from sdc.cli import main

@@ -23,7 +23,8 @@ import pyarrow.parquet as pq
 import pytest
 from scipy import stats
 
-from analysis.report.sweep_report import FEW_WARM_STATES, write_report
+from analysis.report.sweep_report import write_report
+from analysis.report.sweep_words import FEW_WARM_STATES
 from analysis.stats.gate import gate
 from analysis.stats.rates import (
     ClusteredCounts,

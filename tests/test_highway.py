@@ -79,7 +79,8 @@ def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
 
 
 def test_a_sweep_over_both_backends_reports_them_side_by_side(tmp_path):
-    from analysis.report.sweep_report import COLLISION_TITLE, write_report
+    from analysis.report.sweep_report import write_report
+    from analysis.report.sweep_words import COLLISION_TITLE
     from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
     from sdc.batch.progress import QuietReporter

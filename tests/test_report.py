@@ -22,8 +22,8 @@ from click.testing import CliRunner
 from analysis.measures.commands import replay_command
 from analysis.report.look_at import LIST_FILE, SHOWN_PER_CLASS, ranked_runs
 from analysis.report.sweep_page import SECTIONS
-from analysis.report.sweep_report import COLLISION_TITLE, VERDICT_TITLE, write_report
-from analysis.report.sweep_words import NOT_RECORDED
+from analysis.report.sweep_report import write_report
+from analysis.report.sweep_words import COLLISION_TITLE, NOT_RECORDED, VERDICT_TITLE
 from analysis.report.sweep_world import world_lines, world_summary
 from analysis.stats.rates import wilson_interval
 from analysis.stats.verdicts import completed_runs, outcomes_by

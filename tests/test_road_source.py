@@ -61,6 +61,7 @@ def test_each_kind_has_one_source_and_one_warm_state_identity(kind, cls, tmp_pat
     shipped = source.shipped(tmp_path)
     assert shipped.field == {"straight": "network", "sumo_net": "road.net_file",
                              "sumo_config": "road.config_file"}[kind]
+    assert shipped.identity_sha256 == source.identity_sha256(tmp_path)
     if kind != "sumo_config":
         assert sha256_hex(shipped.data) == source.identity_sha256(tmp_path)
     assert (shipped.edges_key is None) == (kind == "straight")

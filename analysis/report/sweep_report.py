@@ -19,12 +19,7 @@ from pathlib import Path
 from analysis.report.report_files import HTML_FILE, Report, ReportError, load_results
 from analysis.report.sweep_page import write_sweep_report
 from analysis.report.sweep_summary import by_column
-from analysis.report.sweep_words import COLLISION_TITLE, FEW_WARM_STATES, VERDICT_TITLE
 from analysis.stats.rates import Method
-
-#: what callers read the report's lines by, besides the entry
-__all__ = ["COLLISION_TITLE", "FEW_WARM_STATES", "VERDICT_TITLE", "Report", "ReportError",
-           "write_report"]
 
 
 def write_report(sweep_dir: Path, *, html_path: Path | None = None, by: list[str] = (),

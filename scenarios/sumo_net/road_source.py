@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Protocol
 
 from scenarios.common.errors import SdcError, SpecError
-from scenarios.common.file_read import file_sha256, sha256_hex
+from scenarios.common.file_read import file_sha256, read_bytes, sha256_hex
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec, TrafficSpec
 from scenarios.sumo_net.build import build_network, input_path, sumo_load_error
@@ -33,15 +33,17 @@ from scenarios.sumo_net.build import build_network, input_path, sumo_load_error
 @dataclasses.dataclass(frozen=True)
 class ShippedFile:
     """What a job ships of a road: the field that names it, how the driver names it
-    (its path), its bytes, the name its copy takes, and the key of its network's
-    cached road edges (the network file's sha256; None: a built road's edges are
-    its geometry's)."""
+    (its path), its bytes, the name its copy takes, the key of its network's cached
+    road edges (the network file's sha256; None: a built road's edges are its
+    geometry's), and its warm states' identity (:meth:`RoadSource.identity_sha256`,
+    from the bytes read here: the file is read once)."""
 
     field: str
     driver_path: str
     data: bytes
     name: str
     edges_key: str | None
+    identity_sha256: str
 
 
 class RoadSource(Protocol):
@@ -125,8 +127,8 @@ class BuiltRoad(_WarmsUpFromZero):
 
     def shipped(self, cache_dir: Path | None = None) -> ShippedFile:
         path = self.network_file(cache_dir)
-        return ShippedFile("network", str(path), _read(path, "the built SUMO network"),
-                           path.name, None)
+        data = read_bytes(path, "the built SUMO network")
+        return ShippedFile("network", str(path), data, path.name, None, sha256_hex(data))
 
     def identity_sha256(self, cache_dir: Path | None = None) -> str:
         return file_sha256(self.network_file(cache_dir))
@@ -175,8 +177,9 @@ class NetworkFileRoad(_NetworkRoad, _WarmsUpFromZero):
 
     def shipped(self, cache_dir: Path | None = None) -> ShippedFile:
         path = self.network_file()
-        data = _read(path, "the SUMO network")
-        return ShippedFile("road.net_file", str(path), data, path.name, sha256_hex(data))
+        data = read_bytes(path, "the SUMO network")
+        digest = sha256_hex(data)
+        return ShippedFile("road.net_file", str(path), data, path.name, digest, digest)
 
     def identity_sha256(self, cache_dir: Path | None = None) -> str:
         return file_sha256(self.network_file())
@@ -212,7 +215,7 @@ class ConfigRoad(_NetworkRoad):
         bundle = self._bundle()
         name = f"{input_path(self.road.config_file).stem}{BUNDLE_SUFFIX}"
         return ShippedFile("road.config_file", self.road.config_file, bundle.to_bytes(), name,
-                           sha256_hex(bundle.files[bundle.net_name]))
+                           sha256_hex(bundle.files[bundle.net_name]), bundle.sha256)
 
     def identity_sha256(self, cache_dir: Path | None = None) -> str:
         return self._bundle().sha256  # its content, not its bundle's bytes
@@ -252,8 +255,3 @@ def road_source(road: RoadSpec) -> RoadSource:
     """The source of ``road``, by its kind."""
     return _BY_KIND[road.kind](road)
 
-
-def _read(path: Path, what: str) -> bytes:
-    from scenarios.common.file_read import read_bytes
-
-    return read_bytes(path, what)

@@ -98,7 +98,7 @@ class FileCatalog:
                                                                         self.cache_dir)
             self._by_road[road] = (main,) + ((self._read("road edges", edges, "road edges"),)
                                              if edges is not None and edges.is_file() else ())
-            self._identity[road] = source.identity_sha256(self.cache_dir)
+            self._identity[road] = own.identity_sha256
         return self._by_road[road]
 
     def warm_key(self, spec: ScenarioSpec) -> str | None:
