@@ -111,3 +111,18 @@ def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = 
     from scenarios.sumo.sumo_world import SumoWorld
 
     return SumoWorld(spec, road, cache_dir, gui, warm_state=warm_state)
+
+
+def make_shared_world(egos: list[tuple[ScenarioSpec, RoadGeometry]],
+                      cache_dir: Path | None = None, warm_state: Path | None = None):
+    """One SUMO world for several egos (each a spec and its road; the first's traffic is
+    the world's: :class:`scenarios.sumo.sumo_world.SumoWorld`); the highway backend
+    holds one ego only."""
+    (spec, road), others = egos[0], tuple(egos[1:])
+    if spec.scenario.backend != "sumo" and others:
+        raise SdcError("[sweep] egos_per_world: only the sumo backend holds several egos")
+    if not others:
+        return make_world(spec, road, cache_dir, warm_state=warm_state)
+    from scenarios.sumo.sumo_world import SumoWorld
+
+    return SumoWorld(spec, road, cache_dir, warm_state=warm_state, others=others)

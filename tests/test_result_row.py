@@ -61,7 +61,7 @@ def _outcome() -> dict:
             "min_road_edge_gap_m": np.float64(0.7),
             "stop_gap_m": 27.275, "stop_possible": np.True_,
             "sim_time_s": 0.2, "steps": 3, "wall_time_s": 0.01, "network_vehicles": 0,
-            "warm_state": None,
+            "warm_state": None, "world_egos": 1,
             "trace_sha256": "ab" * 32}
 
 
@@ -79,8 +79,10 @@ def test_columns_are_unique_keep_the_contract_in_order_and_say_what_they_mean():
     assert [n for n in names if n in CONTRACT] == CONTRACT
     parts = {"identity", "status", "outcome", "metric", "sweep"}
     assert all(c.part in parts and c.meaning for c in COLUMNS)
-    assert [c.name for c in COLUMNS if c.part == "sweep"] == ["run_index", "sample"]
-    assert tuple(n for n in names if n not in ("run_index", "sample")) == RUN_COLUMNS
+    assert [c.name for c in COLUMNS if c.part == "sweep"] == ["run_index", "sample", "world_id",
+                                                              "world_slot"]
+    assert tuple(n for n in names if n not in ("run_index", "sample", "world_id",
+                                               "world_slot")) == RUN_COLUMNS
 
 
 def test_the_schema_is_the_definitions_then_the_swept_parameters():

@@ -39,6 +39,7 @@ from scenarios.common.seeding import (
 from scenarios.spec.controller_params import CONTROLLER_PARAMS
 from scenarios.spec.controller_ref import controller_label, resolve_file
 from scenarios.spec.scenario_spec import ControllerSpec, ScenarioSpec
+from scenarios.spec.shared_worlds import WorldSeat, group_worlds
 from scenarios.spec.spec_fields import Spec, build, num
 from scenarios.spec.toml_io import load_spec, read_toml
 
@@ -48,6 +49,8 @@ PARAM_PREFIX = "p."
 #: memory (5-14 KB a run) and is built (1-2 ms a run) and written to plan.parquet
 #: before the first run starts; 100,000 runs are hours of runs on a few cores
 MAX_RUNS = 100_000
+#: the most egos one world holds ([sweep] egos_per_world)
+MAX_EGOS_PER_WORLD = 64
 #: how often planning says how far it got [runs]
 PLAN_PROGRESS_RUNS = 1000
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
@@ -241,6 +244,9 @@ class _SweepTable(Spec):
     seed: int = num(0, ge=0, lt=SEED_LIMIT)
     levels: int | None = num(None, ge=2, le=1000)
     warm_states: int | None = num(None, ge=1, le=MAX_RUNS)
+    #: runs that share one SUMO world (its traffic simulated once), each with its own
+    #: ego (scenarios/spec/shared_worlds.py); 1: every run in a world of its own
+    egos_per_world: int = num(1, ge=1, le=MAX_EGOS_PER_WORLD)
     controllers: tuple = ("seed",)
     params: tuple = ()
 
@@ -261,6 +267,8 @@ class SweepSpec:
     #: how many distinct warm states of the traffic the samples draw from (None: each
     #: sample warms up its own, from its seed)
     warm_states: int | None = None
+    #: runs that share one world (scenarios/spec/shared_worlds.py); 1: none share
+    egos_per_world: int = 1
 
     @classmethod
     def from_plain(cls, data: Any, base_dir: Path) -> SweepSpec:
@@ -337,8 +345,13 @@ class SweepSpec:
             check_runs("sweep.samples", f"{meta.samples} samples", meta.samples,
                        len(controllers), "fewer samples")
         _check_warm_states(meta.warm_states, base, parsed)
+        if meta.egos_per_world > 1 and base.scenario.backend != "sumo":
+            raise SpecError("sweep.egos_per_world", "only the sumo backend holds several "
+                            f"egos in one world; the base scenario runs on "
+                            f"{base.scenario.backend!r}")
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
-                   meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states)
+                   meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states,
+                   meta.egos_per_world)
 
     @property
     def param_types(self) -> dict[str, type]:
@@ -365,6 +378,8 @@ class SweepSpec:
             table["levels"] = self.levels
         if self.warm_states is not None:
             table["warm_states"] = self.warm_states
+        if self.egos_per_world > 1:
+            table["egos_per_world"] = self.egos_per_world
         table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
         return {"sweep": table}
 
@@ -434,6 +449,7 @@ class PlannedRun:
     params: dict[str, Any]
     spec: ScenarioSpec | None
     error: str | None
+    world: WorldSeat | None = None  # its seat in a shared world ([sweep] egos_per_world)
 
 
 def _unit_points(sweep: SweepSpec, rng: np.random.Generator) -> np.ndarray:
@@ -530,7 +546,20 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
             ))
     if progress is not None:
         progress(len(plan), total)
-    return plan
+    return _seated(plan, sweep.egos_per_world, width)
+
+
+def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[PlannedRun]:
+    """``plan`` with its runs seated in shared worlds (:func:`group_worlds`), each
+    run's spec taking its world's traffic seed; unchanged for one ego a world."""
+    if egos_per_world == 1:
+        return plan
+    grouped = group_worlds([(k, f"{run.sample:0{width}d}", run.controller, run.spec)
+                            for k, run in enumerate(plan) if run.spec is not None],
+                           egos_per_world)
+    return [run if k not in grouped else
+            dataclasses.replace(run, spec=grouped[k][1], world=grouped[k][0])
+            for k, run in enumerate(plan)]
 
 
 def plan_sha256(plan: list[PlannedRun]) -> str:
@@ -538,5 +567,6 @@ def plan_sha256(plan: list[PlannedRun]) -> str:
     digest = hashlib.sha256()
     for run in plan:
         body = run.spec.to_plain() if run.spec else run.error
-        digest.update(json.dumps([run.run_id, run.params, body], sort_keys=True).encode())
+        seat = [] if run.world is None else [run.world.world_id, run.world.slot]
+        digest.update(json.dumps([run.run_id, run.params, body, *seat], sort_keys=True).encode())
     return digest.hexdigest()

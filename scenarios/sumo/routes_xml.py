@@ -12,6 +12,8 @@ are known.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,6 +28,32 @@ EGO_ID = "ego"
 EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
 OBSTACLE_PREFIX = "obstacle."
 TRAFFIC_PREFIX = "traffic."
+EGO_ROUTE = "r0"
+
+
+@dataclass(frozen=True)
+class EgoNames:
+    """The names SUMO knows one ego of a world by: the first ego's are :data:`EGO_ID`,
+    :data:`EGO_TYPE`, :data:`EGO_ROUTE` and :data:`OBSTACLE_PREFIX`; the ego in slot
+    ``k`` of a shared world has ``ego<k>``, ``ego<k>``, ``r0.<k>`` and
+    ``obstacle<k>.`` (its type starts with :data:`EGO_TYPE`, so it is never read as a
+    traffic type; no other slot's obstacle id starts with the first's prefix)."""
+
+    ego_id: str
+    ego_type: str
+    route_id: str
+    obstacle_prefix: str  # its obstacles' ids: <prefix><i>, and <prefix><i>.<lane> beside
+
+
+def ego_names(slot: int) -> EgoNames:
+    """The names of the ego in ``slot`` of its world (0: the only ego of a run alone)."""
+    if slot == 0:
+        return EgoNames(EGO_ID, EGO_TYPE, EGO_ROUTE, OBSTACLE_PREFIX)
+    return EgoNames(f"{EGO_ID}{slot}", f"{EGO_TYPE}{slot}", f"{EGO_ROUTE}.{slot}",
+                    f"obstacle{slot}.")
+
+
+FIRST = ego_names(0)
 TRAFFIC_LENGTH_M, TRAFFIC_WIDTH_M = traffic_model.TRAFFIC_LENGTH_M, traffic_model.TRAFFIC_WIDTH_M
 
 
@@ -65,21 +93,25 @@ def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
             f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
 
 
-def _ego_types(spec: ScenarioSpec) -> list[str]:
-    """The ego's vType (its size, acceleration and braking, so followers keep gaps for
-    the car it is) and the obstacles'."""
+def _ego_type(spec: ScenarioSpec, names: EgoNames) -> str:
+    """The ego's vType: its size, acceleration and braking, so followers keep gaps for
+    the car it is."""
     model = VEHICLE_MODELS[spec.vehicle.model]
     decel = model.braking_decel_mps2(spec.vehicle.friction_mu)
-    return [f'  <vType id="{EGO_TYPE}" length="{model.length_m}" width="{model.width_m}" '
-            f'accel="{model.max_accel_mps2}" decel="{decel!r}" emergencyDecel="{decel!r}"/>'] + [
-        f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
-        for kind, (length, width) in OBSTACLE_SIZES_M.items()
-    ]
+    return (f'  <vType id="{names.ego_type}" length="{model.length_m}" '
+            f'width="{model.width_m}" accel="{model.max_accel_mps2}" decel="{decel!r}" '
+            f'emergencyDecel="{decel!r}"/>')
 
 
-def _ego_route(spec: ScenarioSpec, road: RoadGeometry) -> str:
+def _obstacle_types() -> list[str]:
+    return [f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
+            for kind, (length, width) in OBSTACLE_SIZES_M.items()]
+
+
+def _ego_route(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames) -> str:
     ego_front_m = spec.ego.start_m + VEHICLE_MODELS[spec.vehicle.model].length_m / 2
-    return f'  <route id="r0" edges="{" ".join(road.route_edges(ego_front_m))}"/>'
+    return (f'  <route id="{names.route_id}" '
+            f'edges="{" ".join(road.route_edges(ego_front_m))}"/>')
 
 
 def lanes_blocked(road: RoadGeometry, box: np.ndarray, lane: int,
@@ -114,7 +146,7 @@ def across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, fl
     return d_m - half_m, d_m + half_m
 
 
-def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
+def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, depart: str = "0",
                checks: str = "all") -> list[str]:
     """The obstacles as vehicles stopped for good where they stand, entering at
     ``depart`` with SUMO's insertion ``checks``. On a built-in road an obstacle that
@@ -130,9 +162,10 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, depart: str = "0",
         lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
         for k, spec_lane in enumerate(lanes):
             edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
-            vid = f"{OBSTACLE_PREFIX}{i}" if k == 0 else f"{OBSTACLE_PREFIX}{i}.{lane}"
-            route = "r0" if edge == EDGE_ID else vid
-            if route != "r0":
+            vid = (f"{names.obstacle_prefix}{i}" if k == 0
+                   else f"{names.obstacle_prefix}{i}.{lane}")
+            route = names.route_id if edge == EDGE_ID else vid
+            if route != names.route_id:
                 lines.append(f'  <route id="{route}" edges="{edge}"/>')
             lines += [
                 f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.kind}" '
@@ -148,17 +181,33 @@ def _routes(lines: list[str]) -> str:
     return "\n".join(["<routes>", *lines, "</routes>"]) + "\n"
 
 
-def routes_xml(spec: ScenarioSpec, road: RoadGeometry,
-               trips: list[tuple[str, str]] = ()) -> str:
-    """The ``.rou.xml`` text of a run without a warm state: vehicle types, the ego's
-    route, obstacles as stopped vehicles, and the background traffic (flows, or on a
-    network the ``trips`` (from edge, to edge) leaving at 0 s)."""
+#: the egos of one world: each one's spec and road, the first's traffic the world's
+Egos = Sequence[tuple[ScenarioSpec, RoadGeometry]]
+
+
+def _egos_lines(egos: Egos, depart: str = "0", checks: str = "all") -> list[str]:
+    """Each ego's vType and route and its obstacles, the obstacles' types after the
+    first ego's type."""
+    lines = []
+    for slot, (spec, road) in enumerate(egos):
+        names = ego_names(slot)
+        lines += [_ego_type(spec, names), *(_obstacle_types() if slot == 0 else []),
+                  _ego_route(spec, road, names),
+                  *_obstacles(spec, road, names, depart=depart, checks=checks)]
+    return lines
+
+
+def routes_xml(egos: Egos, trips: list[tuple[str, str]] = ()) -> str:
+    """The ``.rou.xml`` text of a world without a warm state: vehicle types, each ego's
+    route, obstacles as stopped vehicles, and the background traffic of the first
+    ego's spec (flows until the last run's end, or on a network the ``trips`` (from
+    edge, to edge) leaving at 0 s)."""
+    spec, road = egos[0]
     flows = road_source(spec.road).flows
-    end_s = spec.traffic.warm_up_s + spec.scenario.duration_s
-    enter_s = spec.scenario.step_s  # after the ego, which enters in the first step
-    return _routes([_traffic_type(spec, road), *_ego_types(spec), _ego_route(spec, road),
-                    *_obstacles(spec, road),
-                    *(_flows(spec, "r0", end_s, enter_s) if flows
+    end_s = spec.traffic.warm_up_s + max(s.scenario.duration_s for s, _ in egos)
+    enter_s = spec.scenario.step_s  # after the egos, which enter in the first step
+    return _routes([_traffic_type(spec, road), *_egos_lines(egos),
+                    *(_flows(spec, EGO_ROUTE, end_s, enter_s) if flows
                       else _trips(trips, enter_s))])
 
 
@@ -171,9 +220,8 @@ def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
                     *_flows(spec, "traffic", WARM_FLOW_END_S)])
 
 
-def warm_run_routes_xml(spec: ScenarioSpec, road: RoadGeometry) -> str:
-    """The ``.rou.xml`` text loaded beside a warm state: the ego's types and route,
+def warm_run_routes_xml(egos: Egos) -> str:
+    """The ``.rou.xml`` text loaded beside a warm state: each ego's types and route,
     and the obstacles entering as the run begins, wherever the traffic stands
     (the traffic on their spots is taken off first)."""
-    return _routes([*_ego_types(spec), _ego_route(spec, road),
-                    *_obstacles(spec, road, depart="begin", checks="none")])
+    return _routes(_egos_lines(egos, depart="begin", checks="none"))

@@ -26,19 +26,13 @@ from scenarios.common.errors import SdcError
 from scenarios.scene import road_kernels, traffic_model
 from scenarios.scene.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import (
-    Snapshot,
-    in_start_zone,
-    near_obstacles,
-    obstacle_boxes,
-    sensing_radius_m,
-)
-from scenarios.spec.bodies import VEHICLE_MODELS
+from scenarios.scene.snapshot import Snapshot, in_start_zone, near_obstacles
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.shared_worlds import world_fields
+from scenarios.sumo.ego_slot import EgoSlot, others_seen
 from scenarios.sumo.routes_xml import (
     EGO_ID,
     EGO_TYPE,
-    OBSTACLE_PREFIX,
     OBSTACLE_TYPE_PREFIX,
     TRAFFIC_PREFIX,
     TRAFFIC_WIDTH_M,
@@ -86,11 +80,6 @@ def subscription_slack_m(longest_m: float, ego_length_m: float) -> float:
     return 1.0 + (longest_m + ego_length_m) / 2
 
 
-def _is_traffic(vehicle_id: str) -> bool:
-    """Background traffic: neither the ego nor an obstacle."""
-    return vehicle_id != EGO_ID and not vehicle_id.startswith(OBSTACLE_PREFIX)
-
-
 def _is_person(values: dict) -> bool:
     """Are these subscription results a person's (not a vehicle's)?"""
     return tc.VAR_VEHICLE in values
@@ -101,6 +90,20 @@ def _riding(nearby: dict) -> frozenset[str]:
     return frozenset(pid for pid, values in nearby.items() if values.get(tc.VAR_VEHICLE))
 
 
+def _with_others(slot: EgoSlot, slots: list[EgoSlot], boxes: np.ndarray, speeds: np.ndarray,
+                 classes: np.ndarray, bodies: np.ndarray | None):
+    """The traffic ``slot`` reads from SUMO, and after it the other egos and their
+    obstacles within its sensing radius, each a body of its own."""
+    more_boxes, more_speeds, more_classes = others_seen(slot, slots)
+    if not len(more_boxes):
+        return boxes, speeds, classes, bodies
+    if bodies is not None:
+        first = int(bodies[-1]) + 1 if len(bodies) else 0
+        bodies = np.concatenate([bodies, first + np.arange(len(more_boxes))])
+    return (np.vstack([boxes, more_boxes]), np.concatenate([speeds, more_speeds]),
+            np.concatenate([classes, more_classes]), bodies)
+
+
 def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
     """Front-bumper x, y and SUMO angle (deg clockwise from north) of a box."""
     cx, cy, yaw, length, _ = box.tolist()
@@ -109,13 +112,16 @@ def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
 
 
 class SumoWorld:
-    """One run of a scenario in libsumo."""
+    """One run of a scenario in libsumo, or several runs sharing its traffic: the first
+    ego's spec is the world's (its road, traffic and seed), each of ``others`` (a spec
+    and its road) one more ego, in slots 1, 2, ... (:mod:`sdc.run.shared_world`)."""
 
     backend = "sumo"
 
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
                  gui: bool = False, sumo_options: tuple[str, ...] = (),
-                 warm_state: Path | None = None):
+                 warm_state: Path | None = None,
+                 others: tuple[tuple[ScenarioSpec, RoadGeometry], ...] = ()):
         """``sumo_options``: more of SUMO's command-line options, after ours (its
         outputs and devices, for example ``--device.ssm.*``). ``warm_state``: the
         file of the spec's warm state when the caller has it (a job's copy); without
@@ -126,18 +132,21 @@ class SumoWorld:
         self.road = road
         self.cache_dir = cache_dir
         self.warm_state_path = warm_state
-        self._obstacle_boxes = obstacle_boxes(spec, road)
-        self._crossings = road.crossings()
+        self._slots = [EgoSlot(0, spec, road),
+                       *(EgoSlot(k, s, r) for k, (s, r) in enumerate(others, start=1))]
+        shared = world_fields(spec)
+        for slot in self._slots[1:]:
+            if world_fields(slot.spec) != shared:
+                raise SdcError(f"the ego in slot {slot.slot} is not of this world: its road, "
+                               "traffic, step or backend differ from the first ego's")
+        self._ego_ids = frozenset(slot.names.ego_id for slot in self._slots)
+        self._obstacle_prefixes = tuple(slot.names.obstacle_prefix for slot in self._slots)
         self._demand: RandomTrips | None = None
         self._trips_made = 0
-        self._radius_m = sensing_radius_m(spec)
-        self._model = VEHICLE_MODELS[spec.vehicle.model]
-        self._ego_s_m = spec.ego.start_m  # where the ego was last, along the road
         self._types = VehicleTypes()
-        self._subscribed_m = 0.0  # the context subscription's radius
-        self.people_subscribed = False  # the persons around the ego are read too
         #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``), for
-        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
+        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step); a
+        #: world of one ego only
         self.keep_ids = False
         self.last_ids: list[str] = []
         self._source = road_source(spec.road)
@@ -150,11 +159,25 @@ class SumoWorld:
         self._paths: LanePaths | None = None  # the lanes' shapes, read as bodies are laid
         self.warm_state_key: str | None = None  # the key of the warm state it started from
 
+    @property
+    def people_subscribed(self) -> bool:
+        """Are the persons around the (first) ego read too?"""
+        return self._slots[0].people_subscribed
+
+    def _is_traffic(self, vehicle_id: str) -> bool:
+        """Background traffic: no ego of this world, nor one of their obstacles."""
+        return (vehicle_id not in self._ego_ids
+                and not vehicle_id.startswith(self._obstacle_prefixes))
+
     def twin(self) -> SumoWorld:
-        """An unstarted world of the same scenario, road, options and warm state: pushed
-        the same ego, it is the same world, step for step."""
+        """An unstarted world of the same scenarios, roads, options and warm state:
+        pushed the same egos, it is the same world, step for step."""
         return SumoWorld(self.spec, self.road, self.cache_dir, sumo_options=self.sumo_options,
-                         warm_state=self.warm_state_path)
+                         warm_state=self.warm_state_path,
+                         others=tuple((s.spec, s.road) for s in self._slots[1:]))
+
+    def _egos(self) -> list[tuple[ScenarioSpec, RoadGeometry]]:
+        return [(slot.spec, slot.road) for slot in self._slots]
 
     def net_path(self) -> Path:
         """The network file SUMO runs on."""
@@ -213,7 +236,13 @@ class SumoWorld:
         self._paths = LanePaths(sim.lane, self._lanes_behind)
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
-        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot.
+        """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot
+        (a world of one ego: :meth:`start_all`)."""
+        return self.start_all({0: (ego_box, ego_speed_mps)})[0]
+
+    def start_all(self, egos: dict[int, tuple[np.ndarray, float]]) -> dict[int, Snapshot]:
+        """Start SUMO, insert each ego (slot -> its box and speed; every slot) and
+        return each one's first snapshot.
 
         With a warm-up, SUMO starts afresh on the warm state (:meth:`warm_state`),
         the obstacles entering as the run begins. With ``gui``, the same simulation
@@ -231,7 +260,7 @@ class SumoWorld:
             state = self.warm_state()
             state_file = self._scratch() / "warm-state.xml.gz"
             state_file.write_bytes(state.sumo_state)
-            self._start_sumo(sim, command, warm_run_routes_xml(self.spec, self.road),
+            self._start_sumo(sim, command, warm_run_routes_xml(self._egos()),
                              "--load-state", str(state_file), *self.sumo_options, fresh=False)
             self._demand = self._new_demand(warm_seed(self.spec))
             if self._demand is not None:  # it goes on where the warm-up left it
@@ -240,27 +269,31 @@ class SumoWorld:
             self.warm_state_key = state.key
             self._clear_start(obstacles=True)
         else:
-            self._demand = self._new_demand(self.spec.scenario.seed)
+            seed = warm_seed(self.spec)  # the traffic's: the scenario's, unless given
+            self._demand = self._new_demand(seed)
             trips = self._demand.draw(self.spec.traffic.vehicles) if self._demand else []
             self._trips_made = len(trips)
-            self._start_sumo(sim, command, routes_xml(self.spec, self.road, trips),
-                             *self.sumo_options)
-        ego = self.spec.ego
-        # inserted where it starts, so traffic knows of it from the first step
-        _, lane, front_m = self.road.sumo_place(ego.start_m + self._model.length_m / 2,
-                                                   ego.lane)
-        sim.vehicle.add(EGO_ID, "r0", typeID=EGO_TYPE, depart="now", departLane=str(lane),
-                        departPos=f"{front_m:.6f}", departSpeed=f"{ego_speed_mps:.6f}")
-        sim.vehicle.setSpeedMode(EGO_ID, 0)
-        sim.vehicle.setLaneChangeMode(EGO_ID, 0)
-        for tl in sorted({stop.tl for stop in self.road.stops() if stop.tl is not None}):
+            self._start_sumo(sim, command, routes_xml(self._egos(), trips), *self.sumo_options,
+                             seed=seed)
+        for slot in self._slots:
+            ego, names = slot.spec.ego, slot.names
+            # inserted where it starts, so traffic knows of it from the first step
+            _, lane, front_m = slot.road.sumo_place(ego.start_m + slot.model.length_m / 2,
+                                                    ego.lane)
+            sim.vehicle.add(names.ego_id, names.route_id, typeID=names.ego_type, depart="now",
+                            departLane=str(lane), departPos=f"{front_m:.6f}",
+                            departSpeed=f"{egos[slot.slot][1]:.6f}")
+            sim.vehicle.setSpeedMode(names.ego_id, 0)
+            sim.vehicle.setLaneChangeMode(names.ego_id, 0)
+        for tl in sorted({stop.tl for slot in self._slots for stop in slot.road.stops()
+                          if stop.tl is not None}):
             sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
         self._watch_types()
         self._show_obstacles_beside()
-        self._push(ego_box, ego_speed_mps)
-        # what departed in this step entered beside the ego, not after it: checked here
+        self._push(egos)
+        # what departed in this step entered beside an ego, not after it: checked here
         taken = self._clear_start(among=self._sumo.simulation.getDepartedIDList())
-        return self._snapshot(ego_box, taken)
+        return self._snapshots(taken)
 
     def _watch_types(self) -> None:
         """Read the vehicle types SUMO has newly loaded; subscribe to the vehicles
@@ -268,17 +301,21 @@ class SumoWorld:
         radius that holds the longest type's, and to the persons too from the step SUMO
         has loaded any (its count holds them before they depart, so none is missed)."""
         self._types.refresh(self._sumo.vehicletype, (EGO_TYPE, OBSTACLE_TYPE_PREFIX))
-        radius_m = self._radius_m + subscription_slack_m(self._types.longest_m,
-                                                         self._model.length_m)
-        people = self.people_subscribed or self._sumo.person.getIDCount() > 0
-        if radius_m > self._subscribed_m or people != self.people_subscribed:
-            # libsumo hands both back in one dict (vehicle.getContextSubscriptionResults)
-            self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE, radius_m,
-                                                _TRAFFIC_VARS)
-            if people:
-                self._sumo.vehicle.subscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE,
-                                                    radius_m, _PERSON_VARS)
-            self._subscribed_m, self.people_subscribed = radius_m, people
+        vehicle = self._sumo.vehicle
+        for slot in self._slots:
+            if not slot.active:
+                continue
+            radius_m = slot.radius_m + subscription_slack_m(self._types.longest_m,
+                                                            slot.model.length_m)
+            people = slot.people_subscribed or self._sumo.person.getIDCount() > 0
+            if radius_m > slot.subscribed_m or people != slot.people_subscribed:
+                # libsumo hands both back in one dict (vehicle.getContextSubscriptionResults)
+                vehicle.subscribeContext(slot.names.ego_id, tc.CMD_GET_VEHICLE_VARIABLE,
+                                         radius_m, _TRAFFIC_VARS)
+                if people:
+                    vehicle.subscribeContext(slot.names.ego_id, tc.CMD_GET_PERSON_VARIABLE,
+                                             radius_m, _PERSON_VARS)
+                slot.subscribed_m, slot.people_subscribed = radius_m, people
 
     def warm_state(self, on_sample: Callable[[float], None] | None = None) -> WarmState:
         """The spec's warm state: the one given, else the cached one, else computed
@@ -341,34 +378,37 @@ class SumoWorld:
 
     def _clear_start(self, obstacles: bool = False,
                      among: list[str] | None = None) -> frozenset[str]:
-        """Take the traffic (``among`` those, default all) off the ego's entry
+        """Take the traffic (``among`` those, default all) off each ego's entry
         (:func:`~scenarios.scene.snapshot.in_start_zone`: on or near it, or too close to stop
         for it or for it to stop), and with ``obstacles`` off the obstacles' spots too;
         the ids taken off."""
         vehicle = self._sumo.vehicle
-        ids = [v for v in (vehicle.getIDList() if among is None else among) if _is_traffic(v)]
+        ids = [v for v in (vehicle.getIDList() if among is None else among)
+               if self._is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
         lengths = np.array([vehicle.getLength(v) for v in ids])
         yaws = np.radians(90.0 - np.array([vehicle.getAngle(v) for v in ids]))
         centers = fronts - (lengths / 2)[:, None] * np.column_stack([np.cos(yaws), np.sin(yaws)])
         speeds = np.array([vehicle.getSpeed(v) for v in ids])
-        taken = in_start_zone(self.spec, self.road, centers, lengths, speeds)
-        if obstacles:
-            taken |= near_obstacles(self.spec, self.road, fronts)
+        taken = np.zeros(len(ids), bool)
+        for slot in self._slots:
+            taken |= in_start_zone(slot.spec, slot.road, centers, lengths, speeds)
+            if obstacles:
+                taken |= near_obstacles(slot.spec, slot.road, fronts)
         removed = frozenset(str(vid) for vid in np.array(ids)[taken])
         for vid in sorted(removed, key=ids.index):
             vehicle.remove(vid)
         return removed
 
-    def _ego_pose(self, box: np.ndarray) -> tuple[float, float, float]:
-        """SUMO's front-bumper x, y and angle for the ego at ``box``: its front bumper
-        moved across the road to the lateral position SUMO is to see
+    def _ego_pose(self, slot: EgoSlot, box: np.ndarray) -> tuple[float, float, float]:
+        """SUMO's front-bumper x, y and angle for the ego of ``slot`` at ``box``: its
+        front bumper moved across the road to the lateral position SUMO is to see
         (:func:`scenarios.scene.traffic_model.sumo_lateral_m`: the whole body, or just
         inside its lane where what reaches over a lane line leaves room to pass)."""
         x, y, angle_deg = _sumo_pose(box)
-        road, model = self.road, self._model
-        s_m, d_m = road.locate_near(float(box[0]), float(box[1]), self._ego_s_m)
-        self._ego_s_m = s_m
+        road, model = slot.road, slot.model
+        s_m, d_m = road.locate_near(float(box[0]), float(box[1]), slot.s_m)
+        slot.s_m = s_m
         heading = road.heading_at_s(s_m)
         lane = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
         lane_d_m = road.lane_center_d_m(lane)
@@ -391,11 +431,14 @@ class SumoWorld:
         """On a network, an obstacle standing in a lane beside its own too far for
         the traffic to pass (:func:`lanes_blocked`, for the widest type SUMO has loaded)
         stands there too, as a second stopped vehicle (``obstacle.<i>.<lane>``)."""
-        road = self.road
         if self._source.flows:  # a built road's obstacles stand beside from the start
             return
-        vehicle = self._sumo.vehicle
-        for i, (obstacle, box) in enumerate(zip(self.spec.obstacles, self._obstacle_boxes,
+        for slot in self._slots:
+            self._show_beside(slot)
+
+    def _show_beside(self, slot: EgoSlot) -> None:
+        road, vehicle = slot.road, self._sumo.vehicle
+        for i, (obstacle, box) in enumerate(zip(slot.spec.obstacles, slot.obstacle_boxes,
                                                 strict=True)):
             s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
             edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
@@ -405,7 +448,7 @@ class SumoWorld:
                 if beside is None:  # its front is on an edge without that lane
                     continue
                 pos_m = front_m * beside.sumo_length_m / own_length_m
-                vid = f"{OBSTACLE_PREFIX}{i}.{beside.index}"
+                vid = f"{slot.names.obstacle_prefix}{i}.{beside.index}"
                 self._sumo.route.add(vid, [edge])
                 vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
                             depart="now", departLane=str(beside.index),
@@ -413,27 +456,55 @@ class SumoWorld:
                 vehicle.setStop(vid, edge, pos=pos_m, laneIndex=beside.index, duration=1e9)
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
-        """Place the ego at ``ego_box``, advance SUMO one step, return the new state."""
-        self._push(ego_box, ego_speed_mps)
-        return self._snapshot(ego_box)
+        """Place the ego at ``ego_box``, advance SUMO one step, return the new state
+        (a world of one ego: :meth:`step_all`)."""
+        return self.step_all({0: (ego_box, ego_speed_mps)})[0]
 
-    def _push(self, ego_box: np.ndarray, ego_speed_mps: float) -> None:
-        """Place the ego at ``ego_box`` and advance SUMO one step."""
-        x, y, angle_deg = self._ego_pose(ego_box)
-        sumo = self._sumo
-        sumo.vehicle.moveToXY(EGO_ID, "", -1, x, y, angle_deg, keepRoute=2)
-        sumo.vehicle.setSpeed(EGO_ID, ego_speed_mps)
-        sumo.simulationStep()
+    def step_all(self, egos: dict[int, tuple[np.ndarray, float]]) -> dict[int, Snapshot]:
+        """Place each ego still in the world (slot -> its box and speed), advance SUMO
+        one step, return each one's new state."""
+        self._push(egos)
+        return self._snapshots()
+
+    def leave(self, slot_index: int) -> None:
+        """The run of the ego in ``slot_index`` has ended: it and its obstacles leave
+        SUMO; the world goes on for the others."""
+        slot = self._slots[slot_index]
+        slot.active = False
+        vehicle = self._sumo.vehicle
+        if slot.subscribed_m:  # SUMO would read the context of a vehicle it no longer has
+            vehicle.unsubscribeContext(slot.names.ego_id, tc.CMD_GET_VEHICLE_VARIABLE,
+                                       slot.subscribed_m)
+            if slot.people_subscribed:
+                vehicle.unsubscribeContext(slot.names.ego_id, tc.CMD_GET_PERSON_VARIABLE,
+                                           slot.subscribed_m)
+        for vid in vehicle.getIDList():
+            if slot.is_mine(vid):
+                vehicle.remove(vid)
+
+    def _push(self, egos: dict[int, tuple[np.ndarray, float]]) -> None:
+        """Place each ego (slot -> its box and speed) and advance SUMO one step."""
+        vehicle = self._sumo.vehicle
+        for index, (box, speed_mps) in egos.items():
+            slot = self._slots[index]
+            x, y, angle_deg = self._ego_pose(slot, box)
+            vehicle.moveToXY(slot.names.ego_id, "", -1, x, y, angle_deg, keepRoute=2)
+            vehicle.setSpeed(slot.names.ego_id, speed_mps)
+            slot.box, slot.speed_mps = box, speed_mps
+        self._sumo.simulationStep()
         self._renew_trips()
 
-    def _snapshot(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()) -> Snapshot:
-        """The state after a step, without the vehicles ``taken`` off since."""
-        boxes, speeds, classes, bodies = self._traffic(ego_box, taken)
+    def _snapshots(self, taken: frozenset[str] = frozenset()) -> dict[int, Snapshot]:
+        """The state after a step for each ego still in the world, without the vehicles
+        ``taken`` off since."""
+        read = {slot.slot: self._traffic(slot, taken) for slot in self._slots if slot.active}
         self._watch_types()
         signals = {tl: values[tc.TL_RED_YELLOW_GREEN_STATE] for tl, values
                    in self._sumo.trafficlight.getAllSubscriptionResults().items()}
-        return Snapshot(self._sumo.simulation.getTime(), boxes, self._obstacle_boxes, speeds,
-                        classes, signals, bodies)
+        t_s = self._sumo.simulation.getTime()
+        return {index: Snapshot(t_s, boxes, self._slots[index].obstacle_boxes, speeds, classes,
+                                signals, bodies)
+                for index, (boxes, speeds, classes, bodies) in read.items()}
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""
@@ -444,7 +515,7 @@ class SumoWorld:
         """On a network, every car that arrived in the last step starts a new trip."""
         if self._demand is None:
             return
-        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if _is_traffic(v)]
+        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if self._is_traffic(v)]
         if not arrived:
             return
         for start, end in self._demand.draw(len(arrived)):
@@ -456,10 +527,12 @@ class SumoWorld:
                                    departLane="random", departPos="random_free",
                                    departSpeed="0")
 
-    def _traffic(self, ego_box: np.ndarray, taken: frozenset[str] = frozenset()
+    def _traffic(self, slot: EgoSlot, taken: frozenset[str] = frozenset()
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """Boxes, speeds and vehicle classes of the vehicles and the persons on foot
-        within the sensing radius, ego and obstacles aside, in SUMO's order; each one's
+        within ``slot``'s sensing radius, its ego and obstacles aside, in SUMO's order,
+        then the world's other egos and their obstacles where they are in their runs
+        (:func:`scenarios.sumo.ego_slot.others_seen`; SUMO's copies of them aside); each one's
         size and class its type's, a person's class ``pedestrian``
         (:mod:`scenarios.sumo.vehicle_types`); and which body each box is of (None: each
         its own).
@@ -473,22 +546,24 @@ class SumoWorld:
         :func:`scenarios.scene.road_kernels.traffic` (compiled where built: in Python it cost
         more than the step's geometry); the rest are laid here (:meth:`_lay`).
         """
-        nearby = self._sumo.vehicle.getContextSubscriptionResults(EGO_ID)
+        ego_box = slot.box
+        nearby = self._sumo.vehicle.getContextSubscriptionResults(slot.names.ego_id)
         # the results are the step's, from before they were taken off
-        hidden = taken | self._on_other_levels(nearby, ego_box)
-        if self.people_subscribed:
+        hidden = taken | self._on_other_levels(slot, nearby)
+        if slot.people_subscribed:
             hidden |= _riding(nearby)
-        if hidden:
-            nearby = {vid: values for vid, values in nearby.items() if vid not in hidden}
+        if hidden or len(self._slots) > 1:
+            nearby = {vid: values for vid, values in nearby.items()
+                      if vid not in hidden and self._is_traffic(vid)}
         n = len(nearby)
         boxes, speeds, kinds, laid = np.empty((n, 5)), np.empty(n), np.empty(n), np.empty(n)
         try:
-            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
+            count, laid_count = self._read_traffic(slot, nearby, boxes, speeds, kinds, laid)
         except KeyError:  # vehicles or persons met for the first time
-            new = [v for v in nearby if v not in self._types.sizes and _is_traffic(v)]
+            new = [v for v in nearby if v not in self._types.sizes and self._is_traffic(v)]
             self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
             self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
-            count, laid_count = self._read_traffic(nearby, ego_box, boxes, speeds, kinds, laid)
+            count, laid_count = self._read_traffic(slot, nearby, boxes, speeds, kinds, laid)
         boxes, speeds, kinds = boxes[:count], speeds[:count], kinds[:count]
         bodies = None
         if laid_count:
@@ -497,10 +572,14 @@ class SumoWorld:
                 speeds, kinds = speeds[bodies], kinds[bodies]
         if self.keep_ids:
             ids = road_kernels.traffic_ids(
-                nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX, self._types.sizes,
-                float(ego_box[0]), float(ego_box[1]), self._radius_m)
+                nearby, _TRAFFIC_VARS, slot.names.ego_id, slot.names.obstacle_prefix,
+                self._types.sizes, float(ego_box[0]), float(ego_box[1]), slot.radius_m)
             self.last_ids = ids if bodies is None else [ids[b] for b in bodies]
-        return boxes, speeds, self._types.names(kinds), bodies
+        classes = self._types.names(kinds)
+        if len(self._slots) > 1:
+            boxes, speeds, classes, bodies = _with_others(slot, self._slots, boxes, speeds,
+                                                          classes, bodies)
+        return boxes, speeds, classes, bodies
 
     def _lay(self, nearby: dict, boxes: np.ndarray, laid: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray | None]:
@@ -557,7 +636,7 @@ class SumoWorld:
             vid = self.last_ids[row]
             bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
         for i in obstacles:
-            own = f"{OBSTACLE_PREFIX}{i}"
+            own = f"{self._slots[0].names.obstacle_prefix}{i}"
             bodies.append(np.vstack([laid(vid) for vid in standing
                                      if vid == own or vid.startswith(own + ".")]))
         return bodies
@@ -596,30 +675,31 @@ class SumoWorld:
                     return chain
         return []
 
-    def _on_other_levels(self, nearby: dict, ego_box: np.ndarray) -> frozenset[str]:
-        """The vehicles around the ego on a road that crosses its route without a
-        junction (a bridge or a tunnel: :meth:`RoadGeometry.crossings`), their front
-        bumpers within ``LEVEL_REACH_M`` of where it crosses."""
-        points, lanes = self._crossings.points_xy, self._crossings.lanes
+    def _on_other_levels(self, slot: EgoSlot, nearby: dict) -> frozenset[str]:
+        """The vehicles around the ego of ``slot`` on a road that crosses its route
+        without a junction (a bridge or a tunnel: :meth:`RoadGeometry.crossings`), their
+        front bumpers within ``LEVEL_REACH_M`` of where it crosses."""
+        points, lanes = slot.crossings.points_xy, slot.crossings.lanes
         if not nearby or not len(points):
             return frozenset()
-        if np.min(np.hypot(*(points - ego_box[:2]).T)) > self._radius_m + LEVEL_REACH_M:
+        if np.min(np.hypot(*(points - slot.box[:2]).T)) > slot.radius_m + LEVEL_REACH_M:
             return frozenset()
         hidden = []
         for vid, values in nearby.items():
             x_m, y_m = values[tc.VAR_POSITION]
             near = np.min(np.hypot(points[:, 0] - x_m, points[:, 1] - y_m)) <= LEVEL_REACH_M
             domain = self._sumo.person if _is_person(values) else self._sumo.vehicle
-            if near and _is_traffic(vid) and domain.getLaneID(vid) in lanes:
+            if near and self._is_traffic(vid) and domain.getLaneID(vid) in lanes:
                 hidden.append(vid)
         return frozenset(hidden)
 
-    def _read_traffic(self, nearby: dict, ego_box: np.ndarray, boxes: np.ndarray,
+    def _read_traffic(self, slot: EgoSlot, nearby: dict, boxes: np.ndarray,
                       speeds: np.ndarray, kinds: np.ndarray, laid: np.ndarray
                       ) -> tuple[int, int]:
-        return road_kernels.traffic(nearby, _TRAFFIC_VARS, EGO_ID, OBSTACLE_PREFIX,
-                                    self._types.sizes, self._paths.flat, float(ego_box[0]),
-                                    float(ego_box[1]), self._radius_m, PIECE_TOLERANCE_M,
+        names = slot.names
+        return road_kernels.traffic(nearby, _TRAFFIC_VARS, names.ego_id, names.obstacle_prefix,
+                                    self._types.sizes, self._paths.flat, float(slot.box[0]),
+                                    float(slot.box[1]), slot.radius_m, PIECE_TOLERANCE_M,
                                     STRETCH_MIN_M, boxes, speeds, kinds, laid)
 
     def hand_ego_to_sumo(self, max_speed_mps: float) -> None:
@@ -643,7 +723,7 @@ class SumoWorld:
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""
-        return sum(1 for v in self._sumo.vehicle.getIDList() if _is_traffic(v))
+        return sum(1 for v in self._sumo.vehicle.getIDList() if self._is_traffic(v))
 
     def close(self) -> None:
         if self._sumo is not None:

@@ -37,6 +37,7 @@ from scenarios.common.cache_dir import sdc_cache_dir
 from scenarios.common.errors import SdcError
 from scenarios.scene import traffic_model
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.shared_worlds import traffic_seed
 
 #: bumped whenever what a state holds or how a warm-up runs changes (2: its persons)
 WARM_FORMAT = 2
@@ -55,9 +56,9 @@ _ZIP_TIME = (2020, 1, 1, 0, 0, 0)  # fixed, so equal states make equal files
 
 
 def warm_seed(spec: ScenarioSpec) -> int:
-    """The seed of ``spec``'s warm-up: ``traffic.warm_seed``, or the scenario's."""
-    seed = spec.traffic.warm_seed
-    return spec.scenario.seed if seed is None else seed
+    """The seed of ``spec``'s warm-up: its traffic's seed, ``traffic.warm_seed`` or the
+    scenario's (:func:`scenarios.spec.shared_worlds.traffic_seed`)."""
+    return traffic_seed(spec)
 
 
 def uses_warm_state(spec: ScenarioSpec) -> bool:

@@ -43,7 +43,7 @@ from sdc.batch.manifest import (
     write_manifest,
 )
 from sdc.batch.result_store import ResultStore
-from sdc.batch.run_task import RunTask, TraceMode
+from sdc.batch.run_task import RunTask, TraceMode, rows_of, world_task
 from sdc.batch.warm_states import prepare_warm_states, with_warm_state, write_settling
 from sdc.run.result_row import SweepColumns, invalid_sample_row, result_schema
 
@@ -71,7 +71,9 @@ class SweepOutcome:
 
 
 def sweep_columns(run: PlannedRun) -> SweepColumns:
-    return SweepColumns(run_index=run.index, sample=run.sample, params=run.params)
+    seat = run.world
+    return SweepColumns(run_index=run.index, sample=run.sample, params=run.params,
+                        world_id=seat and seat.world_id, world_slot=seat and seat.slot)
 
 
 def invalid_row(run: PlannedRun) -> dict:
@@ -84,11 +86,44 @@ def plan_table_of(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     rows = [{"run_id": r.run_id, "controller": r.controller, "seed": r.seed, "error": r.error,
              "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
              **sweep_columns(r).values()} for r in plan]
-    fields = [params.field(n) for n in ("run_id", "run_index", "sample", "controller", "seed",
-                                        "error")]
+    fields = [params.field(n) for n in ("run_id", "run_index", "sample", "world_id",
+                                        "world_slot", "controller", "seed", "error")]
     fields += [pa.field("spec_json", pa.string())]
     fields += [f for f in params if f.name.startswith(PARAM_PREFIX)]
     return pa.Table.from_pylist(rows, schema=pa.schema(fields))
+
+
+def plan_tasks(plan: list[PlannedRun], done: set[str], trace_dir: Path | None,
+               traces: TraceMode) -> list[RunTask]:
+    """The tasks of the runs of ``plan`` without a row (``done``: those with one). The
+    runs of a shared world go as one task, all of them (it re-simulates the world), a
+    run that has its row without a trace path (its row is not taken again)."""
+    def task(run: PlannedRun) -> RunTask:
+        path = (None if trace_dir is None or run.run_id in done
+                else trace_dir / f"{run.run_id}.parquet")
+        return RunTask(run.run_id, run.spec, sweep_columns(run), trace_path=path,
+                       traces=traces)
+
+    worlds: dict[str, list[PlannedRun]] = {}
+    tasks = []
+    for run in plan:
+        if run.spec is None:
+            continue
+        if run.world is None:
+            if run.run_id not in done:
+                tasks.append(task(run))
+        else:
+            worlds.setdefault(run.world.world_id, []).append(run)
+    for world_id, runs in worlds.items():
+        if any(run.run_id not in done for run in runs):
+            tasks.append(world_task(world_id, [task(run) for run in runs]))
+    return tasks
+
+
+def members_keys(tasks: list[RunTask], keys: dict[str, str]) -> dict[str, str]:
+    """``keys`` (warm-state keys by task ID) also by the run IDs of world tasks' runs."""
+    return {**keys, **{m.run_id: keys[t.run_id] for t in tasks for m in t.members
+                       if t.run_id in keys}}
 
 
 def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
@@ -231,10 +266,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     if traces != "none":
         trace_dir.mkdir(exist_ok=True)
     todo = [run for run in plan if run.run_id not in done]
-    tasks = [RunTask(run.run_id, run.spec, sweep_columns(run),
-                     trace_path=None if traces == "none" else trace_dir / f"{run.run_id}.parquet",
-                     traces=traces)
-             for run in todo if run.spec is not None]
+    tasks = plan_tasks(plan, done, trace_dir if traces != "none" else None, traces)
 
     manifest = start_session(out_dir, manifest, executor, traces, len(todo))
 
@@ -254,10 +286,14 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                 warm, keys = prepare_warm_states(tasks, executor, reporter.warm_states)
                 manifest = record_warm_states(out_dir, manifest, warm, keys)
                 manifest = record_job_files(out_dir, manifest, tasks)
-                for row in executor.map(tasks):
-                    row = with_warm_state(row, keys)
-                    store.add(row)
-                    reporter.advance(row)
+                keys = members_keys(tasks, keys)
+                for task_row in executor.map(tasks):
+                    for row in rows_of(task_row):
+                        if row["run_id"] in done:  # a world's run that had its row
+                            continue
+                        row = with_warm_state(row, keys)
+                        store.add(row)
+                        reporter.advance(row)
     except KeyboardInterrupt:
         interrupted = True
     finally:

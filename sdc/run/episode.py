@@ -84,11 +84,14 @@ class Simulation:
     gives the :class:`Episode`.
     """
 
-    def __init__(self, spec: ScenarioSpec, world: World, look_ahead_m: float | None = None):
+    def __init__(self, spec: ScenarioSpec, world: World, look_ahead_m: float | None = None,
+                 road: RoadGeometry | None = None):
+        """``road``: the run's road, when it is not the world's (an ego of a shared
+        world other than the first)."""
         self.spec, self.world = spec, world
         self.look_ahead_m = (spec.controller.look_ahead_m if look_ahead_m is None
                              else look_ahead_m)
-        self.road = world.road
+        self.road = world.road if road is None else road
         self.model = VEHICLE_MODELS[spec.vehicle.model]
         self.vehicle = Vehicle(self.model, spec.vehicle.friction_mu)
         edges = self.road.edge_segments() if spec.road.see_edges else np.zeros((0, 4))
@@ -106,6 +109,9 @@ class Simulation:
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
         self.hit: str | None = None
         self.collision: Collision | None = None
+        #: the egos of its world (1: it ran alone); a run in a shared world has no
+        #: twin to judge its overlaps by (sdc.run.shared_world)
+        self.world_egos = 1
         self.wall_start = time.perf_counter()
         # the current step: set by start(), then by each advance()
         self.k = 0
@@ -122,10 +128,18 @@ class Simulation:
         self.conflicts: Conflicts | None = None
 
     def start(self) -> None:
+        self.place()
+        self.begin(self.world.start(self.box, self.state.speed_mps))
+
+    def place(self) -> None:
+        """The car where it starts (its body box in ``box``), before the world starts."""
         self.k = 0
         self.state = initial_state(self.spec, self.road, self.vehicle)
         self.box = self.vehicle.body_box(self.state)
-        self.snapshot = self.world.start(self.box, self.state.speed_mps)
+
+    def begin(self, snapshot: Snapshot) -> None:
+        """Sense the world's first ``snapshot``."""
+        self.snapshot = snapshot
         self.network_vehicles = self.world.vehicle_count()
         self._sense()
 
@@ -188,9 +202,17 @@ class Simulation:
 
     def advance(self, command: Command) -> None:
         """Move the car under ``command``, push it into the world, step the world."""
+        self.move(command)
+        self.arrive(self.world.step(self.box, self.state.speed_mps))
+
+    def move(self, command: Command) -> None:
+        """Move the car under ``command`` (its new body box in ``box``)."""
         self.state = self.vehicle.step(self.state, command, self.step_s)
         self.box = self.vehicle.body_box(self.state)
-        self.snapshot = self.world.step(self.box, self.state.speed_mps)
+
+    def arrive(self, snapshot: Snapshot) -> None:
+        """Sense ``snapshot``, the world's answer to the car's move: the next step."""
+        self.snapshot = snapshot
         self.k += 1
         if self.k == 1:  # SUMO's traffic enters one step after the ego
             self.network_vehicles = self.world.vehicle_count()
@@ -231,7 +253,7 @@ class Simulation:
         (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
         steps = overlap_steps(trace.traffic, self.snapshot.obstacle_boxes,
                               trace.traffic_class, self.obstacle_classes, trace.traffic_body)
-        if self.world.backend != "sumo" or not len(steps):
+        if self.world.backend != "sumo" or not len(steps) or self.world_egos > 1:
             return len(steps), 0
         return judge_overlaps(self.world.twin(), trace, self.vehicle, steps,
                               self.obstacle_classes)
@@ -286,6 +308,7 @@ class Simulation:
             wall_time_s=time.perf_counter() - self.wall_start,
             network_vehicles=self.network_vehicles,
             warm_state=warm_state_id(self.world.warm_state_key),
+            world_egos=self.world_egos,
             trace_sha256=trace.sha256(),
         )
         metadata = {

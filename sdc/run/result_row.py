@@ -50,6 +50,12 @@ COLUMNS: tuple[Column, ...] = (
            "the run's ID: the sweep plan's, or <scenario>-<controller>-<seed> for sdc run"),
     Column("run_index", pa.int64(), SWEEP, "position in the sweep's plan"),
     Column("sample", pa.int64(), SWEEP, "the scenario sample; its controllers share it"),
+    Column("world_id", pa.string(), SWEEP,
+           "the shared world the run's traffic came from ([sweep] egos_per_world): "
+           "w<its first sample>-<controller>; its runs are one cluster in every interval; "
+           "None: the run had a world of its own"),
+    Column("world_slot", pa.int64(), SWEEP,
+           "the run's place among its world's runs, from 0; None: a world of its own"),
     Column("seed", pa.int64(), IDENTITY, "scenario.seed: SUMO's and the lidar noise's seed"),
     Column("controller", pa.string(), IDENTITY, "the controller's name"),
     Column("backend", pa.string(), IDENTITY, "the world simulator: sumo | highway"),
@@ -142,6 +148,10 @@ COLUMNS: tuple[Column, ...] = (
     Column("warm_state", pa.string(), OUTCOME,
            "the warm state the run's traffic started from (its key's first 16 hex "
            "digits); runs that share one share their traffic; None: no warm-up"),
+    Column("world_egos", pa.int64(), OUTCOME,
+           "the egos whose runs shared the run's SUMO world ([sweep] egos_per_world; each "
+           "a body to the others); 1: it ran alone. In a shared world every overlap of "
+           "other bodies counts in world_overlaps (no twin judges it)"),
     Column("trace_sha256", pa.string(), OUTCOME,
            "hash of the trace: same spec and seed, same hash"),
     Column("traceback", pa.string(), STATUS, "the Python traceback of a run that raised"),
@@ -243,9 +253,12 @@ class SweepColumns:
     run_index: int
     sample: int
     params: Mapping[str, Any]  # swept path -> value; the columns p.<path>
+    world_id: str | None = None  # its shared world (scenarios/spec/shared_worlds.py)
+    world_slot: int | None = None
 
     def values(self) -> dict[str, Any]:
         return {"run_index": self.run_index, "sample": self.sample,
+                "world_id": self.world_id, "world_slot": self.world_slot,
                 **{PARAM_PREFIX + path: value for path, value in self.params.items()}}
 
 

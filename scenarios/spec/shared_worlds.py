@@ -1,0 +1,79 @@
+"""Which runs of a sweep share a world (``[sweep] egos_per_world``): plain data.
+
+What the egos of one world share is :func:`world_fields`: the road, the traffic (its
+seed, ``traffic.warm_seed``, among it), the step length and the backend. A sweep
+with ``egos_per_world = K`` groups each controller's runs, in plan order, into worlds
+of up to K runs whose world fields agree but for the traffic's seed; each world's
+runs then take its first run's traffic seed (so they load one warm state). The rest
+of a spec stays each run's own: its start, route (its seed's, on a network),
+obstacles, controller, sensors, car and duration.
+
+A world is named ``w<its first sample>-<controller>`` and its runs keep their plan
+order as slots 0, 1, ...; where the placement rule does not let all of them share one
+SUMO simulation, the rest run in another on the same traffic
+(:mod:`sdc.run.shared_world`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+from scenarios.spec.scenario_spec import ScenarioSpec
+
+
+def traffic_seed(spec: ScenarioSpec) -> int:
+    """The seed of ``spec``'s traffic (its warm-up; SUMO's randomness and the random
+    trips of a run without one): ``traffic.warm_seed``, or the scenario's."""
+    seed = spec.traffic.warm_seed
+    return spec.scenario.seed if seed is None else seed
+
+
+def world_fields(spec: ScenarioSpec) -> dict:
+    """What the egos of one world share (plain data): its road, its traffic (its seed
+    :func:`traffic_seed` among it), its step length and backend."""
+    plain = spec.to_plain()
+    return {"road": plain["road"], "traffic": plain["traffic"],
+            "step_s": spec.scenario.step_s, "backend": spec.scenario.backend}
+
+
+def _group_key(spec: ScenarioSpec) -> str:
+    """The world fields but the traffic's seed, as text."""
+    fields = world_fields(spec)
+    fields["traffic"] = {k: v for k, v in fields["traffic"].items() if k != "warm_seed"}
+    return json.dumps(fields, sort_keys=True)
+
+
+@dataclasses.dataclass(frozen=True)
+class WorldSeat:
+    """A run's place in a sweep's shared worlds."""
+
+    world_id: str  # w<first sample>-<controller>
+    slot: int  # its place among the world's runs, from 0
+
+
+def group_worlds(runs: list[tuple[int, str, str, ScenarioSpec]], egos_per_world: int
+                 ) -> dict[int, tuple[WorldSeat, ScenarioSpec]]:
+    """The worlds of ``runs`` (each: its index in the plan, its sample's number as run
+    IDs write it, its controller's label and its spec; in plan order), up to
+    ``egos_per_world`` runs each: index -> its seat and its spec with the world's
+    traffic seed."""
+    open_worlds: dict[tuple[str, str], list[tuple[int, str, ScenarioSpec]]] = {}
+    out: dict[int, tuple[WorldSeat, ScenarioSpec]] = {}
+
+    def close(label: str, members: list[tuple[int, str, ScenarioSpec]]) -> None:
+        seed = traffic_seed(members[0][2])
+        world_id = f"w{members[0][1]}-{label}"
+        for slot, (index, _, spec) in enumerate(members):
+            traffic = dataclasses.replace(spec.traffic, warm_seed=seed)
+            out[index] = (WorldSeat(world_id, slot), dataclasses.replace(spec, traffic=traffic))
+
+    for index, sample, label, spec in runs:
+        key = (label, _group_key(spec))
+        members = open_worlds.setdefault(key, [])
+        members.append((index, sample, spec))
+        if len(members) == egos_per_world:
+            close(label, open_worlds.pop(key))
+    for (label, _), members in open_worlds.items():
+        close(label, members)
+    return out
