@@ -91,6 +91,7 @@ class SweepSummary:
     world: dict  # the world audit and who hit whom
     settling: dict | None = None  # the warm-up's word
     sweep_dir: str | None = None  # where its runs are (the replay commands name it)
+    shared_worlds: dict | None = None  # runs that shared a world (shared_world_summary)
 
     def to_plain(self) -> dict:
         plain = {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
@@ -114,6 +115,21 @@ def _recorded(part) -> dict:
 
 def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
     return {controller: dataclasses.asdict(rate) for controller, rate in rates.items()}
+
+
+def shared_world_summary(results: pd.DataFrame, manifest: SweepManifest) -> dict | None:
+    """How the runs shared worlds ([sweep] egos_per_world): the egos asked a world, the
+    worlds, the runs in them, the SUMO simulations they took (a world whose runs did not
+    all fit apart takes more) and the runs that shared theirs with fewer egos than
+    asked; None when no run shared a world."""
+    if "world_id" not in results.columns or results.world_id.isna().all():
+        return None
+    asked = int(manifest.sweep.get("sweep", {}).get("egos_per_world", 1))
+    shared = results[results.world_id.notna()]
+    egos = shared.world_egos.dropna()
+    return {"egos_per_world": asked, "worlds": int(shared.world_id.nunique()),
+            "runs": len(shared), "simulations": round(float((1 / egos).sum())),
+            "runs_with_fewer": int((egos < asked).sum())}
 
 
 def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str], method: Method,
@@ -161,6 +177,7 @@ def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str],
         traffic_model=manifest.traffic_model,
         sumo_config=manifest.sumo_config,
         world=world_summary(counted),
+        shared_worlds=shared_world_summary(results, manifest),
     )
 
 

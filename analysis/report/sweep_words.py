@@ -56,7 +56,7 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     from, that the intervals are widened (each controller's design effect on its
     collision rate), and a WARNING when the warm states are fewer than
     :data:`FEW_WARM_STATES`."""
-    lines = settling_lines(summary.settling)
+    lines = settling_lines(summary.settling) + shared_world_lines(summary.shared_worlds)
     if not shares_traffic(summary):
         return lines
     warm = summary.warm_states
@@ -75,6 +75,20 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
                      f"for traffic beyond them; raise [sweep] warm_states to "
                      f"{FEW_WARM_STATES} or more.")
     return lines
+
+
+def shared_world_lines(worlds: dict | None) -> list[str]:
+    """How many worlds the runs shared and how many egos each held (none: [])."""
+    if worlds is None:
+        return []
+    fewer = worlds["runs_with_fewer"]
+    return [f"Shared worlds: the {worlds['runs']} runs ran as egos of "
+            f"{plural(worlds['worlds'], 'world')} ([sweep] egos_per_world = "
+            f"{worlds['egos_per_world']}), in {plural(worlds['simulations'], 'SUMO simulation')}"
+            + (f"; {fewer} of them shared theirs with fewer egos (the placement rule keeps "
+               "each ego's sensing radius clear of the others at the start)" if fewer else "")
+            + ". A world's runs share its traffic: each world is one cluster in every "
+            "interval, and each ego was a body to the others (column world_egos)."]
 
 
 def coverage_lines(summary: SweepSummary) -> list[str]:

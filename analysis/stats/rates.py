@@ -4,7 +4,8 @@ Only ``status == "ok"`` rows count toward a rate; error and timeout rows are
 counted beside it, never as "no collision".
 
 Runs that started from the same warm state (column ``warm_state``: the background
-traffic warmed up once and reused) are not independent samples of traffic. Every
+traffic warmed up once and reused), or ran in one shared world (column ``world_id``),
+are not independent samples of traffic. Every
 rate interval here counts them as a cluster (:func:`clustered_counts`): the
 binomial interval is taken on the effective number of independent runs, never
 on more runs than the plain interval. Results without the column, or whose runs
@@ -33,6 +34,8 @@ MAX_GROUPS = 12
 ENVELOPE_RATE = 0.05
 #: the column naming the warm state (shared background traffic) a run started from
 WARM_STATE = "warm_state"
+#: the column naming the shared world a run's traffic came from ([sweep] egos_per_world)
+WORLD_ID = "world_id"
 
 
 def wilson_interval(k: float, n: float, confidence: float = 0.95) -> tuple[float, float]:
@@ -149,6 +152,17 @@ def warm_states_of(rows: pd.DataFrame) -> pd.Series | None:
     return rows[WARM_STATE] if WARM_STATE in rows.columns else None
 
 
+def traffic_clusters(rows: pd.DataFrame) -> pd.Series | None:
+    """The traffic each run shares with others, its cluster in every interval: its warm
+    state, else its shared world (a world without a warm-up shares its traffic's seed;
+    null: its own traffic); None for results with neither column."""
+    states = warm_states_of(rows)
+    if WORLD_ID not in rows.columns:
+        return states
+    worlds = "world " + rows[WORLD_ID]
+    return worlds if states is None else states.where(states.notna(), worlds)
+
+
 def count_warm_states(rows: pd.DataFrame) -> int | None:
     """How many distinct warm states ``rows`` started from (None without the column)."""
     states = warm_states_of(rows)
@@ -183,7 +197,7 @@ def flag_interval(flags, rows: pd.DataFrame, method: Method) -> tuple[tuple[floa
                                                                       ClusteredCounts]:
     """The 95% interval by ``method`` of the rate of ``flags`` (one per row of ``rows``),
     clustered by the rows' warm states, and the counts it was taken on."""
-    counts = clustered_counts(flags, warm_states_of(rows))
+    counts = clustered_counts(flags, traffic_clusters(rows))
     return interval_of(counts.k_eff, counts.n_eff, method), counts
 
 
@@ -230,7 +244,7 @@ def rate_summary(rows: pd.DataFrame) -> CollisionRate:
     """The :class:`CollisionRate` of ``rows``."""
     ok = rows[rows.status == "ok"]
     k, n = int(ok.collision.sum()), len(ok)
-    counts = clustered_counts(ok.collision, warm_states_of(ok))
+    counts = clustered_counts(ok.collision, traffic_clusters(ok))
     wilson = wilson_interval(counts.k_eff, counts.n_eff)
     exact = clopper_pearson_interval(counts.k_eff, counts.n_eff)
     return CollisionRate(

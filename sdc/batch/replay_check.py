@@ -25,6 +25,7 @@ from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.manifest import controller_changes, package_versions, read_manifest
 
 _PLAN_COLUMNS = ("run_id", "spec_json", "error")
+_WORLD_COLUMNS = ("world_id", "world_slot")  # in the plans of sweeps with shared worlds
 _RESULT_COLUMNS = ("run_id", "status", "error", "trace_sha256")  # what a replay compares
 
 
@@ -47,6 +48,9 @@ class RecordedRun:
     row: dict | None  # its result row; None when the sweep has not run it yet
     trace_path: Path | None  # the recorded trace, when the sweep kept it
     manifest: SweepManifest
+    #: the runs of its shared world in slot order (their IDs and specs), itself among
+    #: them; None: it had a world of its own
+    world: tuple[list[str], list[ScenarioSpec]] | None = None
 
 
 def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
@@ -59,9 +63,10 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
     plan_files += sorted((sweep_dir / "plan-parts").glob("part-*.parquet"))
     if manifest is None or not plan_files:
         raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no manifest.json)")
-    plan = pa.concat_tables(
-        read_parquet(f, "the plan file", required=_PLAN_COLUMNS).select(list(_PLAN_COLUMNS))
-        for f in plan_files).to_pandas()
+    tables = [read_parquet(f, "the plan file", required=_PLAN_COLUMNS) for f in plan_files]
+    columns = list(_PLAN_COLUMNS) + [c for c in _WORLD_COLUMNS
+                                     if all(c in t.column_names for t in tables)]
+    plan = pa.concat_tables(t.select(columns) for t in tables).to_pandas()
     match = plan[plan.run_id == run_id]
     if match.empty:
         shown = ", ".join(map(str, plan.run_id.head(4)))
@@ -77,7 +82,12 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
         rows = table.filter(pc.field("run_id") == run_id).to_pylist()
         row = rows[0] if rows else None
     trace = sweep_dir / "traces" / f"{run_id}.parquet"
-    return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest)
+    world = None
+    if "world_id" in plan.columns and planned.world_id is not None:
+        runs = plan[plan.world_id == planned.world_id].sort_values("world_slot")
+        world = (list(runs.run_id), [_planned_spec(j, plan_path, r)
+                                     for r, j in zip(runs.run_id, runs.spec_json, strict=True)])
+    return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest, world)
 
 
 def _planned_spec(spec_json: str, plan_path: Path, run_id: str) -> ScenarioSpec:

@@ -127,9 +127,14 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     if recorded.row is not None and recorded.row["status"] == "ok":
         check_at(at_s, recorded.row["sim_time_s"])
     warm_up_first(recorded.spec)
-    if recorded.row is not None and recorded.row["status"] != "ok":
+    if recorded.world is not None:
+        episode = _replay_in_world(recorded, gui)
+        if episode is None:
+            return None
+    elif recorded.row is not None and recorded.row["status"] != "ok":
         return _replay_failed_run(recorded, out, every, gui, at_s)
-    episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
+    else:
+        episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
     for line in summary_lines(run_id, episode.row):
         click.echo(line)
     diverged, verdict = replay_verdict(recorded.row, recorded_trace, episode.trace, sweep_dir,
@@ -139,6 +144,26 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
         check_at(at_s, float(episode.trace.floats["t_s"][-1]))
         _render(episode.trace, episode.metadata, out, every, at_s)
     return diverged
+
+
+def _replay_in_world(recorded, gui: bool):
+    """A run of a shared world: its world re-simulated with all its runs; the run's
+    episode (None: it failed, said here)."""
+    from sdc.run.shared_world import Failed, replay_in_world
+
+    if gui:
+        raise SdcError(f"--gui: {recorded.run_id} shared a world with other runs; sumo-gui "
+                       "shows one ego's run (replay it without --gui)")
+    run_ids, specs = recorded.world
+    click.echo(f"{recorded.run_id}: slot {run_ids.index(recorded.run_id)} of a world of "
+               f"{len(run_ids)} runs; re-simulating the world")
+    outcome = replay_in_world(specs, run_ids, recorded.run_id)
+    if isinstance(outcome, Failed):
+        row = recorded.row
+        click.echo(f"replay: {outcome.error}" + (f" (in the sweep: {row['status']}: "
+                                                 f"{row['error']})" if row else ""))
+        return None
+    return outcome
 
 
 def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,

@@ -178,3 +178,11 @@ def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
             out[i] = (result, len(members))
     return [out[i] for i in range(len(specs))]
 
+
+
+def replay_in_world(specs: list[ScenarioSpec], run_ids: list[str], run_id: str,
+                    cache_dir: Path | None = None) -> Episode | Failed:
+    """Re-simulate the shared world of ``specs`` (its runs in slot order, named
+    ``run_ids``) as its sweep ran it, and return ``run_id``'s outcome."""
+    outcomes = run_group(specs, run_ids, cache_dir=cache_dir)
+    return outcomes[run_ids.index(run_id)][0]
