@@ -16,6 +16,7 @@ from scenarios.scene.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePa
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import read_toml
+from scenarios.sumo.lane_laying import lanes_behind
 from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import initial_state
@@ -151,7 +152,7 @@ def test_every_body_lies_where_sumo_holds_it(config, enter_s, steps, long_ones):
                 if sumo.vehicle.getLateralLanePosition(vid) != 0.0 or k % 5:
                     continue
                 lane = sumo.vehicle.getLaneID(vid)
-                chain = [*world._lanes_behind(vid, lane, length_m - pos_m), lane]
+                chain = [*lanes_behind(sumo, vid, lane, length_m - pos_m), lane]
                 behind = np.append(np.arange(0.0, length_m, 1.0), length_m)
                 along = np.array([sumo_point(sumo, chain, pos_m - b) for b in behind])
                 assert np.hypot(*(along[-1] - back)) < 1e-6, vid

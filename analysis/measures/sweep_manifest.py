@@ -139,6 +139,8 @@ class SweepManifest(Record):
     warm_states: int | None = None  # the most distinct warm states of a session
     outcomes: dict | None = None  # ok rows by outcome
     adaptive: AdaptiveRecord | None = None  # a search's or estimate's settings
+    #: how the runs shared worlds (analysis.measures.world_sharing; None: none did)
+    shared_worlds: dict | None = None
 
     _NESTED: ClassVar[dict[str, tuple[type[Record], bool]]] = {
         "sessions": (Session, True), "adaptive": (AdaptiveRecord, False)}

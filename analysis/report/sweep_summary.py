@@ -9,6 +9,7 @@ import itertools
 import pandas as pd
 
 from analysis.measures.sweep_manifest import SweepManifest
+from analysis.measures.world_sharing import world_sharing
 from analysis.report.report_files import ReportError
 from analysis.report.sweep_world import world_summary
 from analysis.stats.gate import Gate, gate
@@ -117,21 +118,6 @@ def _plain_rates(rates: dict[str, CollisionRate]) -> dict[str, dict]:
     return {controller: dataclasses.asdict(rate) for controller, rate in rates.items()}
 
 
-def shared_world_summary(results: pd.DataFrame, manifest: SweepManifest) -> dict | None:
-    """How the runs shared worlds ([sweep] egos_per_world): the egos asked a world, the
-    worlds, the runs in them, the SUMO simulations they took (a world whose runs did not
-    all fit apart takes more) and the runs that shared theirs with fewer egos than
-    asked; None when no run shared a world."""
-    if "world_id" not in results.columns or results.world_id.isna().all():
-        return None
-    asked = int(manifest.sweep.get("sweep", {}).get("egos_per_world", 1))
-    shared = results[results.world_id.notna()]
-    egos = shared.world_egos.dropna()
-    return {"egos_per_world": asked, "worlds": int(shared.world_id.nunique()),
-            "runs": len(shared), "simulations": round(float((1 / egos).sum())),
-            "runs_with_fewer": int((egos < asked).sum())}
-
-
 def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str], method: Method,
                   shared: pd.Index, fail_above: float | None = None,
                   min_completed: float | None = None,
@@ -177,7 +163,8 @@ def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str],
         traffic_model=manifest.traffic_model,
         sumo_config=manifest.sumo_config,
         world=world_summary(counted),
-        shared_worlds=shared_world_summary(results, manifest),
+        shared_worlds=world_sharing(
+            results, int(manifest.sweep.get("sweep", {}).get("egos_per_world", 1))),
     )
 
 

@@ -3,8 +3,9 @@
 What the egos of one world share is :func:`world_fields`: the road, the traffic (its
 seed, ``traffic.warm_seed``, among it), the step length and the backend. A sweep
 with ``egos_per_world = K`` groups each controller's runs, in plan order, into worlds
-of up to K runs whose world fields agree but for the traffic's seed; each world's
-runs then take its first run's traffic seed (so they load one warm state). The rest
+of up to K runs whose world fields agree (the traffic's seed too, where a spec sets
+it: ``warm_states`` draws it from a pool); each world's runs then take its first
+run's traffic seed (so they load one warm state). The rest
 of a spec stays each run's own: its start, route (its seed's, on a network),
 obstacles, controller, sensors, car and duration.
 
@@ -38,9 +39,11 @@ def world_fields(spec: ScenarioSpec) -> dict:
 
 
 def _group_key(spec: ScenarioSpec) -> str:
-    """The world fields but the traffic's seed, as text."""
+    """The world fields as text; the traffic's seed among them only when the spec sets
+    one (``warm_states`` draws it from a pool: the world keeps it)."""
     fields = world_fields(spec)
-    fields["traffic"] = {k: v for k, v in fields["traffic"].items() if k != "warm_seed"}
+    if spec.traffic.warm_seed is None:
+        fields["traffic"].pop("warm_seed", None)
     return json.dumps(fields, sort_keys=True)
 
 

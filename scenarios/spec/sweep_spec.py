@@ -551,11 +551,13 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
 
 def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[PlannedRun]:
     """``plan`` with its runs seated in shared worlds (:func:`group_worlds`), each
-    run's spec taking its world's traffic seed; unchanged for one ego a world."""
+    run's spec taking its world's traffic seed; unchanged for one ego a world. Only
+    SUMO holds several egos: a run swept onto another backend keeps a world of its own."""
     if egos_per_world == 1:
         return plan
     grouped = group_worlds([(k, f"{run.sample:0{width}d}", run.controller, run.spec)
-                            for k, run in enumerate(plan) if run.spec is not None],
+                            for k, run in enumerate(plan)
+                            if run.spec is not None and run.spec.scenario.backend == "sumo"],
                            egos_per_world)
     return [run if k not in grouped else
             dataclasses.replace(run, spec=grouped[k][1], world=grouped[k][0])

@@ -14,6 +14,7 @@ could not stop behind the entering ego is taken off.
 
 from __future__ import annotations
 
+import functools
 import math
 import tempfile
 from collections.abc import Callable
@@ -30,6 +31,7 @@ from scenarios.scene.snapshot import Snapshot, in_start_zone, near_obstacles
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.shared_worlds import world_fields
 from scenarios.sumo.ego_slot import EgoSlot, others_seen
+from scenarios.sumo.lane_laying import lanes_behind, lay
 from scenarios.sumo.routes_xml import (
     EGO_ID,
     EGO_TYPE,
@@ -233,7 +235,7 @@ class SumoWorld:
             inputs = ["--net-file", str(self.net_path()), "--route-files", str(path)]
         sim.start([*command, *inputs, *ours])
         self._sumo = sim
-        self._paths = LanePaths(sim.lane, self._lanes_behind)
+        self._paths = LanePaths(sim.lane, functools.partial(lanes_behind, sim))
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Start SUMO, insert the ego at ``ego_box`` and return the first snapshot
@@ -544,7 +546,7 @@ class SumoWorld:
         bumper, within the sensing radius) and how a person on foot stands. The read
         of the dict of dicts libsumo and traci hand over, with the one-box bodies, is
         :func:`scenarios.scene.road_kernels.traffic` (compiled where built: in Python it cost
-        more than the step's geometry); the rest are laid here (:meth:`_lay`).
+        more than the step's geometry); the rest are laid by :func:`scenarios.sumo.lane_laying.lay`.
         """
         ego_box = slot.box
         nearby = self._sumo.vehicle.getContextSubscriptionResults(slot.names.ego_id)
@@ -567,7 +569,7 @@ class SumoWorld:
         boxes, speeds, kinds = boxes[:count], speeds[:count], kinds[:count]
         bodies = None
         if laid_count:
-            boxes, bodies = self._lay(nearby, boxes, laid[:count])
+            boxes, bodies = lay(self._paths, nearby, boxes, laid[:count])
             if bodies is not None:
                 speeds, kinds = speeds[bodies], kinds[bodies]
         if self.keep_ids:
@@ -580,38 +582,6 @@ class SumoWorld:
             boxes, speeds, classes, bodies = _with_others(slot, self._slots, boxes, speeds,
                                                           classes, bodies)
         return boxes, speeds, classes, bodies
-
-    def _lay(self, nearby: dict, boxes: np.ndarray, laid: np.ndarray
-             ) -> tuple[np.ndarray, np.ndarray | None]:
-        """``boxes`` with each vehicle whose ``laid`` entry names it (its index in
-        ``nearby``: one on a lane met for the first time, reaching back off its lane or
-        in several boxes) laid along its lane where SUMO holds it
-        (:class:`scenarios.scene.lane_bodies.LanePath`); and which body each box is of, None
-        if every one is still one box."""
-        ids = list(nearby)
-        pieces: dict[int, list] = {}
-        for row in np.flatnonzero(laid >= 0).tolist():
-            vid = ids[int(laid[row])]
-            values = nearby[vid]
-            length_m, width_m = float(boxes[row, 3]), float(boxes[row, 4])
-            pos_m = values[tc.VAR_LANEPOSITION]
-            path = self._paths.path(vid, values[tc.VAR_LANE_ID], length_m - pos_m)
-            if path.segments:
-                pieces[row] = path.body(pos_m, values[tc.VAR_LANEPOSITION_LAT], length_m,
-                                        width_m)
-        if all(len(body) == 1 for body in pieces.values()):
-            for row, body in pieces.items():
-                boxes[row] = body[0]
-            return boxes, None
-        counts = np.ones(len(boxes), np.intp)
-        for row, body in pieces.items():
-            counts[row] = len(body)
-        bodies = np.repeat(np.arange(len(boxes)), counts)
-        out = boxes[bodies]
-        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        for row, body in pieces.items():
-            out[first[row]:first[row] + len(body)] = body
-        return out, bodies
 
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles) -> list[np.ndarray]:
         """The bodies of the last snapshot's traffic ``rows`` (indices into its
@@ -640,40 +610,6 @@ class SumoWorld:
             bodies.append(np.vstack([laid(vid) for vid in standing
                                      if vid == own or vid.startswith(own + ".")]))
         return bodies
-
-    def _lanes_behind(self, vid: str, lane_id: str, reach_m: float) -> list[str]:
-        """The lanes a vehicle on ``lane_id`` came by, in driving order, as far back as
-        ``reach_m`` behind the lane's start: the lanes of the edges before on its
-        route that lead into it and the junctions' lanes between (from SUMO's links;
-        as many as are found)."""
-        vehicle, lane = self._sumo.vehicle, self._sumo.lane
-        route, index = vehicle.getRoute(vid), vehicle.getRouteIndex(vid)
-        before = index if lane_id.startswith(":") else index - 1
-        lanes: list[str] = []
-        while reach_m > 0 and 0 <= before < len(route):
-            chain = self._lanes_into(route[before], lane_id)
-            if not chain:
-                break
-            lanes[:0] = chain
-            reach_m -= sum(lane.getLength(k) for k in chain)
-            lane_id, before = chain[0], before - 1
-        return lanes
-
-    def _lanes_into(self, edge: str, lane_id: str) -> list[str]:
-        """The lane of ``edge`` that leads into ``lane_id`` and the junction's lanes
-        between them (SUMO may split one in two), in driving order; [] if none."""
-        lane = self._sumo.lane
-        for k in range(self._sumo.edge.getLaneNumber(edge)):
-            from_id = f"{edge}_{k}"
-            for link in lane.getLinks(from_id):
-                chain, via = [from_id], link[4]
-                while via and via != lane_id:
-                    chain.append(via)
-                    onward = lane.getLinks(via)
-                    via = onward[0][0] if onward and onward[0][0].startswith(":") else ""
-                if via == lane_id or link[0] == lane_id:
-                    return chain
-        return []
 
     def _on_other_levels(self, slot: EgoSlot, nearby: dict) -> frozenset[str]:
         """The vehicles around the ego of ``slot`` on a road that crosses its route

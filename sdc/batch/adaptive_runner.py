@@ -49,20 +49,21 @@ from scenarios.spec.controller_ref import controller_label
 from scenarios.spec.sweep_spec import PlannedRun, SweepSpec, plan_samples
 from sdc.batch.executors import Executor
 from sdc.batch.result_store import ResultStore
-from sdc.batch.run_task import RunTask, TraceMode
+from sdc.batch.run_task import TraceMode, rows_of
 from sdc.batch.sweep_runner import (
     Reporter,
     build_networks,
     end_session,
     invalid_row,
     make_dir,
+    members_keys,
     new_manifest,
     open_dir,
     plan_table_of,
+    plan_tasks,
     record_job_files,
     record_warm_states,
     start_session,
-    sweep_columns,
 )
 from sdc.batch.warm_states import prepare_warm_states, with_warm_state
 from sdc.run.result_row import adaptive_row, result_schema
@@ -193,7 +194,10 @@ class _Runs:
         for run in todo:
             if run.spec is None:
                 self._add(adaptive_row(invalid_row(run), **adaptive[run.run_id], score=None))
-        tasks = [self._task(r) for r in todo if r.spec is not None]
+        if self.traces != "none":
+            self.trace_dir.mkdir(exist_ok=True)
+        tasks = plan_tasks(plan, set(self.rows),
+                           None if self.traces == "none" else self.trace_dir, self.traces)
         if tasks:
             build_networks(tasks, self.executor.workers)
             if not self._entered:
@@ -202,18 +206,15 @@ class _Runs:
             warm, keys = prepare_warm_states(tasks, self.executor, self.reporter.warm_states)
             self.manifest = record_warm_states(self.out_dir, self.manifest, warm, keys)
             self.manifest = record_job_files(self.out_dir, self.manifest, tasks)
-            for row in self.executor.map(tasks):
-                row = with_warm_state(row, keys)
-                score = self.event.run_score(row)
-                self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
+            keys = members_keys(tasks, keys)
+            for task_row in self.executor.map(tasks):
+                for row in rows_of(task_row):
+                    if row["run_id"] in self.rows:  # a world's run that had its row
+                        continue
+                    row = with_warm_state(row, keys)
+                    score = self.event.run_score(row)
+                    self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
         return [self.rows[r.run_id] for r in plan]
-
-    def _task(self, run: PlannedRun) -> RunTask:
-        trace = None if self.traces == "none" else self.trace_dir / f"{run.run_id}.parquet"
-        if trace is not None:
-            self.trace_dir.mkdir(exist_ok=True)
-        return RunTask(run.run_id, run.spec, sweep_columns(run), trace_path=trace,
-                       traces=self.traces)
 
     def _add(self, row: dict) -> None:
         self.store.add(row)

@@ -26,7 +26,7 @@ from multiprocessing.connection import wait
 from scenarios.common.errors import SdcError
 from sdc.batch.job_files import FileCatalog, with_files
 from sdc.batch.run_task import RunTask, execute, task_error_row
-from sdc.batch.timeouts import next_deadline_s, timeout_row
+from sdc.batch.timeouts import next_deadline_s, task_limit_s, timeout_row
 from sdc.batch.worker_files import WorkerFiles
 from sdc.batch.worker_run import TaskFn, deliver, run_in_worker
 
@@ -175,7 +175,8 @@ class LocalExecutor:
                 if pending and worker.ready and worker.task is None:
                     worker.assign(pending.popleft(), self.files)
             running = [w for w in self._pool if w.task is not None]
-            timeout = next_deadline_s((w.started for w in running), self.run_timeout_s)
+            timeout = next_deadline_s((w.started, task_limit_s(w.task, self.run_timeout_s))
+                                      for w in running)
             handles = {h for w in self._pool for h in (w.conn, w.process.sentinel)}
             ready = set(wait(list(handles), timeout))
             for i, worker in enumerate(self._pool):
@@ -185,7 +186,7 @@ class LocalExecutor:
                         yield row
                 elif worker.task is not None and self.run_timeout_s is not None:
                     elapsed = time.monotonic() - worker.started
-                    if elapsed >= self.run_timeout_s:
+                    if elapsed >= task_limit_s(worker.task, self.run_timeout_s):
                         task = worker.task
                         self._replace(i)
                         yield timeout_row(task, elapsed, self.run_timeout_s)

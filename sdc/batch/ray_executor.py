@@ -38,7 +38,7 @@ from sdc.batch.batch_size import BatchSizer
 from sdc.batch.job_files import FileCatalog, with_files
 from sdc.batch.local_executor import WARM_MODULES
 from sdc.batch.run_task import RunTask, execute, task_error_row
-from sdc.batch.timeouts import next_deadline_s, timeout_row
+from sdc.batch.timeouts import next_deadline_s, task_limit_s, timeout_row
 from sdc.batch.worker_files import WorkerFiles
 from sdc.batch.worker_run import TaskFn, deliver, run_in_worker
 
@@ -167,8 +167,8 @@ class RayExecutor:
             while pending and len(running) < self.slots:
                 generator, batch = self._submit(*self._next_batch(pending))
                 running[generator] = batch
-            timeout = next_deadline_s((b.clock_s for b in running.values()),
-                                      self.run_timeout_s)
+            timeout = next_deadline_s((b.clock_s, task_limit_s(b.current, self.run_timeout_s))
+                                      for b in running.values())
             ready, _ = ray.wait(list(running), num_returns=1, timeout=timeout)
             for generator in ready:
                 yield from self._take(generator, running, pending)
@@ -204,7 +204,7 @@ class RayExecutor:
             return
         for generator, batch in list(running.items()):
             elapsed = time.monotonic() - batch.clock_s
-            if elapsed >= self.run_timeout_s:
+            if elapsed >= task_limit_s(batch.current, self.run_timeout_s):
                 self._ray.cancel(generator, force=True)
                 del running[generator]
                 pending.extendleft((task, batch.alone)

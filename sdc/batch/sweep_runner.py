@@ -23,6 +23,7 @@ import pyarrow.parquet as pq
 
 from analysis.measures.run_outcome import COLLIDED, OUTCOMES, STATUSES
 from analysis.measures.sweep_manifest import Session, SweepManifest
+from analysis.measures.world_sharing import world_sharing
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError
 from scenarios.scene import traffic_model
@@ -326,8 +327,11 @@ def end_session(out_dir: Path, manifest: SweepManifest, table: pa.Table,
     outcomes = {o: by_outcome.get(o, 0) for o in OUTCOMES}
     finished = not summary["missing"] if finished is None else finished
     ended_at = now_iso()
+    asked = (manifest.sweep or {}).get("sweep", {}).get("egos_per_world", 1)
+    sharing = world_sharing(table.to_pandas(), asked) if asked > 1 else None
     manifest = manifest.with_session(ended_at=ended_at).updated(
         ended_at=ended_at, counts=summary, collisions=outcomes[COLLIDED], outcomes=outcomes,
-        status="complete" if finished else "interrupted")
+        status="complete" if finished else "interrupted",
+        **({"shared_worlds": sharing} if sharing else {}))
     write_manifest(out_dir, manifest)
     return summary, outcomes

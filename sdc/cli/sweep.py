@@ -33,6 +33,10 @@ def _plan_lines(sweep, plan) -> list[str]:
     if sweep.warm_states is not None:
         lines.append(f"the samples draw their traffic from {len(warm)} warm states "
                      f"(sweep.warm_states = {sweep.warm_states})")
+    worlds = {run.world.world_id for run in plan if run.world is not None}
+    if worlds:
+        lines.append(f"the runs share {len(worlds)} worlds (sweep.egos_per_world = "
+                     f"{sweep.egos_per_world}; the placement rule may seat fewer together)")
     paths = [p.path for p in sweep.params]
     lines.append("  ".join(["run_id", "seed"] + paths))
     for run in plan:

@@ -94,11 +94,12 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
             controllers.append(_failed(e))
     ends: dict[int, str | Failed] = {i: c for i, c in enumerate(controllers)
                                      if isinstance(c, Failed)}
-    world = make_shared_world(egos, cache_dir, warm_state)
-    sims = [Simulation(spec, world, road=road) for spec, road in egos]
-    for sim in sims:
-        sim.world_egos = len(egos)
+    sims: list[Simulation] = []
     try:
+        world = make_shared_world(egos, cache_dir, warm_state)
+        sims = [Simulation(spec, world, road=road) for spec, road in egos]
+        for sim in sims:
+            sim.world_egos = len(egos)
         with world:
             _step_together(world, sims, controllers, ends)
     except Exception as e:  # noqa: BLE001 - the world failed: so did every run in it
@@ -106,7 +107,7 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         for i in range(len(egos)):
             ends.setdefault(i, failed)
     out: list[Episode | Failed] = []
-    for i, sim in enumerate(sims):
+    for i, sim in enumerate(sims or [None] * len(egos)):
         end = ends[i]
         if isinstance(end, Failed):
             out.append(end)

@@ -1,0 +1,259 @@
+"""Several egos in one SUMO world (sdc/run/shared_world.py): one ego through the shared
+path is the plain run, egos are bodies to each other (seen, sensed, hit), a world of
+the same runs gives the same traces, a run that ends leaves, and the placement rule
+keeps sensing radii apart at the start.
+
+Each test that steps SUMO drives a real libsumo simulation."""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from scenarios import CATALOG_DIR
+from scenarios.scene.snapshot import sensing_radius_m
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.toml_io import load_spec, read_toml
+from scenarios.world_backends import make_road
+from sdc.run.episode import Episode, run_episode
+from sdc.run.shared_world import Failed, placed_apart, run_group, run_world
+
+QUICK_TOWN = Path(__file__).parent / "data" / "grid-town-quick.toml"
+STEP_S = 0.064
+
+
+def straight(start_m: float, *, lane: int = 0, speed_mps: float = 10.0,
+             duration_s: float = 8.0, seed: int = 1, flow_vph: float = 0.0,
+             obstacles: tuple = (), max_range_m: float | None = None) -> ScenarioSpec:
+    """A built straight road of 1000 m, two 3.5 m lanes, no road edges in the lidar
+    (its central beams see bodies only); a lane-keeping ego (it holds its speed)."""
+    plain = copy.deepcopy(read_toml(CATALOG_DIR / "seed-lesson.toml"))
+    plain["scenario"].update(seed=seed, duration_s=duration_s)
+    plain["road"].update(length_m=1000.0, lanes=2, speed_limit_mps=27.78, see_edges=False)
+    plain["traffic"] = ({"flow_vph_per_lane": flow_vph, "speed_mean_mps": 25.0,
+                         "speed_dev": 0.1} if flow_vph else {"flow_vph_per_lane": 0.0})
+    plain["obstacles"] = [dict(o) for o in obstacles]
+    plain["ego"].update(lane=lane, start_m=start_m, speed_mps=speed_mps)
+    if max_range_m is not None:
+        plain["lidar"]["max_range_m"] = max_range_m
+    plain["controller"] = {"name": "lane-keep"}
+    return ScenarioSpec.from_plain(plain)
+
+
+def town(seed: int, *, warm_seed: int = 11, duration_s: float = 6.0) -> ScenarioSpec:
+    """The quick grid town, smaller: 300 cars warmed up 10 s (one warm state for every
+    test: its seed fixed), a 6 s run on the route of ``seed``."""
+    spec = load_spec(QUICK_TOWN)
+    return dataclasses.replace(
+        spec, scenario=dataclasses.replace(spec.scenario, seed=seed, duration_s=duration_s),
+        traffic=dataclasses.replace(spec.traffic, vehicles=300, warm_up_s=10.0,
+                                    warm_seed=warm_seed))
+
+
+def with_roads(specs: list[ScenarioSpec]) -> list[tuple[ScenarioSpec, object]]:
+    return [(spec, make_road(spec)) for spec in specs]
+
+
+def episodes(outcomes: list) -> list[Episode]:
+    """The episodes of ``outcomes`` (run_world's, or run_group's without the counts),
+    none of them failed."""
+    runs = [o[0] if isinstance(o, tuple) else o for o in outcomes]
+    failed = [r for r in runs if isinstance(r, Failed)]
+    assert not failed, failed[0].traceback
+    return runs
+
+
+def boxes_at(episode: Episode, step: int) -> np.ndarray:
+    """The traffic boxes an ego's trace holds at ``step`` (N, 5)."""
+    return np.asarray(episode.trace.traffic[step], float).reshape(-1, 5)
+
+
+def own_box(episode: Episode, step: int) -> np.ndarray:
+    """The ego's own body box at ``step``, from its trace."""
+    model = episode.metadata["vehicle"]
+    return episode.trace.body_boxes(model["center_ahead_of_rear_axle_m"], model["length_m"],
+                                    model["width_m"])[step]
+
+
+def holds(boxes: np.ndarray, box: np.ndarray, tol: float = 1e-3) -> bool:
+    """Is ``box`` among ``boxes`` (to float32's precision in a trace)?"""
+    return bool(len(boxes)) and bool(np.any(np.all(np.abs(boxes - box) <= tol, axis=1)))
+
+
+def without_wall_time(row: dict) -> dict:
+    return {k: v for k, v in row.items() if k != "wall_time_s"}
+
+
+# ------------------------------------------------------ one ego: the plain run
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("make", [
+    lambda: town(11),
+    lambda: straight(50.0, speed_mps=10.0, flow_vph=1200.0, seed=4),
+], ids=["town-warm-state", "straight-flows"])
+def test_one_ego_through_the_shared_path_is_the_plain_run(make):
+    spec = make()
+    alone = run_episode(spec, run_id="r")
+    (outcome, egos), = run_group([spec], ["r"])
+    assert egos == 1
+    (shared,) = episodes([outcome])
+    assert shared.row["trace_sha256"] == alone.row["trace_sha256"]
+    assert without_wall_time(shared.row) == without_wall_time(alone.row)
+    assert shared.row["world_egos"] == 1
+    # the comparison compared traffic, not two empty worlds
+    assert any(len(t) for t in alone.trace.traffic)
+
+
+# ------------------------------------------------------ egos are bodies to each other
+
+
+def test_egos_see_each_other_and_one_runs_into_the_other():
+    """A at 10 m/s behind B, who stands 50 m ahead in the same lane (B's parked car in
+    the other lane): A's lidar sees B coming closer, A runs into B's rear, and B's run
+    ends at the same step, hit from behind."""
+    a = straight(50.0, speed_mps=10.0, duration_s=10.0)
+    b = straight(100.0, speed_mps=0.0, duration_s=10.0, seed=2,
+                 obstacles=({"kind": "car", "lane": 1, "position_m": 130.0},))
+    run_a, run_b = episodes(run_world(with_roads([a, b]), ["a", "b"]))
+    ra, rb = run_a.row, run_b.row
+    assert ra["world_egos"] == rb["world_egos"] == 2
+    assert ra["termination"] == "collision" and ra["collision_with"] == "vehicle"
+    assert ra["collision_vclass"] == "passenger"
+    assert ra["collision_role"] == "ran_into" and ra["collision_part"] == "front"
+    assert rb["termination"] == "collision" and rb["collision_with"] == "vehicle"
+    assert rb["collision_vclass"] == "passenger"
+    assert rb["collision_role"] == "was_hit" and rb["collision_part"] == "rear"
+    assert ra["collision_time_s"] == rb["collision_time_s"]
+    # (50 m - a car's length) at 10 m/s
+    assert ra["collision_time_s"] == pytest.approx((50.0 - 4.85) / 10.0, abs=0.2)
+
+    # each one's traffic holds the other where it truly is, from the first step
+    assert holds(boxes_at(run_a, 0), own_box(run_b, 0))
+    assert holds(boxes_at(run_b, 0), own_box(run_a, 0))
+    # and B's parked car (an obstacle of B's run) is a body in A's world too
+    parked = run_b.metadata["obstacle_boxes"][0]
+    assert holds(boxes_at(run_a, 0), np.array(parked))
+    assert run_a.trace.traffic_class[0].count("passenger") == 2
+    assert not len(run_a.metadata["obstacle_boxes"])  # A has none of its own
+
+    # A's lidar saw B ahead, closer and closer, well before the hit
+    lidar = np.array(run_a.trace.lidar)
+    middle = lidar.shape[1] // 2
+    ahead = lidar[:, middle - 1: middle + 2].min(axis=1)
+    gap_m = 100.0 - 50.0 - 4.85
+    assert ahead[0] == pytest.approx(gap_m, abs=3.0)  # B's rear, not the road's end
+    hit_step = len(lidar) - 1
+    assert ahead[hit_step - 10] < 30.0
+    assert np.all(np.diff(ahead[:hit_step]) <= 1e-3)
+
+
+def test_a_run_alone_sees_no_second_ego():
+    """The counterpart of the test above: without B, A drives its whole duration on an
+    empty road and senses nothing."""
+    a = straight(50.0, speed_mps=10.0, duration_s=3.0)
+    (run_a,) = episodes(run_world(with_roads([a]), ["a"]))
+    assert run_a.row["termination"] == "duration" and not run_a.row["collision"]
+    assert all(len(t) == 0 for t in run_a.trace.traffic)
+    assert np.all(np.isinf(np.array(run_a.trace.lidar)))
+
+
+# ------------------------------------------------------ determinism
+
+
+@pytest.mark.slow
+def test_a_world_of_the_same_runs_gives_the_same_traces_and_counts_its_egos():
+    specs = [town(seed) for seed in (11, 12, 13, 14, 15, 16)]
+    ids = [f"r{i}" for i in range(len(specs))]
+    worlds = placed_apart(with_roads(specs))
+    assert sorted(i for w in worlds for i in w) == list(range(len(specs)))
+    assert any(len(w) > 1 for w in worlds) and len(worlds) > 1  # shared, and split
+    first = episodes(run_group(specs, ids))
+    second = episodes(run_group(specs, ids))
+    assert [e.row["trace_sha256"] for e in first] == [e.row["trace_sha256"] for e in second]
+    assert [without_wall_time(e.row) for e in first] == [without_wall_time(e.row)
+                                                          for e in second]
+    assert len({e.row["trace_sha256"] for e in first}) == len(specs)
+    size = {i: len(w) for w in worlds for i in w}
+    assert [e.row["world_egos"] for e in first] == [size[i] for i in range(len(specs))]
+    assert [e.row["run_id"] for e in first] == ids
+    assert all(e.row["termination"] == "duration" for e in first)
+    # a run placed in a further world on its own has the same traffic: it is its plain run
+    for i in (i for w in worlds if len(w) == 1 for i in w):
+        assert first[i].row["trace_sha256"] == run_episode(specs[i]).row["trace_sha256"]
+
+
+# ------------------------------------------------------ a run that ends leaves
+
+
+@pytest.mark.parametrize("early_slot", [0, 1])
+def test_a_run_that_ends_leaves_and_the_other_goes_on(early_slot):
+    """Two egos side by side (lanes 0 and 1, 10 m apart along the road): the one whose
+    run is 3 s long leaves the world at its end; the other drives its 6 s, and from the
+    step after the first ended, nothing of it is in its traffic."""
+    short = straight(100.0, lane=0, speed_mps=8.0, duration_s=3.0, seed=1)
+    long = straight(110.0, lane=1, speed_mps=8.0, duration_s=6.0, seed=2)
+    specs = [short, long] if early_slot == 0 else [long, short]
+    runs = episodes(run_world(with_roads(specs), ["x", "y"]))
+    ended, going = (runs[0], runs[1]) if early_slot == 0 else (runs[1], runs[0])
+    n_short, n_long = round(3.0 / STEP_S), round(6.0 / STEP_S)
+    assert ended.row["termination"] == "duration" and ended.row["steps"] == n_short + 1
+    assert going.row["termination"] == "duration" and going.row["steps"] == n_long + 1
+    assert going.row["sim_time_s"] == pytest.approx(n_long * STEP_S)
+    assert not ended.row["collision"] and not going.row["collision"]
+    for k in range(n_short + 1):  # while both are in the world: each sees the other
+        assert len(boxes_at(going, k)) == 1 and holds(boxes_at(going, k), own_box(ended, k))
+        assert len(boxes_at(ended, k)) == 1 and holds(boxes_at(ended, k), own_box(going, k))
+    last = own_box(ended, n_short)
+    for k in range(n_short + 1, n_long + 1):  # it left: not even where it stopped
+        assert len(boxes_at(going, k)) == 0, k
+        assert not holds(boxes_at(going, k), last, tol=5.0)
+    # the one that stayed drove on, 8 m/s for its whole run
+    s_m = going.trace.floats["s_m"]
+    assert s_m[-1] - s_m[0] == pytest.approx(8.0 * n_long * STEP_S, rel=0.02)
+
+
+# ------------------------------------------------------ the placement rule
+
+
+def test_the_placement_rule_keeps_sensing_radii_apart():
+    radius = sensing_radius_m(straight(10.0))
+    assert radius == 150.0
+    # start points farther apart than the sum of the radii: one world
+    assert placed_apart(with_roads([straight(10.0), straight(400.0)])) == [[0, 1]]
+    assert placed_apart(with_roads([straight(10.0), straight(315.0)])) == [[0, 1]]
+    # not farther: a world each
+    assert placed_apart(with_roads([straight(10.0), straight(200.0)])) == [[0], [1]]
+    assert placed_apart(with_roads([straight(10.0), straight(300.0)])) == [[0], [1]]
+    # lanes do not matter, distance does
+    assert placed_apart(with_roads([straight(10.0), straight(200.0, lane=1)])) == [[0], [1]]
+    # an ego joins the first world it fits
+    assert placed_apart(with_roads([straight(10.0), straight(200.0), straight(400.0),
+                                    straight(600.0)])) == [[0, 2], [1, 3]]
+
+
+def test_an_obstacle_within_another_egos_radius_splits_them():
+    far = ({"kind": "car", "lane": 1, "position_m": 200.0},)  # 200 m from the ego at 400
+    near = ({"kind": "car", "lane": 1, "position_m": 300.0},)  # 100 m from it
+    assert placed_apart(with_roads([straight(10.0, obstacles=far), straight(400.0)])) == [[0, 1]]
+    assert placed_apart(with_roads([straight(10.0, obstacles=near),
+                                    straight(400.0)])) == [[0], [1]]
+    # the other way round: the second ego's obstacle (ahead of it) near the first
+    ahead = ({"kind": "barrel", "lane": 0, "position_m": 500.0},)  # 100 m from the ego at 600
+    clear = ({"kind": "barrel", "lane": 0, "position_m": 400.0},)  # 200 m from it
+    assert placed_apart(with_roads([straight(600.0),
+                                    straight(200.0, obstacles=ahead)])) == [[0], [1]]
+    assert placed_apart(with_roads([straight(600.0),
+                                    straight(200.0, obstacles=clear)])) == [[0, 1]]
+
+
+def test_the_rule_sums_each_egos_own_radius():
+    wide = straight(400.0, max_range_m=200.0)  # 225 m
+    assert sensing_radius_m(wide) == 225.0
+    # 390 m apart: 150 + 225 = 375 fit, 225 + 225 = 450 do not
+    assert placed_apart(with_roads([straight(10.0), wide])) == [[0, 1]]
+    assert placed_apart(with_roads([straight(10.0, max_range_m=200.0), wide])) == [[0], [1]]

@@ -1,0 +1,327 @@
+"""Shared worlds in a sweep's plan ([sweep] egos_per_world): which runs share a world,
+their seats and their traffic seed; and a sweep of them for real, resumed and on Ray.
+
+Only the last tests run SUMO (marked slow)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import shutil
+import subprocess
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from scenarios import CATALOG_DIR
+from scenarios.common.errors import SpecError
+from scenarios.spec.shared_worlds import WorldSeat, group_worlds, traffic_seed, world_fields
+from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256
+from scenarios.spec.toml_io import load_spec
+
+DATA = Path(__file__).parent / "data"
+QUICK_TOWN = DATA / "grid-town-quick.toml"
+TOWN_NET = CATALOG_DIR / "networks" / "grid-10x10.net.xml"
+SDC = [sys.executable, "-m", "sdc"]
+
+
+def sweep_plain(**table) -> dict:
+    params = table.pop("params", {"ego.speed_mps": {"uniform": [3.0, 6.0]}})
+    return {"sweep": {"name": "worlds", "base": str(QUICK_TOWN), "samples": 10,
+                      "sampler": "random", "seed": 3, "controllers": ["seed", "lane-keep"],
+                      **table, "params": params}}
+
+
+def make(**table) -> SweepSpec:
+    return SweepSpec.from_plain(sweep_plain(**table), DATA)
+
+
+def worlds_of(plan) -> dict[str, list]:
+    """The runs of each world, in plan order."""
+    worlds: dict[str, list] = defaultdict(list)
+    for run in plan:
+        worlds[run.world.world_id].append(run)
+    return dict(worlds)
+
+
+# ------------------------------------------------------ the plan
+
+
+def test_a_sweep_seats_each_controllers_runs_in_worlds_of_up_to_k():
+    plain_plan = expand(make())
+    plan = expand(make(egos_per_world=4))
+    assert len(plan) == len(plain_plan) == 20
+    assert [r.run_id for r in plan] == [r.run_id for r in plain_plan]
+    assert all(run.world is not None and run.spec is not None for run in plan)
+    worlds = worlds_of(plan)
+    for world_id, runs in worlds.items():
+        assert 1 <= len(runs) <= 4
+        assert len({r.controller for r in runs}) == 1  # one controller a world
+        first = runs[0]
+        assert world_id == f"w{first.sample:05d}-{first.controller}"
+        assert [r.world.slot for r in runs] == list(range(len(runs)))  # in plan order
+        assert [r.index for r in runs] == sorted(r.index for r in runs)
+        # one traffic: the first run's seed (its scenario's: the base sets no warm seed)
+        assert {r.spec.traffic.warm_seed for r in runs} == {first.seed}
+        assert {traffic_seed(r.spec) for r in runs} == {first.seed}
+        assert all(world_fields(r.spec) == world_fields(first.spec) for r in runs)
+        # the rest of each run stays its own: its seed (route), start, speed, controller
+        assert len({r.seed for r in runs}) == len(runs)
+    # 10 runs a controller: 4 + 4 + 2, each sample's runs seated alike for both
+    sizes = {c: [len(w) for w in worlds.values() if w[0].controller == c]
+             for c in ("seed", "lane-keep")}
+    assert sizes == {"seed": [4, 4, 2], "lane-keep": [4, 4, 2]}
+    assert sorted(worlds) == ["w00000-lane-keep", "w00000-seed", "w00004-lane-keep",
+                              "w00004-seed", "w00008-lane-keep", "w00008-seed"]
+    # each run's spec is the one it has alone, but for the world's traffic seed
+    for run, alone in zip(plan, plain_plan, strict=True):
+        assert alone.world is None and alone.spec.traffic.warm_seed is None
+        assert dataclasses.replace(run.spec, traffic=alone.spec.traffic) == alone.spec
+        assert run.params == alone.params and run.seed == alone.seed
+
+
+def test_runs_of_different_traffic_never_share_a_world():
+    plan = expand(make(egos_per_world=4, params={
+        "ego.speed_mps": {"uniform": [3.0, 6.0]},
+        "traffic.vehicles": {"choice": [200, 300]}}))
+    values = {r.spec.traffic.vehicles for r in plan}
+    assert values == {200, 300}
+    worlds = worlds_of(plan)
+    for runs in worlds.values():
+        assert len(runs) <= 4
+        assert len({r.spec.traffic.vehicles for r in runs}) == 1
+        assert len({r.controller for r in runs}) == 1
+        assert [r.world.slot for r in runs] == list(range(len(runs)))
+        assert {r.spec.traffic.warm_seed for r in runs} == {runs[0].seed}
+    # each (controller, traffic) class fills its worlds in plan order, up to 4
+    for controller in ("seed", "lane-keep"):
+        for vehicles in (200, 300):
+            runs = [r for r in plan if r.controller == controller
+                    and r.spec.traffic.vehicles == vehicles]
+            chunks = [runs[k:k + 4] for k in range(0, len(runs), 4)]
+            assert [[r.run_id for r in worlds[c[0].world.world_id]] for c in chunks] == \
+                [[r.run_id for r in c] for c in chunks]
+
+
+def test_one_ego_a_world_leaves_the_plan_as_it_was():
+    without = make()
+    one = make(egos_per_world=1)
+    assert one.egos_per_world == 1 and "egos_per_world" not in one.to_plain()["sweep"]
+    plan = expand(one)
+    assert all(run.world is None for run in plan)
+    assert plan_sha256(plan) == plan_sha256(expand(without))
+    assert [r.spec for r in plan] == [r.spec for r in expand(without)]
+    four = make(egos_per_world=4)
+    assert four.to_plain()["sweep"]["egos_per_world"] == 4
+    assert plan_sha256(expand(four)) != plan_sha256(plan)  # the seats are in the digest
+
+
+def test_group_worlds_on_its_own():
+    spec = load_spec(QUICK_TOWN)
+    specs = [dataclasses.replace(spec, scenario=dataclasses.replace(spec.scenario, seed=s))
+             for s in (5, 6, 7)]
+    runs = [(k, f"{k:03d}", "seed", s) for k, s in enumerate(specs)]
+    grouped = group_worlds(runs, 2)
+    assert {k: seat for k, (seat, _) in grouped.items()} == {
+        0: WorldSeat("w000-seed", 0), 1: WorldSeat("w000-seed", 1),
+        2: WorldSeat("w002-seed", 0)}
+    assert [grouped[k][1].traffic.warm_seed for k in range(3)] == [5, 5, 7]
+    assert [grouped[k][1].scenario.seed for k in range(3)] == [5, 6, 7]
+
+
+def test_a_highway_base_cannot_share_worlds(tmp_path):
+    base = tmp_path / "highway.toml"
+    text = (CATALOG_DIR / "highway-obstacle.toml").read_text()
+    base.write_text(text.replace("seed = 7", 'seed = 7\nbackend = "highway"', 1))
+    assert load_spec(base).scenario.backend == "highway"
+    plain = sweep_plain(egos_per_world=2)
+    plain["sweep"]["base"] = str(base)
+    with pytest.raises(SpecError) as e:
+        SweepSpec.from_plain(plain, tmp_path)
+    assert str(e.value).startswith("sweep.egos_per_world")
+    assert e.value.field == "sweep.egos_per_world" and "highway" in e.value.message
+    # one ego a world is any backend's
+    plain["sweep"]["egos_per_world"] = 1
+    assert SweepSpec.from_plain(plain, tmp_path).egos_per_world == 1
+    # from a file, the message names the file and the field
+    sweep_file = tmp_path / "sweep.toml"
+    sweep_file.write_text(f'[sweep]\nname = "h"\nbase = "{base}"\nsamples = 2\n'
+                          'egos_per_world = 2\n\n[sweep.params]\n'
+                          '"ego.speed_mps" = { uniform = [10.0, 20.0] }\n')
+    with pytest.raises(SpecError) as e:
+        load_sweep(sweep_file)
+    assert e.value.field == "sweep.egos_per_world"
+    assert str(e.value).startswith(f"{sweep_file}: sweep.egos_per_world")
+
+
+def test_runs_swept_onto_the_highway_backend_are_refused_or_run():
+    """A sumo base whose sweep draws scenario.backend = "highway" for some samples: with
+    egos_per_world = 2 the sweep is either refused (naming sweep.egos_per_world) or its
+    highway runs run (alone: the highway backend holds one ego)."""
+    from sdc.batch.run_task import execute, rows_of
+    from sdc.batch.sweep_runner import plan_tasks
+
+    plain = {"sweep": {"name": "hw", "base": str(CATALOG_DIR / "seed-lesson.toml"),
+                       "samples": 4, "sampler": "random", "seed": 3,
+                       "controllers": ["lane-keep"], "egos_per_world": 2, "params": {
+                           "scenario.backend": {"choice": ["highway"]},
+                           "scenario.duration_s": {"choice": [2.0]}}}}
+    try:
+        sweep = SweepSpec.from_plain(plain, CATALOG_DIR)
+    except SpecError as e:
+        assert e.field == "sweep.egos_per_world"
+        return
+    plan = expand(sweep)
+    assert all(run.spec.scenario.backend == "highway" for run in plan)
+    rows = [row for task in plan_tasks(plan, set(), None, "none")
+            for row in rows_of(execute(task))]
+    assert sorted(row["run_id"] for row in rows) == [run.run_id for run in plan]
+    assert [row["error"] for row in rows if row["status"] != "ok"] == []
+
+
+# ------------------------------------------------------ a sweep for real (SUMO)
+
+TOWN_BASE = f"""[scenario]
+name = "town-small"
+duration_s = 5.0
+step_s = 0.064
+seed = 1
+
+[road]
+kind = "sumo_net"
+net_file = "{TOWN_NET}"
+length_m = 300.0
+
+[traffic]
+vehicles = 300
+speed_dev = 0.1
+warm_up_s = 10.0
+
+[[obstacles]]
+kind = "car"
+lane = 0
+position_m = 80.0
+
+[ego]
+lane = 0
+start_m = 10.0
+speed_mps = 4.0
+
+[controller]
+name = "seed"
+"""
+SAMPLES, CONTROLLERS, EGOS = 8, ["seed", "lane-keep"], 4
+
+
+def town_sweep(tmp_path: Path) -> Path:
+    base = tmp_path / "town-small.toml"
+    base.write_text(TOWN_BASE)
+    path = tmp_path / "worlds.toml"
+    path.write_text(f"""[sweep]
+name = "worlds"
+base = "{base}"
+samples = {SAMPLES}
+sampler = "random"
+seed = 5
+controllers = {json.dumps(CONTROLLERS)}
+egos_per_world = {EGOS}
+
+[sweep.params]
+"ego.speed_mps" = {{ uniform = [3.0, 8.0] }}
+""")
+    return path
+
+
+def sweep_cli(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([*SDC, "sweep", *map(str, args), "--quiet"], capture_output=True,
+                          text=True, timeout=600)
+
+
+def comparable(out_dir: Path) -> pd.DataFrame:
+    """The results without what differs between sessions: wall time."""
+    return pd.read_parquet(out_dir / "results.parquet").drop(columns=["wall_time_s"])
+
+
+@pytest.fixture(scope="module")
+def swept(tmp_path_factory, temporary_cache) -> tuple[Path, Path]:
+    """The town sweep, run once for the module by the command line: its file and its
+    directory (read only: tests copy it)."""
+    tmp_path = tmp_path_factory.mktemp("worlds")
+    path, out = town_sweep(tmp_path), tmp_path / "reference"
+    result = sweep_cli(path, "--out", out, "--workers", "2")
+    assert result.returncode == 0, result.stderr
+    return path, out
+
+
+@pytest.mark.slow
+def test_a_sweep_of_shared_worlds_fills_the_world_columns(swept):
+    path, out = swept
+    results = pd.read_parquet(out / "results.parquet")
+    plan = expand(load_sweep(path))
+    assert list(results.run_id) == [r.run_id for r in plan]
+    assert (results.status == "ok").all(), results.error.dropna().tolist()
+    assert results.world_id.notna().all() and results.world_slot.notna().all()
+    assert results.world_egos.notna().all()
+    seats = {r.run_id: (r.world.world_id, r.world.slot) for r in plan}
+    assert {row.run_id: (row.world_id, row.world_slot) for row in results.itertuples()} == seats
+    assert results.world_id.nunique() == len(CONTROLLERS) * SAMPLES // EGOS
+    for world_id, runs in results.groupby("world_id"):
+        assert len(runs) <= EGOS and runs.controller.nunique() == 1, world_id
+        assert sorted(runs.world_slot) == list(range(len(runs)))
+        assert runs.world_egos.between(1, len(runs)).all()
+        # the placement rule splits a world into SUMO worlds of n egos: n runs say n
+        for n, count in runs.world_egos.value_counts().items():
+            assert count % n == 0, (world_id, n, count)
+        assert runs.warm_state.nunique() == 1  # one traffic, one warm state
+    by_controller = results.groupby("controller").trace_sha256
+    assert (by_controller.nunique() == SAMPLES).all()
+    # the obstacle 80 m ahead is out of reach in 5 s, so the seed controller only keeps its
+    # lane: a sample's two runs, in their controllers' worlds seated alike, are one run
+    traces = results.pivot(index="sample", columns="controller", values="trace_sha256")
+    assert (traces["seed"] == traces["lane-keep"]).all()
+    plan_table = pd.read_parquet(out / "plan.parquet")
+    assert list(plan_table.world_id) == list(results.world_id)
+
+
+@pytest.mark.slow
+def test_a_resumed_sweep_of_shared_worlds_is_the_uninterrupted_one(swept, tmp_path):
+    path, reference = swept
+    out = tmp_path / "resumed"
+    shutil.copytree(reference, out)
+    # what Ctrl-C leaves: results.parquet with the runs finished so far, no parts
+    table = pq.read_table(out / "results.parquet")
+    ids = table.column("run_id").to_pylist()
+    worlds = table.column("world_id").to_pylist()
+    lost = {ids[1], ids[len(ids) - 1], ids[len(ids) - 3]}  # in two worlds, one run of
+    kept = table.filter(pa.array([i not in lost for i in ids]))
+    pq.write_table(kept, out / "results.parquet")
+    for run_id in lost:
+        (out / "traces" / f"{run_id}.parquet").unlink(missing_ok=True)
+    assert len({worlds[ids.index(i)] for i in lost}) >= 2
+
+    resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
+    assert resumed.returncode == 0, resumed.stderr
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["status"] == "complete"
+    assert manifest["sessions"][-1]["runs_to_do"] == len(lost)
+    pd.testing.assert_frame_equal(comparable(out), comparable(reference))
+    assert sorted(p.name for p in (out / "traces").iterdir()) == \
+        sorted(p.name for p in (reference / "traces").iterdir())
+
+
+@pytest.mark.slow
+def test_ray_runs_the_shared_worlds_as_local_processes_do(swept, tmp_path, ray_session):
+    from sdc.batch.executors import RayExecutor
+    from sdc.batch.progress import QuietReporter
+    from sdc.batch.sweep_runner import run_sweep
+
+    path, reference = swept
+    outcome = run_sweep(load_sweep(path), tmp_path / "ray", RayExecutor(2), QuietReporter())
+    assert outcome.counts == {"ok": SAMPLES * len(CONTROLLERS), "error": 0, "timeout": 0,
+                              "missing": 0}
+    pd.testing.assert_frame_equal(comparable(tmp_path / "ray"), comparable(reference))
