@@ -56,7 +56,10 @@ COLUMNS: tuple[Column, ...] = (
            "None: the run had a world of its own"),
     Column("world_slot", pa.int64(), SWEEP,
            "the run's place among its world's runs, from 0; None: a world of its own"),
-    Column("seed", pa.int64(), IDENTITY, "scenario.seed: SUMO's and the lidar noise's seed"),
+    Column("seed", pa.int64(), IDENTITY,
+           "scenario.seed: the run's own randomness (its lidar's noise; on a network its "
+           "route) and its traffic's, unless traffic.warm_seed gives the traffic its own "
+           "(a warm-state pool's, a shared world's)"),
     Column("controller", pa.string(), IDENTITY, "the controller's name"),
     Column("backend", pa.string(), IDENTITY, "the world simulator: sumo | highway"),
     Column("status", pa.string(), STATUS, "ok | error | timeout"),
