@@ -83,7 +83,7 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
         row = rows[0] if rows else None
     trace = sweep_dir / "traces" / f"{run_id}.parquet"
     world = None
-    if "world_id" in plan.columns and planned.world_id is not None:
+    if "world_id" in plan.columns and isinstance(planned.world_id, str):  # null: NaN
         runs = plan[plan.world_id == planned.world_id].sort_values("world_slot")
         world = (list(runs.run_id), [_planned_spec(j, plan_path, r)
                                      for r, j in zip(runs.run_id, runs.spec_json, strict=True)])
