@@ -20,6 +20,7 @@ A rate is runs over the sweep's wall time; K = 1 runs :data:`SAMPLES` [1] sample
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -59,17 +60,21 @@ def runs_per_hour(sweep_file: Path, out_dir: Path) -> tuple[float, float]:
 
 
 def main() -> None:
+    """``python benchmarks/bench_shared_worlds.py [K ...]``: those K only (1 always)."""
+    wanted = {1, *map(int, sys.argv[1:])} if len(sys.argv) > 1 else set(SAMPLES)
     figures, raw = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for k, samples in SAMPLES.items():
+            if k not in wanted:
+                continue
             sweep = write_sweep(tmp, samples, k)
             os.environ["SDC_CACHE_DIR"] = str(tmp / f"cache-{k}")  # cold: nothing warm
             raw[f"town_runs_per_hour_k{k}"], raw[f"town_mean_world_egos_k{k}"] = (
                 runs_per_hour(sweep, tmp / f"cold-{k}"))
             raw[f"town_runs_per_hour_cached_k{k}"], _ = runs_per_hour(sweep, tmp / f"warm-{k}")
     for k in SAMPLES:
-        if k > 1:
+        if k > 1 and k in wanted:
             figures[f"town_runs_per_hour_k{k}_vs_k1"] = (raw[f"town_runs_per_hour_k{k}"]
                                                          / raw["town_runs_per_hour_k1"])
             figures[f"town_runs_per_hour_cached_k{k}_vs_k1"] = (
