@@ -150,6 +150,11 @@ class SweepManifest(Record):
         return self.sweep["sweep"]["name"]
 
     @property
+    def egos_per_world(self) -> int:
+        """The runs the sweep let share a world (``[sweep] egos_per_world``; 1: none)."""
+        return int((self.sweep or {}).get("sweep", {}).get("egos_per_world", 1))
+
+    @property
     def sweep_params(self) -> dict:
         """The swept parameters as the sweep file gives them: path -> distribution."""
         return self.sweep["sweep"].get("params", {})

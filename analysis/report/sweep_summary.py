@@ -163,8 +163,7 @@ def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str],
         traffic_model=manifest.traffic_model,
         sumo_config=manifest.sumo_config,
         world=world_summary(counted),
-        shared_worlds=world_sharing(
-            results, int(manifest.sweep.get("sweep", {}).get("egos_per_world", 1))),
+        shared_worlds=world_sharing(results, manifest.egos_per_world),
     )
 
 

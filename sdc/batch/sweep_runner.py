@@ -327,7 +327,7 @@ def end_session(out_dir: Path, manifest: SweepManifest, table: pa.Table,
     outcomes = {o: by_outcome.get(o, 0) for o in OUTCOMES}
     finished = not summary["missing"] if finished is None else finished
     ended_at = now_iso()
-    asked = (manifest.sweep or {}).get("sweep", {}).get("egos_per_world", 1)
+    asked = manifest.egos_per_world
     sharing = world_sharing(table.to_pandas(), asked) if asked > 1 else None
     manifest = manifest.with_session(ended_at=ended_at).updated(
         ended_at=ended_at, counts=summary, collisions=outcomes[COLLIDED], outcomes=outcomes,
