@@ -144,11 +144,12 @@ def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
     road = make_road(spec)
     with make_world(spec, road) as world:
         Simulation(spec, world, 0.0).start()
+        slot = world._slots[0]  # the ego's context subscription
         libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
-                                           world._subscribed_m)
-        if world.people_subscribed:
+                                           slot.subscribed_m)
+        if slot.people_subscribed:
             libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_PERSON_VARIABLE,
-                                               world._subscribed_m)
+                                               slot.subscribed_m)
         if ego:  # its speed mode and lane change mode stay off: it keeps speed and lane
             libsumo.vehicle.setSpeed(EGO_ID, spec.ego.speed_mps)
         else:

@@ -12,6 +12,13 @@ swept, under ``seed``, on 2 local workers, traces off. Prints ``name value`` lin
   left to compute): what sharing SUMO's step alone buys.
 - ``raw.town_mean_world_egos_k<K>``: how many egos a run shared its SUMO simulation
   with, on average (the placement rule may seat fewer than K).
+- ``town_world_step_vs_bare_sumo_k<K>``: the median step of one world holding K egos
+  (each sensing, deciding under lane-keep, checked, pushed; then SUMO's one step),
+  over SUMO's own step of the same town without an ego (the floor: what the world
+  costs were our egos free); ``town_ego_step_vs_bare_sumo_k<K>``: that step shared
+  by its K egos, over the floor (below 1: a run's step costs less than SUMO's own).
+  The K egos are the first seeds the placement rule seats in one world
+  (``raw.town_seated_k<K>`` of them, when the town holds fewer).
 
 A rate is runs over the sweep's wall time; K = 1 runs :data:`SAMPLES` [1] samples
 (each a warm-up of its own), the others enough for whole worlds.
@@ -19,19 +26,26 @@ A rate is runs over the sweep's wall time; K = 1 runs :data:`SAMPLES` [1] sample
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+import bench_perf
+import numpy as np
 import pandas as pd
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
+from scenarios.world_backends import make_road, make_shared_world
 from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
+from sdc.car.controller_plugins import make_controller
+from sdc.run.episode import Simulation
+from sdc.run.shared_world import placed_apart
 
 #: samples of the sweep by egos per world
 SAMPLES = {1: 4, 4: 8, 8: 16, 16: 16}
@@ -59,10 +73,84 @@ def runs_per_hour(sweep_file: Path, out_dir: Path) -> tuple[float, float]:
     return outcome.runs / wall_s * 3600, float(rows.world_egos.mean())
 
 
+def seated_town(k: int, candidates: int = 400) -> list[tuple]:
+    """Up to ``k`` town runs (lane-keep, no obstacle, one warm seed) that the placement
+    rule seats in one world: the first seeds that fit, each a spec and its road."""
+    base = bench_perf.town_spec()
+    seated: list[tuple] = []
+    for seed in range(1, candidates + 1):
+        spec = base.with_seed(seed)
+        spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
+                                                                     warm_seed=1))
+        ego = (spec, make_road(spec))
+        if placed_apart([*seated, ego]) == [list(range(len(seated) + 1))]:
+            seated.append(ego)
+        if len(seated) == k:
+            break
+    return seated
+
+
+def world_step_ms(egos: list[tuple], steps: int = bench_perf.TIMED_STEPS) -> float:
+    """Median step [ms] of one world holding ``egos``: each senses, decides, is
+    recorded, checked and moved, then SUMO steps once (the shared loop, timed)."""
+    world = make_shared_world(egos, None, None)
+    sims = [Simulation(spec, world, road=road) for spec, road in egos]
+    controllers = [make_controller(spec.controller) for spec, _ in egos]
+    with world:
+        for sim in sims:
+            sim.place()
+        snapshots = world.start_all({i: (sim.box, sim.state.speed_mps)
+                                     for i, sim in enumerate(sims)})
+        for sim, snapshot in zip(sims, snapshots.values(), strict=True):
+            sim.begin(snapshot)
+        steps_s = []
+        for _ in range(steps):
+            start = time.perf_counter()
+            moves = {}
+            for i, sim in enumerate(sims):
+                command, phase = sim.decide(controllers[i])
+                sim.record(command, phase)
+                sim.end_reason()
+                sim.move(command)
+                moves[i] = (sim.box, sim.state.speed_mps)
+            snapshots = world.step_all(moves)
+            for i in moves:
+                sims[i].arrive(snapshots[i])
+            steps_s.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(steps_s))
+
+
+def step_figures(wanted: set[int], figures: dict, raw: dict) -> None:
+    """The world's step by egos in it, over SUMO's own (the floor)."""
+    bare_ms = bench_perf.bare_sumo_ms(seated_town(1)[0][0], ego=False)
+    raw["town_bare_sumo_step_ms"] = bare_ms
+    for k in sorted(wanted):
+        egos = seated_town(k)
+        raw[f"town_seated_k{k}"] = len(egos)
+        step_ms = world_step_ms(egos)
+        raw[f"town_world_step_ms_k{k}"] = step_ms
+        figures[f"town_world_step_vs_bare_sumo_k{k}"] = step_ms / bare_ms
+        figures[f"town_ego_step_vs_bare_sumo_k{k}"] = step_ms / len(egos) / bare_ms
+
+
 def main() -> None:
-    """``python benchmarks/bench_shared_worlds.py [K ...]``: those K only (1 always)."""
-    wanted = {1, *map(int, sys.argv[1:])} if len(sys.argv) > 1 else set(SAMPLES)
+    """``python benchmarks/bench_shared_worlds.py [--steps] [K ...]``: those K only (1
+    always); ``--steps``: the world's step only, no sweep."""
+    args = [a for a in sys.argv[1:] if a != "--steps"]
+    wanted = {1, *map(int, args)} if args else set(SAMPLES)
     figures, raw = {}, {}
+    if "--steps" not in sys.argv:
+        sweep_figures(wanted, figures, raw)
+    step_figures(wanted, figures, raw)  # on the user's cache: its warm state is kept
+    for name, value in figures.items():
+        print(f"{name} {value:.3f}")
+    for name, value in raw.items():
+        print(f"raw.{name} {value:.1f}")
+
+
+def sweep_figures(wanted: set[int], figures: dict, raw: dict) -> None:
+    """Runs per hour of the town sweep by egos per world, cold and cached."""
+    users_cache = os.environ.get("SDC_CACHE_DIR")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         for k, samples in SAMPLES.items():
@@ -79,10 +167,9 @@ def main() -> None:
                                                          / raw["town_runs_per_hour_k1"])
             figures[f"town_runs_per_hour_cached_k{k}_vs_k1"] = (
                 raw[f"town_runs_per_hour_cached_k{k}"] / raw["town_runs_per_hour_cached_k1"])
-    for name, value in figures.items():
-        print(f"{name} {value:.3f}")
-    for name, value in raw.items():
-        print(f"raw.{name} {value:.1f}")
+    os.environ.pop("SDC_CACHE_DIR")
+    if users_cache is not None:
+        os.environ["SDC_CACHE_DIR"] = users_cache
 
 
 if __name__ == "__main__":

@@ -80,12 +80,12 @@ def main() -> None:
     print(f"world.audit_ms_per_step {1e3 * audit_s / len(episode.trace):.4f}")
     road = make_road(episode_spec)
     with SumoWorld(episode_spec, road) as world:
-        boxes = episode.trace.body_boxes(
-            world._model.center_ahead_of_rear_axle_m, world._model.length_m,
-            world._model.width_m)
+        ego = world._slots[0]
+        boxes = episode.trace.body_boxes(ego.model.center_ahead_of_rear_axle_m,
+                                         ego.model.length_m, ego.model.width_m)
         start = time.perf_counter()
         for box in boxes:
-            world._ego_pose(box)
+            world._ego_pose(ego, box)
         pose_s = time.perf_counter() - start
     print(f"world.ego_pose_us {1e6 * pose_s / len(boxes):.2f}")
     print(f"raw.audit_traffic_per_step "

@@ -133,7 +133,7 @@ def test_every_body_lies_where_sumo_holds_it(config, enter_s, steps, long_ones):
                       else snapshot.traffic_bodies)
             for body in np.unique(bodies):
                 rows = np.flatnonzero(bodies == body)
-                vid = world.last_ids[rows[0]]
+                vid = world.last_ids[0][rows[0]]
                 if snapshot.traffic_classes[rows[0]] == "pedestrian":
                     continue
                 segments = centre_segments(snapshot.traffic_boxes[rows])

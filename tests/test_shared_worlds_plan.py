@@ -159,6 +159,23 @@ def test_a_highway_base_cannot_share_worlds(tmp_path):
     assert str(e.value).startswith(f"{sweep_file}: sweep.egos_per_world")
 
 
+@pytest.mark.parametrize("base", ["highway-obstacle.toml", "seed-lesson.toml",
+                                  "avoid-roads-curve.toml"])
+def test_a_built_road_base_cannot_share_worlds(base):
+    """Every ego of a built road starts at ego.start_m of the same lane: none could be
+    placed apart, so the sweep is refused, naming the field."""
+    plain = sweep_plain(egos_per_world=2)
+    plain["sweep"]["base"] = str(CATALOG_DIR / base)
+    kind = load_spec(CATALOG_DIR / base).road.kind
+    assert kind in ("straight", "curve")
+    with pytest.raises(SpecError) as e:
+        SweepSpec.from_plain(plain, CATALOG_DIR)
+    assert e.value.field == "sweep.egos_per_world"
+    assert "built road" in e.value.message and "network" in e.value.message
+    plain["sweep"]["egos_per_world"] = 1
+    assert SweepSpec.from_plain(plain, CATALOG_DIR).egos_per_world == 1
+
+
 def test_runs_swept_onto_the_highway_backend_are_refused_or_run():
     """A sumo base whose sweep draws scenario.backend = "highway" for some samples: with
     egos_per_world = 2 the sweep is either refused (naming sweep.egos_per_world) or its

@@ -3,6 +3,7 @@ audit; and SUMO without the ego as the oracle of what is SUMO's own."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,10 +16,11 @@ from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import read_toml
 from scenarios.sumo_net.build import input_path
-from scenarios.world_backends import make_road, make_world
+from scenarios.world_backends import make_road, make_shared_world, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import run_episode
-from sdc.run.world_witness import witness_overlaps
+from sdc.run.shared_world import placed_apart, run_world
+from sdc.run.world_witness import Judged, witness_overlaps, witness_world
 
 
 def along_lane(shape_xy, lane_length_m, front_pos_m, lateral_m, length_m, width_m,
@@ -118,6 +120,41 @@ def test_sumos_own_overlaps_on_ingolstadt_are_there_without_the_ego_too(enter_s,
     assert all(w.sumo_holds_both for w in witnessed)
     sample = witnessed[:: max(1, len(witnessed) // 25)]
     alone = bare_sumo_boxes(spec, [w.sumo_time_s for w in sample],
+                            {v for w in sample for v in (w.first, w.second)})
+    for w in sample:
+        a, b = alone[w.sumo_time_s, w.first], alone[w.sumo_time_s, w.second]
+        assert pairs_overlap(a[None], b[None])[0], w
+
+
+@pytest.mark.slow
+def test_a_shared_worlds_runs_are_judged_in_one_replay_of_the_world():
+    """The same Ingolstadt run shares its world with a second ego placed apart (another
+    route): each run's overlaps are judged in one replay of the whole world, every
+    step of both judged; the bicycles waiting inside each other count as SUMO's for
+    the first run, none as ours, and SUMO alone (no ego) holds the same two inside each
+    other at those times."""
+    first = ingolstadt_spec(123.061257, 11.134009)
+    first = dataclasses.replace(first, traffic=dataclasses.replace(first.traffic, warm_seed=1))
+    second = first.with_seed(2)
+    egos = [(spec, make_road(spec)) for spec in (first, second)]
+    assert placed_apart(egos) == [[0, 1]]  # one world
+    outcomes = run_world(egos, ["first", "second"])
+    rows = [outcome.row for outcome in outcomes]
+    assert [row["world_egos"] for row in rows] == [2, 2]
+    assert rows[0]["world_overlaps"] == 0 and rows[0]["sumo_overlaps"] > 0, rows[0]
+    assert rows[1]["world_overlaps"] == 0, rows[1]
+    vehicle = Vehicle(VEHICLE_MODELS[first.vehicle.model], first.vehicle.friction_mu)
+    judged = [Judged(outcome.trace, vehicle,
+                     overlap_steps(outcome.trace.traffic, np.zeros((0, 5)),
+                                   outcome.trace.traffic_class,
+                                   traffic_bodies=outcome.trace.traffic_body), ())
+              for outcome in outcomes]
+    witnessed = witness_world(make_shared_world(egos, None, None), judged)
+    for run, seen, row in zip(judged, witnessed, rows, strict=True):
+        assert {w.step for w in seen} == set(run.steps.tolist())  # every step judged
+        assert len({w.step for w in seen if w.sumo_holds_both}) == row["sumo_overlaps"]
+    sample = witnessed[0][:: max(1, len(witnessed[0]) // 25)]
+    alone = bare_sumo_boxes(first, [w.sumo_time_s for w in sample],
                             {v for w in sample for v in (w.first, w.second)})
     for w in sample:
         a, b = alone[w.sumo_time_s, w.first], alone[w.sumo_time_s, w.second]

@@ -349,6 +349,11 @@ class SweepSpec:
             raise SpecError("sweep.egos_per_world", "only the sumo backend holds several "
                             f"egos in one world; the base scenario runs on "
                             f"{base.scenario.backend!r}")
+        if meta.egos_per_world > 1 and not base.road.on_network:
+            raise SpecError("sweep.egos_per_world", "egos share a world on a network road "
+                            "only (road.net_file, road.config_file): a built road starts "
+                            "every ego at ego.start_m of the same lane, so no two can be "
+                            "placed apart; leave it 1")
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
                    meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states,
                    meta.egos_per_world)
@@ -552,12 +557,14 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
 def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[PlannedRun]:
     """``plan`` with its runs seated in shared worlds (:func:`group_worlds`), each
     run's spec taking its world's traffic seed; unchanged for one ego a world. Only
-    SUMO holds several egos: a run swept onto another backend keeps a world of its own."""
+    SUMO holds several egos, and only a network road places them apart: a run swept
+    onto another backend or a built road keeps a world of its own."""
     if egos_per_world == 1:
         return plan
     grouped = group_worlds([(k, f"{run.sample:0{width}d}", run.controller, run.spec)
                             for k, run in enumerate(plan)
-                            if run.spec is not None and run.spec.scenario.backend == "sumo"],
+                            if run.spec is not None and run.spec.scenario.backend == "sumo"
+                            and run.spec.road.on_network],
                            egos_per_world)
     return [run if k not in grouped else
             dataclasses.replace(run, spec=grouped[k][1], world=grouped[k][0])

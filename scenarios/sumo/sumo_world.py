@@ -146,11 +146,11 @@ class SumoWorld:
         self._demand: RandomTrips | None = None
         self._trips_made = 0
         self._types = VehicleTypes()
-        #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``), for
-        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step); a
-        #: world of one ego only
+        #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``: slot -> the
+        #: ids of the rows read from SUMO; the other egos' bodies follow them), for
+        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
         self.keep_ids = False
-        self.last_ids: list[str] = []
+        self.last_ids: dict[int, list[str]] = {}
         self._source = road_source(spec.road)
         # a sumo_config road's configuration (its files are written into the scratch
         # folder), its enter_s checked before any SUMO
@@ -576,17 +576,19 @@ class SumoWorld:
             ids = road_kernels.traffic_ids(
                 nearby, _TRAFFIC_VARS, slot.names.ego_id, slot.names.obstacle_prefix,
                 self._types.sizes, float(ego_box[0]), float(ego_box[1]), slot.radius_m)
-            self.last_ids = ids if bodies is None else [ids[b] for b in bodies]
+            self.last_ids[slot.slot] = ids if bodies is None else [ids[b] for b in bodies]
         classes = self._types.names(kinds)
         if len(self._slots) > 1:
             boxes, speeds, classes, bodies = _with_others(slot, self._slots, boxes, speeds,
                                                           classes, bodies)
         return boxes, speeds, classes, bodies
 
-    def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles) -> list[np.ndarray]:
-        """The bodies of the last snapshot's traffic ``rows`` (indices into its
-        ``traffic_boxes``; needs ``keep_ids``) and of the spec's ``obstacles`` (indices)
-        as SUMO's own lanes hold them: each (P, 5) boxes laid along its lane in
+    def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles, slot_index: int = 0
+                       ) -> list[np.ndarray]:
+        """The bodies of the last snapshot's traffic ``rows`` of the ego in ``slot_index``
+        (indices into its ``traffic_boxes``, of rows read from SUMO; needs ``keep_ids``)
+        and of its spec's ``obstacles`` (indices) as SUMO's own lanes hold them: each
+        (P, 5) boxes laid along its lane in
         :data:`scenarios.scene.lane_bodies.BODY_PIECES` boxes, an obstacle with the vehicles
         it stands as in lanes beside, a person on foot (no lane holds it) as its own
         box."""
@@ -603,10 +605,10 @@ class SumoWorld:
 
         bodies = []
         for row in rows:
-            vid = self.last_ids[row]
+            vid = self.last_ids[slot_index][row]
             bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
         for i in obstacles:
-            own = f"{self._slots[0].names.obstacle_prefix}{i}"
+            own = f"{self._slots[slot_index].names.obstacle_prefix}{i}"
             bodies.append(np.vstack([laid(vid) for vid in standing
                                      if vid == own or vid.startswith(own + ".")]))
         return bodies

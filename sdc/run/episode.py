@@ -41,7 +41,7 @@ from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
-from sdc.run.world_witness import judge_overlaps
+from sdc.run.world_witness import Judged, judge_world
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
@@ -104,13 +104,13 @@ class Simulation:
         self.crosswalks = CrosswalkAhead(self.road.crosswalks())
         self.beside = LanesBesideMap(self.road.lanes_beside(spec.ego.lane))
         self.recorder = TraceRecorder()
+        self._trace: Trace | None = None  # the recorder's, once the run has ended
         self.obstacle_classes = tuple(o.vehicle_class for o in spec.obstacles)
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
         self.hit: str | None = None
         self.collision: Collision | None = None
-        #: the egos of its world (1: it ran alone); a run in a shared world has no
-        #: twin to judge its overlaps by (sdc.run.shared_world)
+        #: the egos of its world (1: it ran alone; sdc.run.shared_world)
         self.world_egos = 1
         self.wall_start = time.perf_counter()
         # the current step: set by start(), then by each advance()
@@ -248,22 +248,36 @@ class Simulation:
             termination = self.control(controller)
         return termination
 
-    def _whose_overlaps(self, trace: Trace) -> tuple[int, int]:
-        """The steps in which bodies other than the ego overlap: (ours, SUMO's own)
-        (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
+    def trace(self) -> Trace:
+        """The run's trace, once it has ended."""
+        if self._trace is None:
+            self._trace = self.recorder.finish()
+        return self._trace
+
+    def judged(self) -> Judged:
+        """What the world's witness needs of this run: its trace, car, the steps in which
+        bodies other than the ego overlap, and its obstacles' classes."""
+        trace = self.trace()
         steps = overlap_steps(trace.traffic, self.snapshot.obstacle_boxes,
                               trace.traffic_class, self.obstacle_classes, trace.traffic_body)
-        if self.world.backend != "sumo" or not len(steps) or self.world_egos > 1:
-            return len(steps), 0
-        return judge_overlaps(self.world.twin(), trace, self.vehicle, steps,
-                              self.obstacle_classes)
+        return Judged(trace, self.vehicle, steps, self.obstacle_classes)
 
-    def finish(self, termination: str, run_id: str | None = None) -> Episode:
+    def _whose_overlaps(self) -> tuple[int, int]:
+        """The steps in which bodies other than the ego overlap: (ours, SUMO's own)
+        (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
+        judged = self.judged()
+        if self.world.backend != "sumo" or not len(judged.steps):
+            return len(judged.steps), 0
+        return judge_world(self.world.twin(), [judged])[0]
+
+    def finish(self, termination: str, run_id: str | None = None,
+               overlaps: tuple[int, int] | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
         :func:`default_run_id`). Called once its world is closed (judging an overlap
-        runs the world's twin)."""
+        runs the world's twin); ``overlaps``: (ours, SUMO's own) where the caller judged
+        them (a shared world's runs, judged together)."""
         spec, model, road = self.spec, self.model, self.road
-        trace = self.recorder.finish()
+        trace = self.trace()
         t_end = float(trace.floats["t_s"][-1])
         edge_gaps_m = road_edge_gaps_m(
             trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
@@ -274,7 +288,7 @@ class Simulation:
         passed = run_outcome.passed_every_obstacle(
             floats["s_m"], model.length_m, road.to_frenet(obstacles[:, :2])[0], obstacles[:, 3])
         progress_m = run_outcome.progress_m(floats["s_m"], lane_scale(spec, road))
-        ours, sumo = self._whose_overlaps(trace)
+        ours, sumo = self._whose_overlaps() if overlaps is None else overlaps
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
                                   spec.controller.detect_beams),

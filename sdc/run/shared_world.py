@@ -37,6 +37,7 @@ from scenarios.world_backends import make_road, make_shared_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import Episode, Simulation, initial_state
+from sdc.run.world_witness import judge_world
 
 
 @dataclass(frozen=True)
@@ -106,6 +107,7 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         failed = _failed(e)
         for i in range(len(egos)):
             ends.setdefault(i, failed)
+    overlaps = _judged_together(world, sims, ends) if sims else {}
     out: list[Episode | Failed] = []
     for i, sim in enumerate(sims or [None] * len(egos)):
         end = ends[i]
@@ -113,10 +115,25 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
             out.append(end)
             continue
         try:
-            out.append(sim.finish(end, run_ids[i]))
+            out.append(sim.finish(end, run_ids[i], overlaps.get(i)))
         except Exception as e:  # noqa: BLE001 - its summing up failed: its row says so
             out.append(_failed(e))
     return out
+
+
+def _judged_together(world, sims: list[Simulation], ends: dict) -> dict[int, tuple[int, int]]:
+    """Each run's overlapping steps of bodies other than its ego, (ours, SUMO's own),
+    judged in one replay of the world (:func:`sdc.run.world_witness.judge_world`).
+    Without every run's trace (a run failed) the world cannot be replayed: none is
+    judged, and every overlap counts as ours."""
+    ran = {i: sim.judged() for i, sim in enumerate(sims) if not isinstance(ends[i], Failed)}
+    all_ours = {i: (len(judged.steps), 0) for i, judged in ran.items()}
+    if len(ran) < len(sims):
+        return all_ours
+    try:
+        return dict(enumerate(judge_world(world.twin(), list(ran.values()))))
+    except Exception:  # noqa: BLE001 - no witness: missing evidence is never SUMO's alibi
+        return all_ours
 
 
 def _step_together(world, sims: list[Simulation], controllers: list, ends: dict) -> None:

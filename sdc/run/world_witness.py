@@ -12,6 +12,11 @@ crossing lanes wait inside one another, its bicycles ride through its pedestrian
 where SUMO holds a body along its lane, a body reaching where SUMO was not shown it):
 ``world_overlaps``. A step whose replay differs from the trace counts as ours: missing
 evidence is never SUMO's alibi. Only runs with an overlap pay for the second run.
+
+A shared world's runs (:mod:`sdc.run.shared_world`) are judged in one replay of it,
+every ego pushed along its own trace and leaving when its run ended; an overlap with
+another ego's body (the ego or one of its obstacles) is ours: where an ego is, we put
+it.
 """
 
 from __future__ import annotations
@@ -22,8 +27,11 @@ import numpy as np
 
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
-from scenarios.sumo.routes_xml import OBSTACLE_PREFIX
+from scenarios.sumo.routes_xml import ego_names
 from sdc.car.vehicle import Vehicle, VehicleState
+
+#: what a pair names another ego's body by (its ego or an obstacle of its run)
+ANOTHER_EGO = "another ego's body"
 
 
 class Witnessed(NamedTuple):
@@ -42,42 +50,90 @@ def _overlap_anywhere(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(pairs_overlap(first, second).any())
 
 
-def witness_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
-                     obstacle_classes: tuple[str | None, ...]) -> list[Witnessed]:
-    """Each overlapping pair at the trace's overlapping ``steps`` (ascending), judged by
-    SUMO's own placement; none for a step the replay did not reach as the trace has
-    it. ``twin``: an unstarted world of the run's spec and road."""
-    floats, wanted, witnessed = trace.floats, set(steps.tolist()), []
+class Judged(NamedTuple):
+    """What the witness needs of one run of a world (plain data)."""
+
+    trace: Trace
+    vehicle: Vehicle
+    steps: np.ndarray  # its overlapping steps, ascending
+    obstacle_classes: tuple[str | None, ...]
+
+
+def _pose(run: Judged, k: int) -> tuple[np.ndarray, float]:
+    """The ego's box and speed at step ``k`` of its trace."""
+    floats = run.trace.floats
+    state = VehicleState(float(floats["x_m"][k]), float(floats["y_m"][k]),
+                         float(floats["yaw_rad"][k]), float(floats["speed_mps"][k]),
+                         float(floats["steer_rad"][k]))
+    return run.vehicle.body_box(state), state.speed_mps
+
+
+def witness_world(twin, runs: list[Judged]) -> list[list[Witnessed]]:
+    """Each run's overlapping pairs at its overlapping steps, judged by SUMO's own
+    placement; ``runs``: every run of the world, in slot order (one, or a shared
+    world's: each ego pushed along its trace, leaving SUMO after its last step, as
+    :mod:`sdc.run.shared_world` stepped them). A run's judging stops at the first step
+    the replay did not reach as its trace has it. ``twin``: an unstarted world of the
+    same egos."""
+    witnessed: list[list[Witnessed]] = [[] for _ in runs]
+    wanted = [set(run.steps.tolist()) for run in runs]
+    last_step = [len(run.trace) - 1 for run in runs]
+    reached = [bool(w) for w in wanted]
     with twin as world:
         world.keep_ids = True
-        for k in range(int(steps[-1]) + 1 if len(steps) else 0):
-            state = VehicleState(float(floats["x_m"][k]), float(floats["y_m"][k]),
-                                 float(floats["yaw_rad"][k]), float(floats["speed_mps"][k]),
-                                 float(floats["steer_rad"][k]))
-            box = vehicle.body_box(state)
-            snapshot = (world.start(box, state.speed_mps) if k == 0
-                        else world.step(box, state.speed_mps))
-            replayed = np.asarray(snapshot.traffic_boxes, np.float32).ravel()
-            if not np.array_equal(replayed, trace.traffic[k]):
-                break  # not the run's world any more
-            if k in wanted:
-                witnessed += _judged(world, snapshot, k, obstacle_classes)
+        alive = list(range(len(runs)))
+        snapshots = world.start_all({i: _pose(runs[i], 0) for i in alive})
+        k = 0
+        while any(reached[i] and max(wanted[i]) >= k for i in range(len(runs))):
+            for i in alive:
+                if not reached[i]:
+                    continue
+                replayed = np.asarray(snapshots[i].traffic_boxes, np.float32).ravel()
+                reached[i] = bool(np.array_equal(replayed, runs[i].trace.traffic[k]))
+                if reached[i] and k in wanted[i]:
+                    witnessed[i] += _judged(world, snapshots[i], k,
+                                            runs[i].obstacle_classes, i)
+            for i in [i for i in alive if last_step[i] == k]:
+                world.leave(i)
+                alive.remove(i)
+            if not alive:
+                break
+            k += 1
+            snapshots = world.step_all({i: _pose(runs[i], k) for i in alive})
     return witnessed
 
 
-def _judged(world, snapshot, step: int, obstacle_classes) -> list[Witnessed]:
+def witness_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
+                     obstacle_classes: tuple[str | None, ...]) -> list[Witnessed]:
+    """Each overlapping pair at the trace's overlapping ``steps`` (ascending) of a run
+    alone in its world, judged by SUMO's own placement (:func:`witness_world`)."""
+    return witness_world(twin, [Judged(trace, vehicle, steps, obstacle_classes)])[0]
+
+
+def _judged(world, snapshot, step: int, obstacle_classes, slot: int) -> list[Witnessed]:
+    """The overlapping pairs of ``slot``'s snapshot, judged. A pair with another ego's
+    body (the rows after those read from SUMO) is ours: where an ego is, we put it."""
     traffic = snapshot.traffic_boxes
-    n = len(traffic)
+    n, ids = len(traffic), world.last_ids[slot]
     pairs = overlapping_pairs(traffic, snapshot.obstacle_boxes, snapshot.traffic_classes,
                               obstacle_classes, snapshot.traffic_bodies)
-    rows = sorted({i for pair in pairs for i in pair if i < n})
+    rows = sorted({i for pair in pairs for i in pair if i < len(ids)})
     standing = sorted({j - n for _, j in pairs if j >= n})
-    placed = world.placed_by_sumo(traffic, rows, standing)
+    placed = world.placed_by_sumo(traffic, rows, standing, slot)
     body = dict(zip(rows + [n + j for j in standing], placed, strict=True))
-    ids = {**{row: world.last_ids[row] for row in rows},
-           **{n + j: f"{OBSTACLE_PREFIX}{j}" for j in standing}}
-    return [Witnessed(step, snapshot.t_s, ids[i], ids[j], _overlap_anywhere(body[i], body[j]))
+    prefix = ego_names(slot).obstacle_prefix
+    names = {**{row: ids[row] for row in rows}, **{n + j: f"{prefix}{j}" for j in standing}}
+    return [Witnessed(step, snapshot.t_s, names.get(i, ANOTHER_EGO), names.get(j, ANOTHER_EGO),
+                      i in body and j in body and _overlap_anywhere(body[i], body[j]))
             for i, j in pairs]
+
+
+def _counted(steps: np.ndarray, witnessed: list[Witnessed]) -> tuple[int, int]:
+    """(ours, SUMO's) of ``steps``: a step may hold both; a step nobody judged is ours."""
+    sumo = {w.step for w in witnessed if w.sumo_holds_both}
+    ours = {w.step for w in witnessed if not w.sumo_holds_both}
+    ours |= set(steps.tolist()) - ours - sumo  # judged by nobody
+    return len(ours), len(sumo)
 
 
 def judge_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
@@ -85,10 +141,13 @@ def judge_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
     """Of the trace's overlapping ``steps``, how many hold an overlap SUMO's own bodies
     do not have (ours: also every step the replay did not reach) and how many one they
     have too (SUMO's); a step may hold both."""
-    if not len(steps):
-        return 0, 0
-    witnessed = witness_overlaps(twin, trace, vehicle, steps, obstacle_classes)
-    sumo = {w.step for w in witnessed if w.sumo_holds_both}
-    ours = {w.step for w in witnessed if not w.sumo_holds_both}
-    ours |= set(steps.tolist()) - ours - sumo  # judged by nobody
-    return len(ours), len(sumo)
+    return judge_world(twin, [Judged(trace, vehicle, steps, obstacle_classes)])[0]
+
+
+def judge_world(twin, runs: list[Judged]) -> list[tuple[int, int]]:
+    """:func:`judge_overlaps` for every run of a world (in slot order), judged in one
+    replay of it (:func:`witness_world`); no replay when no run has an overlap."""
+    if not any(len(run.steps) for run in runs):
+        return [(0, 0) for _ in runs]
+    return [_counted(run.steps, witnessed)
+            for run, witnessed in zip(runs, witness_world(twin, runs), strict=True)]
