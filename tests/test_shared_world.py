@@ -59,12 +59,10 @@ def with_roads(specs: list[ScenarioSpec]) -> list[tuple[ScenarioSpec, object]]:
 
 
 def episodes(outcomes: list) -> list[Episode]:
-    """The episodes of ``outcomes`` (run_world's, or run_group's without the counts),
-    none of them failed."""
-    runs = [o[0] if isinstance(o, tuple) else o for o in outcomes]
-    failed = [r for r in runs if isinstance(r, Failed)]
+    """The episodes of ``outcomes`` (run_world's or run_group's), none of them failed."""
+    failed = [r for r in outcomes if isinstance(r, Failed)]
     assert not failed, failed[0].traceback
-    return runs
+    return outcomes
 
 
 def boxes_at(episode: Episode, step: int) -> np.ndarray:
@@ -99,9 +97,7 @@ def without_wall_time(row: dict) -> dict:
 def test_one_ego_through_the_shared_path_is_the_plain_run(make):
     spec = make()
     alone = run_episode(spec, run_id="r")
-    (outcome, egos), = run_group([spec], ["r"])
-    assert egos == 1
-    (shared,) = episodes([outcome])
+    (shared,) = episodes(run_group([spec], ["r"]))
     assert shared.row["trace_sha256"] == alone.row["trace_sha256"]
     assert without_wall_time(shared.row) == without_wall_time(alone.row)
     assert shared.row["world_egos"] == 1

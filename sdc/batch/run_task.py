@@ -159,7 +159,7 @@ def _run_world(task: RunTask) -> dict:
     outcomes = run_group(specs, [m.run_id for m in task.members], cache_dir=task.cache_dir,
                          warm_state=task.warm_state)
     rows = []
-    for member, (outcome, _) in zip(task.members, outcomes, strict=True):
+    for member, outcome in zip(task.members, outcomes, strict=True):
         if isinstance(outcome, Failed):
             rows.append(task_error_row(member, outcome.error, outcome.traceback))
         else:

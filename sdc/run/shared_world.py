@@ -176,26 +176,25 @@ def _failed(e: Exception) -> Failed:
 
 def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
               cache_dir: Path | None = None, warm_state: Path | None = None
-              ) -> list[tuple[Episode | Failed, int]]:
+              ) -> list[Episode | Failed]:
     """Run the runs of one group of a sweep (specs sharing the world's fields, in slot
     order) in as many worlds as the placement rule needs, one after the other: each
-    run's outcome (as :func:`run_world`) and how many egos shared its world."""
+    run's outcome, as :func:`run_world` (its row's ``world_egos`` says how many egos
+    shared its world)."""
     egos, out = [], {}
     for i, spec in enumerate(specs):
         try:
             egos.append((spec, make_road(spec, cache_dir)))
         except Exception as e:  # noqa: BLE001 - a road it cannot have: its row says why
-            out[i] = (_failed(e), 1)
+            out[i] = _failed(e)
             egos.append(None)
     placeable = [i for i, ego in enumerate(egos) if ego is not None]
     for world in placed_apart([egos[i] for i in placeable]):
         members = [placeable[j] for j in world]
         results = run_world([egos[i] for i in members], [run_ids[i] for i in members],
                             cache_dir=cache_dir, warm_state=warm_state)
-        for i, result in zip(members, results, strict=True):
-            out[i] = (result, len(members))
+        out.update(zip(members, results, strict=True))
     return [out[i] for i in range(len(specs))]
-
 
 
 def replay_in_world(specs: list[ScenarioSpec], run_ids: list[str], run_id: str,
@@ -203,4 +202,4 @@ def replay_in_world(specs: list[ScenarioSpec], run_ids: list[str], run_id: str,
     """Re-simulate the shared world of ``specs`` (its runs in slot order, named
     ``run_ids``) as its sweep ran it, and return ``run_id``'s outcome."""
     outcomes = run_group(specs, run_ids, cache_dir=cache_dir)
-    return outcomes[run_ids.index(run_id)][0]
+    return outcomes[run_ids.index(run_id)]
