@@ -1,17 +1,24 @@
-"""Several egos in one world: runs per hour of a town sweep by egos per world, as
-ratios measured in one process run.
+"""Several egos in one world: runs per hour of a town sweep and of a real
+configuration's by egos per world, as ratios measured in one process run.
 
-The sweep: the catalog's grid-town (10 x 10 junctions, 2000 cars, 400 s of warm-up,
-each sample its own warm state unless it shares a world), the obstacle's position
-swept, under ``seed``, on 2 local workers, traces off. Prints ``name value`` lines:
+The sweeps, on 2 local workers, traces off (:data:`FAMILIES`):
 
-- ``town_runs_per_hour_k<K>_vs_k1``: runs per hour of the sweep with
+- ``town``: the catalog's grid-town (10 x 10 junctions, 2000 cars, 400 s of warm-up,
+  each sample its own warm state unless it shares a world), the obstacle's position
+  swept, under ``seed``;
+- ``real``: SUMO's Ingolstadt (tools/game/fkk_in.sumocfg, its own demand entered at
+  120 s, each sample its own entry unless it shares a world), the ego's speed swept,
+  under ``lane-keep``.
+
+Prints ``name value`` lines:
+
+- ``<family>_runs_per_hour_k<K>_vs_k1``: runs per hour of the sweep with
   ``egos_per_world = K`` over the same sweep with one ego a world, each on a cold
   cache (a world computes its warm state in the sweep, one for its K runs).
-- ``town_runs_per_hour_cached_k<K>_vs_k1``: the same on the filled cache (no warm-up
-  left to compute): what sharing SUMO's step alone buys.
-- ``raw.town_mean_world_egos_k<K>``: how many egos a run shared its SUMO simulation
-  with, on average (the placement rule may seat fewer than K).
+- ``<family>_runs_per_hour_cached_k<K>_vs_k1``: the same on the filled cache (no
+  warm-up left to compute): what sharing SUMO's step alone buys.
+- ``raw.<family>_mean_world_egos_k<K>``: how many egos a run shared its SUMO
+  simulation with, on average (the placement rule may seat fewer than K).
 - ``town_world_step_vs_bare_sumo_k<K>``: the median step of one world holding K egos
   (each sensing, deciding under lane-keep, checked, pushed; then SUMO's one step),
   over SUMO's own step of the same town without an ego (the floor: what the world
@@ -52,12 +59,22 @@ SAMPLES = {1: 4, 4: 8, 8: 16, 16: 16}
 WORKERS = 2
 
 
-def write_sweep(tmp: Path, samples: int, egos_per_world: int) -> Path:
-    lines = ['[sweep]', 'name = "shared-worlds-bench"',
-             f'base = "{CATALOG_DIR / "grid-town.toml"}"', f"samples = {samples}",
-             "seed = 11", 'controllers = ["seed"]', f"egos_per_world = {egos_per_world}",
-             "[sweep.params]", '"obstacles[0].position_m" = { uniform = [40.0, 120.0] }']
-    path = tmp / f"town-{egos_per_world}.toml"
+#: each family's base, controller and swept parameters
+FAMILIES = {
+    "town": ("grid-town.toml", "seed",
+             ['"obstacles[0].position_m" = { uniform = [40.0, 120.0] }']),
+    "real": ("real-traffic.toml", "lane-keep",
+             ['"road.config_file" = { choice = ["sumo:tools/game/fkk_in.sumocfg"] }',
+              '"ego.speed_mps" = { uniform = [8.0, 14.0] }']),
+}
+
+
+def write_sweep(tmp: Path, family: str, samples: int, egos_per_world: int) -> Path:
+    base, controller, params = FAMILIES[family]
+    lines = ['[sweep]', 'name = "shared-worlds-bench"', f'base = "{CATALOG_DIR / base}"',
+             f"samples = {samples}", "seed = 11", f'controllers = ["{controller}"]',
+             f"egos_per_world = {egos_per_world}", "[sweep.params]", *params]
+    path = tmp / f"{family}-{egos_per_world}.toml"
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -149,24 +166,23 @@ def main() -> None:
 
 
 def sweep_figures(wanted: set[int], figures: dict, raw: dict) -> None:
-    """Runs per hour of the town sweep by egos per world, cold and cached."""
+    """Runs per hour of each family's sweep by egos per world, cold and cached."""
     users_cache = os.environ.get("SDC_CACHE_DIR")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for k, samples in SAMPLES.items():
-            if k not in wanted:
-                continue
-            sweep = write_sweep(tmp, samples, k)
-            os.environ["SDC_CACHE_DIR"] = str(tmp / f"cache-{k}")  # cold: nothing warm
-            raw[f"town_runs_per_hour_k{k}"], raw[f"town_mean_world_egos_k{k}"] = (
-                runs_per_hour(sweep, tmp / f"cold-{k}"))
-            raw[f"town_runs_per_hour_cached_k{k}"], _ = runs_per_hour(sweep, tmp / f"warm-{k}")
-    for k in SAMPLES:
-        if k > 1 and k in wanted:
-            figures[f"town_runs_per_hour_k{k}_vs_k1"] = (raw[f"town_runs_per_hour_k{k}"]
-                                                         / raw["town_runs_per_hour_k1"])
-            figures[f"town_runs_per_hour_cached_k{k}_vs_k1"] = (
-                raw[f"town_runs_per_hour_cached_k{k}"] / raw["town_runs_per_hour_cached_k1"])
+        for family in FAMILIES:
+            for k in sorted(wanted & set(SAMPLES)):
+                name = f"{family}_runs_per_hour"
+                sweep = write_sweep(tmp, family, SAMPLES[k], k)
+                os.environ["SDC_CACHE_DIR"] = str(tmp / f"cache-{family}-{k}")  # cold
+                raw[f"{name}_k{k}"], raw[f"{family}_mean_world_egos_k{k}"] = (
+                    runs_per_hour(sweep, tmp / f"cold-{family}-{k}"))
+                raw[f"{name}_cached_k{k}"], _ = runs_per_hour(sweep,
+                                                              tmp / f"warm-{family}-{k}")
+                if k > 1:
+                    figures[f"{name}_k{k}_vs_k1"] = raw[f"{name}_k{k}"] / raw[f"{name}_k1"]
+                    figures[f"{name}_cached_k{k}_vs_k1"] = (raw[f"{name}_cached_k{k}"]
+                                                            / raw[f"{name}_cached_k1"])
     os.environ.pop("SDC_CACHE_DIR")
     if users_cache is not None:
         os.environ["SDC_CACHE_DIR"] = users_cache

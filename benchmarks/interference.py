@@ -15,11 +15,12 @@ world's runs (one warm state each) share it, each a body to the others. The warm
 states are computed once (the first sweep) and loaded by the others.
 
 Prints, per K, controller and outcome: the runs, the rate and its 95% Wilson
-interval (clustered by traffic, as every report's), and whether it overlaps K = 1's;
-then, per K and controller, how many runs' verdicts differ from the same run's with
-K = 1 (paired: same sample, same warm state); then ``raw.`` lines with the mean
-``world_egos`` per K. ``--samples`` and ``--k`` change the experiment (defaults: 64
-samples, K = 1, 4, 8).
+interval (clustered by traffic, as every report's), whether it overlaps K = 1's, and
+the paired comparison: of the same runs (same sample, same warm state), how many
+gained the outcome with K and how many lost it, with the exact McNemar test's
+p-value; then ``raw.`` lines with the mean ``world_egos`` per K. ``--samples`` and
+``--k`` change the experiment (defaults: 64 samples, K = 1, 4, 8); ``--out`` keeps the
+sweeps (and reads those already there).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import tempfile
 from pathlib import Path
 
 import pandas as pd
+from scipy.stats import binomtest
 
 from analysis.measures.run_outcome import OUTCOMES
 from analysis.stats.rates import flag_interval
@@ -58,7 +60,7 @@ def write_sweep(tmp: Path, family: str, samples: int, k: int) -> Path:
              f"samples = {samples}", 'sampler = "sobol"', "seed = 11",
              f"controllers = {controllers}", f"warm_states = {WARM_STATES}",
              f"egos_per_world = {k}", "[sweep.params]", *params]
-    path = tmp / f"interference-{k}.toml"
+    path = tmp / f"interference-{family}-{k}.toml"
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -74,39 +76,59 @@ def outcome_rates(rows: pd.DataFrame) -> dict[tuple[str, str], tuple[int, int, f
     return out
 
 
+def paired_changes(rows: pd.DataFrame, first: pd.DataFrame, outcome: str
+                   ) -> tuple[int, int, float]:
+    """Of the runs both sweeps ran ok (same sample and controller), how many have
+    ``outcome`` with K but not with K = 1, how many the reverse, and the exact
+    McNemar test's two-sided p-value of the two being equally likely."""
+    mine = rows[rows.status == "ok"].set_index(["sample", "controller"]).outcome
+    theirs = first[first.status == "ok"].set_index(["sample", "controller"]).outcome
+    both = mine.index.intersection(theirs.index)
+    now, before = mine[both] == outcome, theirs[both] == outcome
+    gained, lost = int((now & ~before).sum()), int((before & ~now).sum())
+    p_value = binomtest(min(gained, lost), gained + lost).pvalue if gained + lost else 1.0
+    return gained, lost, float(p_value)
+
+
+def print_table(results: dict[int, pd.DataFrame]) -> None:
+    """The table of ``results`` (K -> its sweep's rows; the first K the reference)."""
+    first_k = next(iter(results))
+    first = results[first_k]
+    base = outcome_rates(first)
+    print(f"K  controller  outcome  runs  rate  95% interval  overlaps K={first_k}  "
+          f"paired: gained/lost  McNemar p")
+    for k, rows in results.items():
+        for (controller, outcome), (hits, n, low, high) in outcome_rates(rows).items():
+            _, _, low1, high1 = base[controller, outcome]
+            overlaps = low <= high1 and low1 <= high
+            gained, lost, p_value = paired_changes(rows[rows.controller == controller],
+                                                   first, outcome)
+            print(f"{k}  {controller}  {outcome}  {hits}/{n}  {hits / n:.1%}  "
+                  f"{low:.1%} - {high:.1%}  {'yes' if overlaps else 'NO'}  "
+                  f"+{gained}/-{lost}  {p_value:.2f}")
+    for k, rows in results.items():
+        print(f"raw.mean_world_egos_k{k} {rows.world_egos.mean():.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--family", choices=sorted(FAMILIES), default="town")
     parser.add_argument("--samples", type=int, default=64)
     parser.add_argument("--k", type=int, nargs="+", default=[1, 4, 8])
+    parser.add_argument("--out", type=Path, help="keep the sweeps here (default: a "
+                        "temporary folder); a sweep already there is read, not re-run")
     args = parser.parse_args()
-    rates, verdicts, raw = {}, {}, {}
     with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
+        folder = args.out or Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        results = {}
         for k in args.k:
-            out = tmp / f"k{k}"
-            run_sweep(load_sweep(write_sweep(tmp, args.family, args.samples, k)), out,
-                      LocalExecutor(WORKERS), QuietReporter(), traces="none")
-            rows = pd.read_parquet(out / "results.parquet")
-            rates[k] = outcome_rates(rows)
-            verdicts[k] = rows.set_index(["sample", "controller"]).outcome
-            raw[f"mean_world_egos_k{k}"] = float(rows.world_egos.mean())
-    base = rates[args.k[0]]
-    print("K  controller  outcome  runs  rate  95% interval  overlaps K=1")
-    for k, table in rates.items():
-        for (controller, outcome), (hits, n, low, high) in table.items():
-            _, _, low1, high1 = base[controller, outcome]
-            overlaps = low <= high1 and low1 <= high
-            print(f"{k}  {controller}  {outcome}  {hits}/{n}  {hits / n:.1%}  "
-                  f"{low:.1%} - {high:.1%}  {'yes' if overlaps else 'NO'}")
-    first = verdicts[args.k[0]]
-    print("K  controller  verdicts that differ from K=1's (same sample, same traffic)")
-    for k, outcome in verdicts.items():
-        differ = (outcome != first.reindex(outcome.index)).groupby(level="controller")
-        for controller, flags in differ:
-            print(f"{k}  {controller}  {int(flags.sum())}/{len(flags)}")
-    for name, value in raw.items():
-        print(f"raw.{name} {value:.2f}")
+            out = folder / f"{args.family}-k{k}"
+            if not (out / "results.parquet").is_file():
+                run_sweep(load_sweep(write_sweep(folder, args.family, args.samples, k)),
+                          out, LocalExecutor(WORKERS), QuietReporter(), traces="none")
+            results[k] = pd.read_parquet(out / "results.parquet")
+        print_table(results)
 
 
 if __name__ == "__main__":

@@ -136,17 +136,11 @@ def _counted(steps: np.ndarray, witnessed: list[Witnessed]) -> tuple[int, int]:
     return len(ours), len(sumo)
 
 
-def judge_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
-                   obstacle_classes: tuple[str | None, ...]) -> tuple[int, int]:
-    """Of the trace's overlapping ``steps``, how many hold an overlap SUMO's own bodies
-    do not have (ours: also every step the replay did not reach) and how many one they
-    have too (SUMO's); a step may hold both."""
-    return judge_world(twin, [Judged(trace, vehicle, steps, obstacle_classes)])[0]
-
-
 def judge_world(twin, runs: list[Judged]) -> list[tuple[int, int]]:
-    """:func:`judge_overlaps` for every run of a world (in slot order), judged in one
-    replay of it (:func:`witness_world`); no replay when no run has an overlap."""
+    """Of each run's overlapping steps (``runs`` in slot order), how many hold an overlap
+    SUMO's own bodies do not have (ours: also every step the replay did not reach)
+    and how many one they have too (SUMO's; a step may hold both), judged in one
+    replay of the world (:func:`witness_world`); none when no run has an overlap."""
     if not any(len(run.steps) for run in runs):
         return [(0, 0) for _ in runs]
     return [_counted(run.steps, witnessed)
