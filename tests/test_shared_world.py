@@ -148,6 +148,22 @@ def test_egos_see_each_other_and_one_runs_into_the_other():
     assert np.all(np.diff(ahead[:hit_step]) <= 1e-3)
 
 
+def test_another_runs_barrel_is_a_body_with_its_kind_for_a_class():
+    """B's barrel stands in A's lane: A sees it as traffic of class "barrel" (no
+    vehicle class names it) and runs into it, a collision with traffic; B, in the other
+    lane, drives past it on."""
+    a = straight(50.0, speed_mps=10.0, duration_s=10.0)
+    b = straight(20.0, lane=1, speed_mps=5.0, duration_s=10.0, seed=2,
+                 obstacles=({"kind": "barrel", "lane": 0, "position_m": 100.0},))
+    run_a, run_b = episodes(run_world(with_roads([a, b]), ["a", "b"]))
+    ra, rb = run_a.row, run_b.row
+    assert ra["termination"] == "collision" and ra["collision_with"] == "vehicle"
+    assert ra["collision_vclass"] == "barrel"
+    assert "barrel" in run_a.trace.traffic_class[0]
+    assert rb["termination"] == "duration" and not rb["collision"]
+    assert len(ra["trace_sha256"]) == len(rb["trace_sha256"]) == 64
+
+
 def test_a_run_alone_sees_no_second_ego():
     """The counterpart of the test above: without B, A drives its whole duration on an
     empty road and senses nothing."""

@@ -31,7 +31,10 @@ class EgoSlot:
         self.names: EgoNames = ego_names(slot)
         self.model = VEHICLE_MODELS[spec.vehicle.model]
         self.obstacle_boxes = obstacle_boxes(spec, road)
-        self.obstacle_classes = np.array([o.vehicle_class for o in spec.obstacles], dtype=object)
+        #: the classes the other egos see its obstacles as (traffic to them): a
+        #: vehicle's or person's class, else the obstacle's kind (a barrel)
+        self.obstacle_classes = np.array([o.vehicle_class or o.kind for o in spec.obstacles],
+                                         dtype=object)
         self.radius_m = sensing_radius_m(spec)
         self.crossings = road.crossings()
         self.s_m = spec.ego.start_m  # where it was last, along its road

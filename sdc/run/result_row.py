@@ -80,8 +80,9 @@ COLUMNS: tuple[Column, ...] = (
            "collision"),
     Column("collision_vclass", pa.string(), OUTCOME,
            "the SUMO vehicle class (vClass) of the vehicle hit: passenger, truck, bus, "
-           "motorcycle, bicycle, ...; pedestrian for a person; None unless collision_with "
-           "is vehicle or pedestrian"),
+           "motorcycle, bicycle, ...; pedestrian for a person; in a shared world, "
+           "another ego is passenger and another run's barrel barrel; None unless "
+           "collision_with is vehicle or pedestrian"),
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle or person overlapped another one or an "
            "obstacle within the sensing radius, two persons aside "
