@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from analysis.measures.world_audit import pairs_overlap
 from scenarios import CATALOG_DIR
 from scenarios.scene.snapshot import sensing_radius_m
 from scenarios.spec.scenario_spec import ScenarioSpec
@@ -146,6 +147,24 @@ def test_egos_see_each_other_and_one_runs_into_the_other():
     hit_step = len(lidar) - 1
     assert ahead[hit_step - 10] < 30.0
     assert np.all(np.diff(ahead[:hit_step]) <= 1e-3)
+
+
+def test_another_egos_collision_is_its_own_not_the_others_world_overlap():
+    """A runs into B while C drives beside them and sees the two overlap at the hit:
+    the hit is A's and B's collision (their rows); C's world audit does not count it
+    as an overlap the coupling made up."""
+    a = straight(50.0, speed_mps=10.0, duration_s=8.0)
+    b = straight(100.0, speed_mps=0.0, duration_s=8.0, seed=2)
+    c = straight(60.0, lane=1, speed_mps=10.0, duration_s=8.0, seed=3)
+    run_a, run_b, run_c = episodes(run_world(with_roads([a, b, c]), ["a", "b", "c"]))
+    assert run_a.row["collision_role"] == "ran_into" and run_b.row["collision_role"] == "was_hit"
+    hit_step = len(run_a.trace) - 1
+    # C saw both egos at the hit, and they overlap there
+    seen = boxes_at(run_c, hit_step)
+    assert holds(seen, own_box(run_a, hit_step)) and holds(seen, own_box(run_b, hit_step))
+    assert pairs_overlap(own_box(run_a, hit_step)[None], own_box(run_b, hit_step)[None])[0]
+    assert run_c.row["termination"] == "duration" and not run_c.row["collision"]
+    assert run_c.row["world_overlaps"] == 0 and run_c.row["sumo_overlaps"] == 0
 
 
 def test_another_runs_barrel_is_a_body_with_its_kind_for_a_class():

@@ -35,6 +35,9 @@ class EgoSlot:
         #: vehicle's or person's class, else the obstacle's kind (a barrel)
         self.obstacle_classes = np.array([o.vehicle_class or o.kind for o in spec.obstacles],
                                          dtype=object)
+        #: the SUMO ids of its bodies: its ego, then its obstacles
+        self.body_ids = [self.names.ego_id, *(f"{self.names.obstacle_prefix}{i}"
+                                              for i in range(len(spec.obstacles)))]
         self.radius_m = sensing_radius_m(spec)
         self.crossings = road.crossings()
         self.s_m = spec.ego.start_m  # where it was last, along its road
@@ -51,21 +54,24 @@ class EgoSlot:
 
 
 def others_seen(slot: EgoSlot, slots: list[EgoSlot]
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """The bodies of the world's other egos in their runs (each ego's box, then its
     obstacles' boxes) whose centres lie within ``slot``'s sensing radius of its body
-    centre: (N, 5) boxes, (N,) speeds and (N,) vehicle classes, in slot order."""
-    boxes, speeds, classes = [], [], []
+    centre: (N, 5) boxes, (N,) speeds and (N,) vehicle classes, in slot order, and
+    their SUMO ids."""
+    boxes, speeds, classes, ids = [], [], [], []
     for other in slots:
         if other is slot or not other.active:
             continue
         boxes += [other.box[None, :], other.obstacle_boxes]
         speeds += [[other.speed_mps], np.zeros(len(other.obstacle_boxes))]
         classes += [[EGO_CLASS], other.obstacle_classes]
+        ids += other.body_ids
     if not boxes:
-        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=object)
+        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=object), []
     all_boxes = np.vstack(boxes)
     d = all_boxes[:, :2] - slot.box[:2]
     near = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= slot.radius_m * slot.radius_m
     return (all_boxes[near], np.concatenate(speeds)[near],
-            np.concatenate(classes).astype(object)[near])
+            np.concatenate(classes).astype(object)[near],
+            [vid for vid, seen in zip(ids, near, strict=True) if seen])

@@ -93,10 +93,13 @@ def _riding(nearby: dict) -> frozenset[str]:
 
 
 def _with_others(slot: EgoSlot, slots: list[EgoSlot], boxes: np.ndarray, speeds: np.ndarray,
-                 classes: np.ndarray, bodies: np.ndarray | None):
+                 classes: np.ndarray, bodies: np.ndarray | None, ids: list[str] | None):
     """The traffic ``slot`` reads from SUMO, and after it the other egos and their
-    obstacles within its sensing radius, each a body of its own."""
-    more_boxes, more_speeds, more_classes = others_seen(slot, slots)
+    obstacles within its sensing radius, each a body of its own (their SUMO ids added
+    to ``ids``, when kept)."""
+    more_boxes, more_speeds, more_classes, more_ids = others_seen(slot, slots)
+    if ids is not None:
+        ids += more_ids
     if not len(more_boxes):
         return boxes, speeds, classes, bodies
     if bodies is not None:
@@ -147,7 +150,7 @@ class SumoWorld:
         self._trips_made = 0
         self._types = VehicleTypes()
         #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``: slot -> the
-        #: ids of the rows read from SUMO; the other egos' bodies follow them), for
+        #: ids of its rows, the other egos' bodies after those read from SUMO), for
         #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
         self.keep_ids = False
         self.last_ids: dict[int, list[str]] = {}
@@ -166,7 +169,12 @@ class SumoWorld:
         """Are the persons around the (first) ego read too?"""
         return self._slots[0].people_subscribed
 
-    def _is_traffic(self, vehicle_id: str) -> bool:
+    @property
+    def ego_ids(self) -> frozenset[str]:
+        """The SUMO ids of the world's egos."""
+        return self._ego_ids
+
+    def is_traffic(self, vehicle_id: str) -> bool:
         """Background traffic: no ego of this world, nor one of their obstacles."""
         return (vehicle_id not in self._ego_ids
                 and not vehicle_id.startswith(self._obstacle_prefixes))
@@ -386,7 +394,7 @@ class SumoWorld:
         the ids taken off."""
         vehicle = self._sumo.vehicle
         ids = [v for v in (vehicle.getIDList() if among is None else among)
-               if self._is_traffic(v)]
+               if self.is_traffic(v)]
         fronts = np.array([vehicle.getPosition(v) for v in ids]).reshape(-1, 2)
         lengths = np.array([vehicle.getLength(v) for v in ids])
         yaws = np.radians(90.0 - np.array([vehicle.getAngle(v) for v in ids]))
@@ -517,7 +525,7 @@ class SumoWorld:
         """On a network, every car that arrived in the last step starts a new trip."""
         if self._demand is None:
             return
-        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if self._is_traffic(v)]
+        arrived = [v for v in self._sumo.simulation.getArrivedIDList() if self.is_traffic(v)]
         if not arrived:
             return
         for start, end in self._demand.draw(len(arrived)):
@@ -556,13 +564,13 @@ class SumoWorld:
             hidden |= _riding(nearby)
         if hidden or len(self._slots) > 1:
             nearby = {vid: values for vid, values in nearby.items()
-                      if vid not in hidden and self._is_traffic(vid)}
+                      if vid not in hidden and self.is_traffic(vid)}
         n = len(nearby)
         boxes, speeds, kinds, laid = np.empty((n, 5)), np.empty(n), np.empty(n), np.empty(n)
         try:
             count, laid_count = self._read_traffic(slot, nearby, boxes, speeds, kinds, laid)
         except KeyError:  # vehicles or persons met for the first time
-            new = [v for v in nearby if v not in self._types.sizes and self._is_traffic(v)]
+            new = [v for v in nearby if v not in self._types.sizes and self.is_traffic(v)]
             self._types.add([v for v in new if not _is_person(nearby[v])], self._sumo)
             self._types.add_persons([v for v in new if _is_person(nearby[v])], self._sumo)
             count, laid_count = self._read_traffic(slot, nearby, boxes, speeds, kinds, laid)
@@ -576,11 +584,12 @@ class SumoWorld:
             ids = road_kernels.traffic_ids(
                 nearby, _TRAFFIC_VARS, slot.names.ego_id, slot.names.obstacle_prefix,
                 self._types.sizes, float(ego_box[0]), float(ego_box[1]), slot.radius_m)
-            self.last_ids[slot.slot] = ids if bodies is None else [ids[b] for b in bodies]
+            self.last_ids[slot.slot] = list(ids) if bodies is None else [ids[b] for b in bodies]
         classes = self._types.names(kinds)
         if len(self._slots) > 1:
-            boxes, speeds, classes, bodies = _with_others(slot, self._slots, boxes, speeds,
-                                                          classes, bodies)
+            boxes, speeds, classes, bodies = _with_others(
+                slot, self._slots, boxes, speeds, classes, bodies,
+                self.last_ids[slot.slot] if self.keep_ids else None)
         return boxes, speeds, classes, bodies
 
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles, slot_index: int = 0
@@ -627,7 +636,7 @@ class SumoWorld:
             x_m, y_m = values[tc.VAR_POSITION]
             near = np.min(np.hypot(points[:, 0] - x_m, points[:, 1] - y_m)) <= LEVEL_REACH_M
             domain = self._sumo.person if _is_person(values) else self._sumo.vehicle
-            if near and self._is_traffic(vid) and domain.getLaneID(vid) in lanes:
+            if near and self.is_traffic(vid) and domain.getLaneID(vid) in lanes:
                 hidden.append(vid)
         return frozenset(hidden)
 
@@ -661,7 +670,7 @@ class SumoWorld:
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""
-        return sum(1 for v in self._sumo.vehicle.getIDList() if self._is_traffic(v))
+        return sum(1 for v in self._sumo.vehicle.getIDList() if self.is_traffic(v))
 
     def close(self) -> None:
         if self._sumo is not None:

@@ -88,8 +88,8 @@ COLUMNS: tuple[Column, ...] = (
            "obstacle within the sensing radius, two persons aside "
            "(analysis.measures.world_audit), where SUMO's own placement of the two (along their "
            "lanes) does not overlap: what the coupling made up (sdc.run.world_witness); "
-           "in a shared world also any overlap with another ego's body; 0 in a "
-           "consistent world"),
+           "in a shared world also any overlap with another run's obstacle (one with "
+           "another ego is that ego's collision); 0 in a consistent world"),
     Column("sumo_overlaps", pa.int64(), OUTCOME,
            "steps in which such an overlap is SUMO's own: its placement of the two along "
            "their lanes overlaps too (vehicles waiting inside each other on a junction's "

@@ -14,9 +14,10 @@ where SUMO holds a body along its lane, a body reaching where SUMO was not shown
 evidence is never SUMO's alibi. Only runs with an overlap pay for the second run.
 
 A shared world's runs (:mod:`sdc.run.shared_world`) are judged in one replay of it,
-every ego pushed along its own trace and leaving when its run ended; an overlap with
-another ego's body (the ego or one of its obstacles) is ours: where an ego is, we put
-it.
+every ego pushed along its own trace and leaving when its run ended. An overlap with
+another ego is that ego's collision (its own check ends its run on it): its row counts
+it, the audit of the others does not. One with another run's obstacle is ours: where
+an ego's run is, we put it.
 """
 
 from __future__ import annotations
@@ -30,9 +31,6 @@ from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
 from scenarios.sumo.routes_xml import ego_names
 from sdc.car.vehicle import Vehicle, VehicleState
 
-#: what a pair names another ego's body by (its ego or an obstacle of its run)
-ANOTHER_EGO = "another ego's body"
-
 
 class Witnessed(NamedTuple):
     """One overlapping pair at one step, judged."""
@@ -42,6 +40,7 @@ class Witnessed(NamedTuple):
     first: str  # SUMO's ids of the two bodies (an obstacle: obstacle.<i>)
     second: str
     sumo_holds_both: bool  # laid along their lanes as SUMO holds them, they overlap too
+    another_ego: bool = False  # one of the two is another ego of a shared world
 
 
 def _overlap_anywhere(a: np.ndarray, b: np.ndarray) -> bool:
@@ -111,28 +110,33 @@ def witness_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
 
 
 def _judged(world, snapshot, step: int, obstacle_classes, slot: int) -> list[Witnessed]:
-    """The overlapping pairs of ``slot``'s snapshot, judged. A pair with another ego's
-    body (the rows after those read from SUMO) is ours: where an ego is, we put it."""
+    """The overlapping pairs of ``slot``'s snapshot, judged. A pair with another ego is
+    that ego's collision (its own check ends its run on it), judged in its row; one
+    with another run's obstacle is ours: where an ego's run is, we put it."""
     traffic = snapshot.traffic_boxes
     n, ids = len(traffic), world.last_ids[slot]
     pairs = overlapping_pairs(traffic, snapshot.obstacle_boxes, snapshot.traffic_classes,
                               obstacle_classes, snapshot.traffic_bodies)
-    rows = sorted({i for pair in pairs for i in pair if i < len(ids)})
+    rows = sorted({i for pair in pairs for i in pair if i < n and world.is_traffic(ids[i])})
     standing = sorted({j - n for _, j in pairs if j >= n})
     placed = world.placed_by_sumo(traffic, rows, standing, slot)
     body = dict(zip(rows + [n + j for j in standing], placed, strict=True))
     prefix = ego_names(slot).obstacle_prefix
-    names = {**{row: ids[row] for row in rows}, **{n + j: f"{prefix}{j}" for j in standing}}
-    return [Witnessed(step, snapshot.t_s, names.get(i, ANOTHER_EGO), names.get(j, ANOTHER_EGO),
-                      i in body and j in body and _overlap_anywhere(body[i], body[j]))
+    names = {**{i: ids[i] for i in range(n)}, **{n + j: f"{prefix}{j}" for j in standing}}
+    return [Witnessed(step, snapshot.t_s, names[i], names[j],
+                      i in body and j in body and _overlap_anywhere(body[i], body[j]),
+                      bool({names[i], names[j]} & world.ego_ids))
             for i, j in pairs]
 
 
 def _counted(steps: np.ndarray, witnessed: list[Witnessed]) -> tuple[int, int]:
-    """(ours, SUMO's) of ``steps``: a step may hold both; a step nobody judged is ours."""
-    sumo = {w.step for w in witnessed if w.sumo_holds_both}
-    ours = {w.step for w in witnessed if not w.sumo_holds_both}
-    ours |= set(steps.tolist()) - ours - sumo  # judged by nobody
+    """(ours, SUMO's) of ``steps``: a step may hold both; a step nobody judged is ours;
+    a step whose every pair is another ego's collision is neither."""
+    theirs = {w.step for w in witnessed if w.another_ego}
+    judged = [w for w in witnessed if not w.another_ego]
+    sumo = {w.step for w in judged if w.sumo_holds_both}
+    ours = {w.step for w in judged if not w.sumo_holds_both}
+    ours |= set(steps.tolist()) - ours - sumo - theirs  # judged by nobody
     return len(ours), len(sumo)
 
 
