@@ -134,6 +134,16 @@ def test_group_worlds_on_its_own():
     assert [grouped[k][1].scenario.seed for k in range(3)] == [5, 6, 7]
 
 
+def test_at_most_the_measured_egos_share_a_world():
+    """16 egos a world is the most the interference table measured to agree with one:
+    more is refused, naming the field."""
+    assert make(egos_per_world=16).egos_per_world == 16
+    for k in (0, 17, 64):
+        with pytest.raises(SpecError) as e:
+            make(egos_per_world=k)
+        assert e.value.field == "sweep.egos_per_world"
+
+
 def test_a_highway_base_cannot_share_worlds(tmp_path):
     base = tmp_path / "highway.toml"
     text = (CATALOG_DIR / "highway-obstacle.toml").read_text()

@@ -49,8 +49,9 @@ PARAM_PREFIX = "p."
 #: memory (5-14 KB a run) and is built (1-2 ms a run) and written to plan.parquet
 #: before the first run starts; 100,000 runs are hours of runs on a few cores
 MAX_RUNS = 100_000
-#: the most egos one world holds ([sweep] egos_per_world)
-MAX_EGOS_PER_WORLD = 64
+#: the most egos one world holds ([sweep] egos_per_world): the largest K whose
+#: verdicts were measured to agree with one ego a world (docs/how-to/shared-worlds.md)
+MAX_EGOS_PER_WORLD = 16
 #: how often planning says how far it got [runs]
 PLAN_PROGRESS_RUNS = 1000
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
