@@ -1,5 +1,8 @@
-"""Several egos in one world: runs per hour of a town sweep and of a real
-configuration's by egos per world, as ratios measured in one process run.
+"""Several egos in one world: runs per hour by egos per world, and the world's step.
+
+Runs per hour of a town sweep and of a real configuration's by egos per world, and
+the step of a world holding K egos against SUMO's own, as ratios measured in one
+process run.
 
 The sweeps, on 2 local workers, traces off (:data:`FAMILIES`):
 
@@ -27,15 +30,18 @@ Prints ``name value`` lines:
   The K egos are the first seeds the placement rule seats in one world
   (``raw.town_seated_k<K>`` of them, when the town holds fewer).
 
+``python benchmarks/bench_shared_worlds.py [--family town|real] [--steps] [K ...]``
+measures those K only (and 1), those families' sweeps, or the step alone.
+
 A rate is runs over the sweep's wall time; K = 1 runs :data:`SAMPLES` [1] samples
 (each a warm-up of its own), the others enough for whole worlds.
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -151,13 +157,18 @@ def step_figures(wanted: set[int], figures: dict, raw: dict) -> None:
 
 
 def main() -> None:
-    """``python benchmarks/bench_shared_worlds.py [--steps] [K ...]``: those K only (1
-    always); ``--steps``: the world's step only, no sweep."""
-    args = [a for a in sys.argv[1:] if a != "--steps"]
-    wanted = {1, *map(int, args)} if args else set(SAMPLES)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("k", type=int, nargs="*", help="the K to measure (1 always; "
+                        f"default: {sorted(SAMPLES)})")
+    parser.add_argument("--family", choices=sorted(FAMILIES), action="append",
+                        help="the sweeps' families (default: all)")
+    parser.add_argument("--steps", action="store_true",
+                        help="the world's step only, no sweep")
+    args = parser.parse_args()
+    wanted = {1, *args.k} if args.k else set(SAMPLES)
     figures, raw = {}, {}
-    if "--steps" not in sys.argv:
-        sweep_figures(wanted, figures, raw)
+    if not args.steps:
+        sweep_figures(wanted, args.family or list(FAMILIES), figures, raw)
     step_figures(wanted, figures, raw)  # on the user's cache: its warm state is kept
     for name, value in figures.items():
         print(f"{name} {value:.3f}")
@@ -165,12 +176,12 @@ def main() -> None:
         print(f"raw.{name} {value:.1f}")
 
 
-def sweep_figures(wanted: set[int], figures: dict, raw: dict) -> None:
+def sweep_figures(wanted: set[int], families: list[str], figures: dict, raw: dict) -> None:
     """Runs per hour of each family's sweep by egos per world, cold and cached."""
     users_cache = os.environ.get("SDC_CACHE_DIR")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for family in FAMILIES:
+        for family in families:
             for k in sorted(wanted & set(SAMPLES)):
                 name = f"{family}_runs_per_hour"
                 sweep = write_sweep(tmp, family, SAMPLES[k], k)
