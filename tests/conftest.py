@@ -2,11 +2,32 @@ from __future__ import annotations
 
 import copy
 import os
+import shutil
+from pathlib import Path
 
 import pytest
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import read_toml
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def source_copy():
+    """Copies what builds the package (its build files and sources, no built
+    extensions) into a new folder and returns it. A build from the copy leaves the
+    checkout's own ``build/`` alone, and two xdist workers' builds never share one
+    (they did, and one failed with "File exists")."""
+    def copy_to(folder: Path) -> Path:
+        folder.mkdir(parents=True)
+        for name in ("setup.py", "pyproject.toml", "README.md"):
+            shutil.copy2(REPO / name, folder)
+        for package in ("scenarios", "sdc", "analysis"):
+            shutil.copytree(REPO / package, folder / package,
+                            ignore=shutil.ignore_patterns("*.so", "__pycache__"))
+        return folder
+    return copy_to
 
 
 @pytest.fixture

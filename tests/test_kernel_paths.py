@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -84,17 +83,11 @@ def test_the_catalog_traces_are_mains_on_both_paths(run, kernels):
 
 
 @pytest.mark.slow
-def test_sdc_builds_without_a_c_compiler_and_runs_in_numpy(tmp_path):
+def test_sdc_builds_without_a_c_compiler_and_runs_in_numpy(tmp_path, source_copy):
     """The build with no compiler to call succeeds, skipping the extensions, and the
     built package runs a catalog scenario on the numpy path to main's trace. The
     sources are copied first: the checkout's own builds stay as they are."""
-    source = tmp_path / "src"
-    source.mkdir()
-    for name in ("setup.py", "pyproject.toml", "README.md"):
-        shutil.copy2(REPO / name, source)
-    for package in ("scenarios", "sdc", "analysis"):
-        shutil.copytree(REPO / package, source / package,
-                        ignore=shutil.ignore_patterns("*.so", "__pycache__"))
+    source = source_copy(tmp_path / "src")
     lib = tmp_path / "lib"
     no_compiler = str(tmp_path / "no-such-compiler")
     build = python(["setup.py", "build", "--build-base", str(tmp_path / "build"),

@@ -39,13 +39,15 @@ def run(args, cwd: Path, env: dict, timeout_s: float = 600) -> subprocess.Comple
 
 
 @pytest.fixture(scope="module")
-def installed(tmp_path_factory) -> tuple[Path, dict]:
+def installed(tmp_path_factory, source_copy) -> tuple[Path, dict]:
     """A fresh environment holding the wheel (its dependencies read from this one's
     site-packages, whose editable finder of the source tree is not loaded), and the
-    environment variables of a shell without a virtual environment on PATH."""
+    environment variables of a shell without a virtual environment on PATH. The wheel
+    is built from a copy of the sources: each xdist worker builds its own."""
     root = tmp_path_factory.mktemp("wheel")
+    source = source_copy(root / "src")
     built = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet",
-                            "--wheel-dir", str(root / "dist"), str(REPO)],
+                            "--wheel-dir", str(root / "dist"), str(source)],
                            capture_output=True, text=True, timeout=600)
     assert built.returncode == 0, built.stderr
     (wheel,) = (root / "dist").glob("sdc-*.whl")
