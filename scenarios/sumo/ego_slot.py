@@ -53,25 +53,27 @@ class EgoSlot:
             self.names.obstacle_prefix)
 
 
-def others_seen(slot: EgoSlot, slots: list[EgoSlot]
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+def others_seen(slot: EgoSlot, slots: list[EgoSlot], with_ids: bool = False
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str] | None]:
     """The bodies of the world's other egos in their runs (each ego's box, then its
     obstacles' boxes) whose centres lie within ``slot``'s sensing radius of its body
     centre: (N, 5) boxes, (N,) speeds and (N,) vehicle classes, in slot order, and
-    their SUMO ids."""
-    boxes, speeds, classes, ids = [], [], [], []
-    for other in slots:
-        if other is slot or not other.active:
-            continue
+    their SUMO ids when asked ``with_ids`` (only the world's audit reads them), else
+    None."""
+    others = [other for other in slots if other is not slot and other.active]
+    if not others:
+        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=object), [] if with_ids else None
+    boxes, speeds, classes = [], [], []
+    for other in others:
         boxes += [other.box[None, :], other.obstacle_boxes]
         speeds += [[other.speed_mps], np.zeros(len(other.obstacle_boxes))]
         classes += [[EGO_CLASS], other.obstacle_classes]
-        ids += other.body_ids
-    if not boxes:
-        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=object), []
     all_boxes = np.vstack(boxes)
     d = all_boxes[:, :2] - slot.box[:2]
     near = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= slot.radius_m * slot.radius_m
+    ids = None
+    if with_ids:
+        every_id = [vid for other in others for vid in other.body_ids]
+        ids = [vid for vid, seen in zip(every_id, near, strict=True) if seen]
     return (all_boxes[near], np.concatenate(speeds)[near],
-            np.concatenate(classes).astype(object)[near],
-            [vid for vid, seen in zip(ids, near, strict=True) if seen])
+            np.concatenate(classes).astype(object)[near], ids)

@@ -97,7 +97,8 @@ def _with_others(slot: EgoSlot, slots: list[EgoSlot], boxes: np.ndarray, speeds:
     """The traffic ``slot`` reads from SUMO, and after it the other egos and their
     obstacles within its sensing radius, each a body of its own (their SUMO ids added
     to ``ids``, when kept)."""
-    more_boxes, more_speeds, more_classes, more_ids = others_seen(slot, slots)
+    more_boxes, more_speeds, more_classes, more_ids = others_seen(
+        slot, slots, with_ids=ids is not None)
     if ids is not None:
         ids += more_ids
     if not len(more_boxes):
