@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from scenarios import CATALOG_DIR
 from scenarios.scene.snapshot import sensing_radius_m
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec, read_toml
+from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import make_road
 from sdc.run.episode import Episode, run_episode
 from sdc.run.shared_world import Failed, placed_apart, run_group, run_world
@@ -181,6 +183,78 @@ def test_another_runs_barrel_is_a_body_with_its_kind_for_a_class():
     assert "barrel" in run_a.trace.traffic_class[0]
     assert rb["termination"] == "duration" and not rb["collision"]
     assert len(ra["trace_sha256"]) == len(rb["trace_sha256"]) == 64
+
+
+#: city lane widths and a wide one: the egos are bodies to each other on each
+LANE_WIDTHS_M = (2.8, 3.2, 3.75)
+
+
+def two_way_street(folder: Path, lane_width_m: float) -> Path:
+    """A netgenerate grid of 3 x 2 junctions 200 m apart, one lane of
+    ``lane_width_m`` each way: A0B0 and B0A0 are the two directions of one street,
+    their lanes' centres ``lane_width_m`` apart."""
+    net = folder / f"street-{lane_width_m}.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.x-number", "3",
+                    "--grid.y-number", "2", "--grid.length", "200", "--default.lanenumber",
+                    "1", "--default.lanewidth", str(lane_width_m), "--no-turnarounds", "true",
+                    "--output-file", str(net)], check=True, capture_output=True)
+    return net
+
+
+def on_street(net: Path, seed: int, start_m: float, speed_mps: float) -> ScenarioSpec:
+    """A lane-keeping ego on the route of ``seed`` through ``net``, no traffic, 12 s
+    (every ego of one world has the same road spec: its route is its seed's)."""
+    return ScenarioSpec.from_plain({
+        "scenario": {"name": "street", "duration_s": 12.0, "step_s": STEP_S, "seed": seed},
+        "road": {"kind": "sumo_net", "net_file": str(net), "length_m": 180.0},
+        "traffic": {"vehicles": 0, "warm_up_s": 0.0},
+        "ego": {"lane": 0, "start_m": start_m, "speed_mps": speed_mps},
+        "controller": {"name": "lane-keep"}})
+
+
+def seed_starting_on(net: Path, edge: str) -> int:
+    """The first seed whose route through ``net`` starts on ``edge``."""
+    return next(seed for seed in range(1, 1000)
+                if make_road(on_street(net, seed, 10.0, 10.0)).route_edges(0.0)[0] == edge)
+
+
+@pytest.mark.parametrize("lane_width_m", LANE_WIDTHS_M)
+def test_egos_pass_each_other_on_a_narrow_two_way_street_untouched(tmp_path, lane_width_m):
+    """A and B drive toward each other in the two lanes of one street: as they pass,
+    each holds the other's true box one lane width across, nobody hits anybody, and
+    nothing overlaps that the world made up, on every lane width (an X5 is 1.93 m
+    wide: 0.87 m apart on 2.8 m lanes)."""
+    net = two_way_street(tmp_path, lane_width_m)
+    a = on_street(net, seed_starting_on(net, "A0B0"), 10.0, 10.0)
+    b = on_street(net, seed_starting_on(net, "B0A0"), 10.0, 10.0)
+    run_a, run_b = episodes(run_world(with_roads([a, b]), ["a", "b"]))
+    for row in (run_a.row, run_b.row):
+        assert row["termination"] == "duration" and not row["collision"]
+        assert row["world_overlaps"] == 0 and row["sumo_overlaps"] == 0
+    steps = min(len(run_a.trace), len(run_b.trace))
+    gap_m = [own_box(run_b, k)[0] - own_box(run_a, k)[0] for k in range(steps)]
+    passing = int(np.argmin(np.abs(gap_m)))
+    assert 0 < passing < steps - 1  # they did pass within the runs
+    box_a, box_b = own_box(run_a, passing), own_box(run_b, passing)
+    assert abs(box_a[1] - box_b[1]) == pytest.approx(lane_width_m, abs=0.15)
+    assert holds(boxes_at(run_a, passing), box_b) and holds(boxes_at(run_b, passing), box_a)
+
+
+@pytest.mark.parametrize("lane_width_m", LANE_WIDTHS_M)
+def test_an_ego_runs_into_a_standing_ego_on_every_lane_width(tmp_path, lane_width_m):
+    """A at 10 m/s behind B, who stands 60 m ahead in the same lane: one collision, A's
+    front into B's rear at the same time in both rows, and no overlap counted as the
+    world's."""
+    net = two_way_street(tmp_path, lane_width_m)
+    seed = seed_starting_on(net, "A0B0")  # one route: B stands on A's
+    a, b = on_street(net, seed, 10.0, 10.0), on_street(net, seed, 70.0, 0.0)
+    run_a, run_b = episodes(run_world(with_roads([a, b]), ["a", "b"]))
+    ra, rb = run_a.row, run_b.row
+    assert ra["collision_role"] == "ran_into" and ra["collision_part"] == "front"
+    assert rb["collision_role"] == "was_hit" and rb["collision_part"] == "rear"
+    assert ra["collision_time_s"] == rb["collision_time_s"]
+    assert ra["collision_time_s"] == pytest.approx((60.0 - 4.85) / 10.0, abs=0.2)
+    assert ra["world_overlaps"] == rb["world_overlaps"] == 0
 
 
 def test_a_run_alone_sees_no_second_ego():
