@@ -66,22 +66,33 @@ def test_a_body_blocks_a_lane_only_where_a_car_cannot_pass_with_the_clearance():
     assert traffic_model.blocks_neighbour(0.01, 2.3, 1.8)
 
 
-@pytest.mark.parametrize("offset_m", [0.0, 0.5, 1.0, 1.3])
-def test_sumo_sees_the_ego_inside_its_lane_while_a_car_can_pass_beside_it(offset_m):
-    half_m = X5_WIDTH_M / 2
-    lateral_m = traffic_model.sumo_lateral_m(offset_m - half_m, offset_m + half_m, 0.0, 3.5,
-                                             X5_WIDTH_M, TRAFFIC_WIDTH_M)
-    assert lateral_m + half_m <= 3.5 / 2 + 1e-9  # nothing over the lane line
-    if offset_m + half_m <= 3.5 / 2:
-        assert lateral_m == pytest.approx(offset_m)  # where it is when it is inside
+@pytest.mark.parametrize("offset_m", [0.0, 0.5, 1.0, 1.3, 1.5, 1.7, -1.6])
+def test_sumo_sees_the_ego_inside_its_lane_and_a_stand_in_where_it_blocks(lesson_plain,
+                                                                          offset_m):
+    """libsumo's own positions: the ego inside its lane (nothing of it over a line), and
+    a vehicle of its size beside it in a lane it blocks, none where it leaves room."""
+    import libsumo
 
-
-@pytest.mark.parametrize("offset_m", [1.5, 1.7, -1.6])
-def test_sumo_sees_the_part_of_the_ego_that_blocks_the_next_lane(offset_m):
-    half_m = X5_WIDTH_M / 2
-    lateral_m = traffic_model.sumo_lateral_m(offset_m - half_m, offset_m + half_m, 0.0, 3.5,
-                                             X5_WIDTH_M, TRAFFIC_WIDTH_M)
-    assert lateral_m == pytest.approx(offset_m)
+    spec = two_lanes(lesson_plain, seed=1, flow_vph=0.0)
+    road = make_road(spec)
+    d_m = road.lane_center_d_m(0) + offset_m
+    lane = road.lane_at_d(d_m)
+    reach_m = abs(d_m - road.lane_center_d_m(lane)) + X5_WIDTH_M / 2 - 3.5 / 2
+    side = 1 if d_m > road.lane_center_d_m(lane) else -1
+    blocks = traffic_model.blocks_neighbour(reach_m, 3.5, TRAFFIC_WIDTH_M) and 0 <= lane + side < 2
+    with SumoWorld(spec, road) as world:
+        world.start(held_box(road, 300.0, d_m), 5.0)
+        world.step(held_box(road, 300.5, d_m), 5.0)
+        assert libsumo.vehicle.getLaneID("ego") == f"road_{lane}"
+        assert abs(libsumo.vehicle.getLateralLanePosition("ego")) <= (3.5 - X5_WIDTH_M) / 2 + 1e-6
+        others = [v for v in libsumo.vehicle.getIDList() if v != "ego"]
+        assert len(others) == int(blocks), others
+        if blocks:
+            (stand_in,) = others
+            assert libsumo.vehicle.getLaneID(stand_in) == f"road_{lane + side}"
+            assert libsumo.vehicle.getLanePosition(stand_in) == pytest.approx(
+                libsumo.vehicle.getLanePosition("ego"), abs=1e-6)
+            assert libsumo.vehicle.getSpeed(stand_in) == pytest.approx(5.0)
 
 
 def test_an_offset_obstacle_stands_in_every_lane_it_blocks(lesson_plain):

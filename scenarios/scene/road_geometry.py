@@ -134,8 +134,11 @@ class RoadGeometry:
                                                                      float | None]]:
         """The width of ``lane`` at ``s_m`` and of the lanes on its right and left
         (None: no lane there) [m]. On a built-in road every lane is ``lane_width_m``
-        wide, and so is what lies beyond its outer lanes."""
-        return self.lane_width_m, (self.lane_width_m, self.lane_width_m)
+        wide."""
+        def beside(other: int) -> float | None:
+            return self.lane_width_m if 0 <= other < self.lanes else None
+
+        return self.lane_width_m, (beside(lane - 1), beside(lane + 1))
 
     def lane_at_d(self, d_m: float) -> int:
         """The lane holding offset ``d_m`` (the inverse of :meth:`lane_center_d_m`; below

@@ -5,9 +5,10 @@ leader only in the lanes it occupies. Measured on SUMO 1.28 (``docs/world.md``):
 
 - a ``moveToXY`` ego whose body reaches into the next lane is invisible there and
   traffic drives through it; with continuous lane changes
-  (``--lanechange.duration``) SUMO does register the part of a body that reaches
-  across the lane line (a "shadow lane"), but any part at all, so a car 0.2 m over
-  the line stopped all traffic beside it;
+  (``--lanechange.duration``) SUMO registers it there (a "shadow lane") only
+  sometimes (on 2.8-3.2 m lanes the car beside had no leader at any step and drove
+  into it), and then for any part at all, so a car 0.2 m over the line stopped all
+  traffic beside it;
 - a stopped obstacle moved sideways (``moveToXY``, ``departPosLat``) gets no
   shadow lane: traffic drives through the part beyond the lane line;
 - the sublane model sees both but costs 3x per step and gridlocks beside a
@@ -17,10 +18,13 @@ So SUMO runs with continuous lane changes over ``traffic.lane_change_s`` (2 s
 unless the scenario says otherwise, 1 s at least: no vehicle jumps sideways), and a
 body is shown in a neighbouring lane exactly when the part reaching into it leaves a
 traffic car driving at that lane's centre less than :data:`PASS_CLEARANCE_M` to pass
-(:func:`blocks_neighbour`): the ego through the lateral position it is given
-(:func:`sumo_lateral_m`), an obstacle as a second stopped vehicle in that lane. A part
-that leaves room to pass is not shown, so traffic passes it with at least that
-clearance instead of queueing. Each lane is judged by its own width (a network's
+(:func:`blocks_neighbour`), as a body of its own in that lane: an obstacle as a second
+stopped vehicle, the ego as a vehicle of its size pushed along beside it every step
+(its stand-in, :meth:`scenarios.sumo.sumo_world.SumoWorld._push`). SUMO itself is
+shown every body inside one lane (:func:`inside_lane_m`): it does not reliably see a
+``moveToXY`` vehicle over a lane line (``docs/world.md``). A part that leaves room to
+pass is not shown, so traffic passes it with at least that clearance instead of
+queueing. Each lane is judged by its own width (a network's
 lanes are as wide as its file says, 2.5-4 m in cities) and by the widest traffic
 that may drive in it (the widest vehicle type SUMO has loaded: a 2.5 m truck needs a
 lane 0.7 m wider than a 1.8 m car to pass with the same clearance).
@@ -81,24 +85,21 @@ def sides_blocked(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float
     return right, left
 
 
-def sumo_lateral_m(lo_m: float, hi_m: float, lane_d_m: float, lane_width_m: float,
-                   body_width_m: float, traffic_width_m: float,
-                   beside_m: tuple[float | None, float | None] | None = None) -> float:
-    """The lateral position [m, across the road, left positive] to give SUMO for a body
-    spanning ``lo_m`` .. ``hi_m`` across the road whose centre is in the lane centred at
-    ``lane_d_m``: a part over a lane line that leaves room to pass is not shown (the
-    body is shown just inside its lane on that side), one that blocks is shown as far
-    as it reaches (SUMO's body is ``body_width_m`` wide, aligned with its lane).
-
-    ``traffic_width_m`` and ``beside_m``: as for :func:`sides_blocked`."""
-    right_blocks, left_blocks = sides_blocked(lo_m, hi_m, lane_d_m, lane_width_m,
-                                              traffic_width_m, beside_m)
-    if left_blocks and not right_blocks:
-        return hi_m - body_width_m / 2
-    if right_blocks and not left_blocks:
-        return lo_m + body_width_m / 2
+def inside_lane_m(centre_m: float, lane_d_m: float, lane_width_m: float,
+                  body_width_m: float) -> float:
+    """The lateral position [m, across the road, left positive] nearest ``centre_m`` at
+    which a body ``body_width_m`` wide lies inside the lane centred at ``lane_d_m``
+    (the lane's centre when the body is wider than its lane): where SUMO is shown a
+    body, so no part of it reaches over a lane line there."""
     inside_m = max(0.0, (lane_width_m - body_width_m) / 2)
-    centre_m = (lo_m + hi_m) / 2
-    if left_blocks:  # and right: a body wider than its lane
-        return centre_m
     return min(max(centre_m, lane_d_m - inside_m), lane_d_m + inside_m)
+
+
+def stand_in_lateral_m(side: int, lane_d_m: float, lane_width_m: float, beside_width_m: float,
+                       body_width_m: float) -> float:
+    """Where the body standing in for a body in the lane centred at ``lane_d_m`` is
+    shown in the lane on its ``side`` (-1 right, +1 left; that lane ``beside_width_m``
+    wide): inside that lane, as near the shared line as it fits [m, across the road]."""
+    beside_d_m = lane_d_m + side * (lane_width_m + beside_width_m) / 2
+    return inside_lane_m(lane_d_m + side * lane_width_m / 2, beside_d_m, beside_width_m,
+                         body_width_m)

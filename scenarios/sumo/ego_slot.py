@@ -5,8 +5,8 @@ A world holds one ego for a run alone, or several that share its traffic
 (:mod:`sdc.run.shared_world`). Each ego senses the world on its own: the vehicles
 and persons SUMO has around it (a context subscription of its own), and the other
 egos and their obstacles where they truly are (our boxes, not where SUMO was shown
-them: :func:`scenarios.scene.traffic_model.sumo_lateral_m` may show SUMO a body
-just inside its lane).
+them: SUMO holds each inside one lane, and a stand-in in a lane it blocks;
+:mod:`scenarios.scene.traffic_model`).
 """
 
 from __future__ import annotations
@@ -44,6 +44,8 @@ class EgoSlot:
         self.subscribed_m = 0.0  # its context subscription's radius
         self.people_subscribed = False  # the persons around it are read too
         self.box: np.ndarray | None = None  # its body box as last pushed
+        #: the lanes beside it (-1 right, +1 left) in which a body stands in for it now
+        self.stand_ins: set[int] = set()
         self.speed_mps = 0.0
         self.active = True  # in the world: its run has not ended
 

@@ -44,6 +44,12 @@ class EgoNames:
     route_id: str
     obstacle_prefix: str  # its obstacles' ids: <prefix><i>, and <prefix><i>.<lane> beside
 
+    def stand_in_id(self, side: int) -> str:
+        """The id of the body standing in for the ego in the lane on its ``side`` (-1
+        right, +1 left): it starts with :attr:`obstacle_prefix`, so every read that
+        leaves our bodies out of the traffic leaves it out too."""
+        return f"{self.obstacle_prefix}ego.{'left' if side > 0 else 'right'}"
+
 
 def ego_names(slot: int) -> EgoNames:
     """The names of the ego in ``slot`` of its world (0: the only ego of a run alone)."""
@@ -133,8 +139,7 @@ def obstacle_lanes(road: RoadGeometry, box: np.ndarray) -> list[int]:
     (:func:`lanes_blocked`, for the built-in traffic)."""
     (_,), (d_m,) = road.to_frenet(box[None, :2])
     own = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
-    return [own] + [own + step for step in lanes_blocked(road, box, own, TRAFFIC_WIDTH_M)
-                    if 0 <= own + step < road.lanes]
+    return [own] + [own + step for step in lanes_blocked(road, box, own, TRAFFIC_WIDTH_M)]
 
 
 def across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, float]:

@@ -411,11 +411,15 @@ class SumoWorld:
             vehicle.remove(vid)
         return removed
 
-    def _ego_pose(self, slot: EgoSlot, box: np.ndarray) -> tuple[float, float, float]:
-        """SUMO's front-bumper x, y and angle for the ego of ``slot`` at ``box``: its
-        front bumper moved across the road to the lateral position SUMO is to see
-        (:func:`scenarios.scene.traffic_model.sumo_lateral_m`: the whole body, or just
-        inside its lane where what reaches over a lane line leaves room to pass)."""
+    def _ego_pose(self, slot: EgoSlot, box: np.ndarray
+                  ) -> tuple[tuple[float, float, float], dict[int, tuple[float, float]]]:
+        """SUMO's front-bumper x, y and angle for the ego of ``slot`` at ``box``, its
+        front bumper moved across the road to just inside its lane
+        (:func:`~scenarios.scene.traffic_model.inside_lane_m`); and for each lane beside
+        it that it blocks (-1 right, +1 left:
+        :func:`~scenarios.scene.traffic_model.sides_blocked`) the front-bumper x, y of
+        the body standing in for it there (same angle). Off its road's lanes, the ego
+        as it is and none."""
         x, y, angle_deg = _sumo_pose(box)
         road, model = slot.road, slot.model
         s_m, d_m = road.locate_near(float(box[0]), float(box[1]), slot.s_m)
@@ -425,13 +429,24 @@ class SumoWorld:
         lane_d_m = road.lane_center_d_m(lane)
         width_m, beside_m = road.lane_widths_m(s_m, lane)
         if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
-            return x, y, angle_deg
+            return (x, y, angle_deg), {}
         lo_m, hi_m = across_m(box, heading, d_m)
-        lateral_m = traffic_model.sumo_lateral_m(lo_m, hi_m, lane_d_m, width_m, model.width_m,
-                                                 self._traffic_width_m(), beside_m)
+        blocked = traffic_model.sides_blocked(lo_m, hi_m, lane_d_m, width_m,
+                                              self._traffic_width_m(), beside_m)
         front_d_m = d_m + model.length_m / 2 * math.sin(float(box[2]) - heading)
-        shift_m = lateral_m - front_d_m
-        return x - shift_m * math.sin(heading), y + shift_m * math.cos(heading), angle_deg
+        across_x, across_y = -math.sin(heading), math.cos(heading)
+
+        def at(lateral_m: float) -> tuple[float, float]:
+            shift_m = lateral_m - front_d_m
+            return x + shift_m * across_x, y + shift_m * across_y
+
+        stand_ins = {
+            side: at(traffic_model.stand_in_lateral_m(side, lane_d_m, width_m,
+                                                      beside_m[side > 0], model.width_m))
+            for side, blocks in zip((-1, 1), blocked, strict=True) if blocks}
+        lateral_m = traffic_model.inside_lane_m((lo_m + hi_m) / 2, lane_d_m, width_m,
+                                                model.width_m)
+        return (*at(lateral_m), angle_deg), stand_ins
 
     def _traffic_width_m(self) -> float:
         """The widest traffic that may pass a body in a lane beside it: of the types
@@ -498,12 +513,34 @@ class SumoWorld:
         vehicle = self._sumo.vehicle
         for index, (box, speed_mps) in egos.items():
             slot = self._slots[index]
-            x, y, angle_deg = self._ego_pose(slot, box)
+            (x, y, angle_deg), stand_ins = self._ego_pose(slot, box)
             vehicle.moveToXY(slot.names.ego_id, "", -1, x, y, angle_deg, keepRoute=2)
             vehicle.setSpeed(slot.names.ego_id, speed_mps)
+            self._place_stand_ins(slot, stand_ins, angle_deg, speed_mps)
             slot.box, slot.speed_mps = box, speed_mps
         self._sumo.simulationStep()
         self._renew_trips()
+
+    def _place_stand_ins(self, slot: EgoSlot, fronts: dict[int, tuple[float, float]],
+                         angle_deg: float, speed_mps: float) -> None:
+        """Show SUMO the ego of ``slot`` in each lane beside it that it blocks: a vehicle
+        of its type whose front bumper is at ``fronts[side]`` (-1 right, +1 left),
+        pushed along with it at its speed, so that lane's traffic follows it and
+        changes into that lane only behind it; one in a lane it no longer blocks
+        leaves. Nothing of ours reads it (its id starts with the obstacles' prefix)."""
+        vehicle, names = self._sumo.vehicle, slot.names
+        for side in slot.stand_ins - fronts.keys():
+            vehicle.remove(names.stand_in_id(side))
+        for side, (x, y) in fronts.items():
+            vid = names.stand_in_id(side)
+            if side not in slot.stand_ins:
+                vehicle.add(vid, names.route_id, typeID=names.ego_type, depart="now",
+                            departSpeed=f"{speed_mps:.6f}")
+                vehicle.setSpeedMode(vid, 0)
+                vehicle.setLaneChangeMode(vid, 0)
+            vehicle.moveToXY(vid, "", -1, x, y, angle_deg, keepRoute=2)
+            vehicle.setSpeed(vid, speed_mps)
+        slot.stand_ins = set(fronts)
 
     def _snapshots(self, taken: frozenset[str] = frozenset()) -> dict[int, Snapshot]:
         """The state after a step for each ego still in the world, without the vehicles
