@@ -90,8 +90,9 @@ def main() -> None:
         into = [r for r in mine if r["through_steps"]]
         passed = [r["least_beside_m"] for r in mine if r["beside_steps"]]
         least = f"{min(passed):.3f} m" if passed else "none passed"
+        left = sum(r["side"] > 0 for r in into)
         print(f"width {width_m:.2f} m: traffic into the ego in {len(into)}/{len(mine)} runs "
-              f"(left {sum(r['side'] > 0 for r in into)}, right {sum(r['side'] < 0 for r in into)}); "
+              f"(left {left}, right {len(into) - left}); "
               f"collisions {sum(r['collision_with'] != 'none' for r in mine)}; "
               f"world_overlaps {sum(r['world_overlaps'] for r in mine)}; "
               f"passed beside in {len(passed)} runs, least gap {least}", flush=True)
