@@ -257,6 +257,46 @@ def test_an_ego_runs_into_a_standing_ego_on_every_lane_width(tmp_path, lane_widt
     assert ra["world_overlaps"] == rb["world_overlaps"] == 0
 
 
+def test_every_ego_of_a_world_has_its_own_stand_in_and_nobody_sees_it():
+    """B (slot 1) reaches 0.9 m over its right lane line into A's lane (A far ahead),
+    3.5 m lanes:
+    SUMO holds B inside its lane and a stand-in of B's (``obstacle1.ego.right``) in
+    A's lane at B's lane position; neither A nor B senses the stand-in (no box of B's
+    snapshot overlaps B), and A's lane's traffic queues behind it, never into B."""
+    import libsumo
+
+    from scenarios.sumo.sumo_world import SumoWorld
+    from sdc.car.geometry import boxes_overlap
+
+    a = straight(700.0, lane=0, flow_vph=600.0, duration_s=40.0)
+    b = straight(300.0, lane=1, flow_vph=600.0, duration_s=40.0)
+    road = make_road(a)
+    d_b_m = road.lane_center_d_m(1) - 1.75 - 0.9 + 1.93 / 2
+
+    def boxes(k: int) -> dict[int, tuple[np.ndarray, float]]:
+        s_a, s_b = 700.0 + 0.5 * k, 300.0 + 0.5 * k
+        a_box = np.array([*road.xy_at(s_a, road.lane_center_d_m(0)), 0.0, 4.85, 1.93])
+        return {0: (a_box, 5.0), 1: (np.array([*road.xy_at(s_b, d_b_m), 0.0, 4.85, 1.93]), 5.0)}
+
+    behind = 0
+    with SumoWorld(a, road, others=((b, road),)) as world:
+        snapshots = world.start_all(boxes(0))
+        for k in range(1, 400):
+            pushed = boxes(k)
+            snapshots = world.step_all(pushed)
+            stand_in = "obstacle1.ego.right"
+            assert libsumo.vehicle.getLaneID(stand_in) == "road_0"
+            assert libsumo.vehicle.getLanePosition(stand_in) == pytest.approx(
+                libsumo.vehicle.getLanePosition("ego1"), abs=1e-6)
+            assert libsumo.vehicle.getLaneID("ego1") == "road_1"
+            assert not boxes_overlap(pushed[1][0], snapshots[1].traffic_boxes).any(), k
+            s_m, d_m = road.to_frenet(snapshots[1].traffic_boxes[:, :2])
+            in_a_lane = np.abs(d_m - road.lane_center_d_m(0)) < 1.0
+            behind += bool(np.any(in_a_lane & (s_m - (300.0 + 0.5 * k) > -40.0)
+                                  & (s_m < 300.0 + 0.5 * k)))
+    assert behind > 20  # A's lane's traffic came up behind B's stand-in
+
+
 def test_a_run_alone_sees_no_second_ego():
     """The counterpart of the test above: without B, A drives its whole duration on an
     empty road and senses nothing."""
