@@ -53,8 +53,9 @@ def description() -> str:
             "--lanechange.duration) and a body reaching into a neighbouring lane so far "
             "that the widest traffic type (on the built-in roads a "
             f"{TRAFFIC_WIDTH_M:g} m wide car) at that lane's centre has under "
-            f"{PASS_CLEARANCE_M:g} m to pass is shown to SUMO in that lane too (the ego by its "
-            "lateral position, an obstacle as a second stopped vehicle); traffic enters "
+            f"{PASS_CLEARANCE_M:g} m to pass is shown to SUMO in that lane too (the ego as a "
+            "stand-in of its size pushed along beside it, an obstacle as a second stopped "
+            "vehicle; SUMO holds every body inside one lane); traffic enters "
             "behind the ego only where it can stop; on highway, highway-env's IDM and MOBIL")
 
 
