@@ -529,8 +529,12 @@ class SumoWorld:
         changes into that lane only behind it; one in a lane it no longer blocks
         leaves. Nothing of ours reads it (its id starts with the obstacles' prefix)."""
         vehicle, names = self._sumo.vehicle, slot.names
-        for side in slot.stand_ins - fronts.keys():
-            vehicle.remove(names.stand_in_id(side))
+        leaving = [names.stand_in_id(side) for side in slot.stand_ins - fronts.keys()]
+        if leaving:  # SUMO may have taken one off already (at the end of its network)
+            present = vehicle.getIDList()
+            for vid in leaving:
+                if vid in present:
+                    vehicle.remove(vid)
         for side, (x, y) in fronts.items():
             vid = names.stand_in_id(side)
             if side not in slot.stand_ins:
