@@ -377,3 +377,53 @@ def test_an_offset_obstacle_on_a_network_stands_in_every_lane_it_blocks(
                 if len(boxes):
                     gap_m = box_gap_m(box, boxes).min()
                     assert gap_m >= traffic_model.PASS_CLEARANCE_M - 1e-3, (kind, offset_m)
+
+
+def grid_spec(net: Path, front_m: float, kind: str, seed: int) -> ScenarioSpec:
+    """A 4 x 4 netgenerate city (2 lanes each way, 3.0 m lanes, 80 m edges, 20 m
+    junctions), 80 cars, a route through three edges, an obstacle of ``kind`` whose
+    front is asked at ``front_m`` along it (edges end at 80 and 180 m), the ego
+    standing at 10 m."""
+    length_m = {"car": 4.5, "truck": 12.0}[kind]
+    return ScenarioSpec.from_plain({
+        "scenario": {"name": "edge", "duration_s": 30.0, "step_s": 0.064, "seed": seed},
+        "road": {"kind": "sumo_net", "net_file": str(net), "length_m": 250.0,
+                 "route_edges": ["A1B1", "B1C1", "C1D1"]},
+        "traffic": {"vehicles": 80, "speed_dev": 0.1},
+        "obstacles": [{"kind": kind, "lane": 0, "position_m": front_m - length_m / 2}],
+        "ego": {"lane": 0, "start_m": 10.0, "speed_mps": 0.0},
+        "controller": {"name": "lane-keep"}})
+
+
+@pytest.mark.slow
+def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
+    """Asked to stand with its front at the end of an edge or past it into the
+    junction, an obstacle stands back off the junction, as SUMO's stopped vehicle
+    does (SUMO holds stops on lanes only; the part in the junction was shown to
+    nobody, and cars waited at the stop line inside it): SUMO's front is ours, and no
+    traffic body overlaps it (pairs_overlap), 3 seeds each."""
+    import libsumo
+
+    from analysis.measures.world_audit import pairs_overlap
+    from scenarios.scene.snapshot import obstacle_boxes
+
+    net = tmp_path / "grid.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
+                    "--grid.length", "100", "--default.lanenumber", "2",
+                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
+                   check=True, capture_output=True)
+    for kind, front_m in (("car", 80.0), ("car", 181.5), ("truck", 180.0)):
+        for seed in (3, 4, 6):
+            spec = grid_spec(net, front_m, kind, seed)
+            road = make_road(spec)
+            box = obstacle_boxes(spec, road)[0]
+            ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
+            front_xy = box[:2] + box[3] / 2 * np.array([np.cos(box[2]), np.sin(box[2])])
+            with SumoWorld(spec, road) as world:
+                world.start(ego, 0.0)
+                assert np.hypot(*(np.array(libsumo.vehicle.getPosition("obstacle.0"))
+                                  - front_xy)) < 0.05, (kind, front_m)
+                for k in range(470):
+                    traffic = world.step(ego, 0.0).traffic_boxes
+                    overlaps = pairs_overlap(traffic, np.repeat(box[None], len(traffic), 0))
+                    assert not overlaps.any(), (kind, front_m, seed, k)

@@ -67,6 +67,8 @@ TURN_WINDOW_M = 3.0
 RADIUS_SAMPLE_M = 0.25
 #: a bend the ego reaches from its start is measured over this much of the lane [m]
 START_BEND_WINDOW_M = 6.0
+#: an obstacle moved off a junction stands this far from it [m]
+JUNCTION_CLEARANCE_M = 0.5
 
 
 @dataclass(frozen=True)
@@ -327,11 +329,21 @@ class NetworkRoad(RoadGeometry):
 
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` can stand: moved ahead
-        off a junction onto the next lane (SUMO holds stops on lanes only)."""
-        following = self._lane_after(s_m)
-        if not self.piece_at(s_m).lane.internal or following is None:
-            return s_m
-        return following.start_s_m + min(length_m / 2 + 0.5, following.length_m / 2)
+        off a junction onto the next lane, and back off the junction its front would
+        reach into (SUMO holds stops on lanes only, and shows nobody the part of a
+        body in a junction: traffic would wait or cross inside it), its ends
+        :data:`JUNCTION_CLEARANCE_M` off the junction (at its lane's middle on a lane
+        too short for that)."""
+        piece, half_m = self.piece_at(s_m), length_m / 2 + JUNCTION_CLEARANCE_M
+        if piece.lane.internal:
+            following = self._lane_after(s_m)
+            if following is None:
+                return s_m
+            return following.start_s_m + min(half_m, following.length_m / 2)
+        end_m = piece.start_s_m + piece.length_m
+        if s_m + length_m / 2 >= end_m and self.piece_at(end_m).lane.internal:
+            return end_m - min(half_m, piece.length_m / 2)
+        return s_m
 
     def _lane_after(self, s_m: float) -> RoutePiece | None:
         """The first route lane outside a junction that starts after ``s_m``."""
