@@ -338,7 +338,6 @@ def test_an_ego_steered_over_a_lane_line_by_its_controller(lesson_plain, width_m
     assert episode.row["status"] == "ok" and episode.row["collision"] is False, episode.row
     assert episode.row["world_overlaps"] == 0
     road = make_road(spec)
-    width_m, _ = road.lane_widths_m(spec.ego.start_m, spec.ego.lane)
     line_d_m = road.lane_center_d_m(spec.ego.lane) + side * width_m / 2
     seen, reached = Straddled(0, np.inf, 0, 0), 0
     floats = episode.trace.floats
