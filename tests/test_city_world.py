@@ -378,18 +378,20 @@ def test_an_offset_obstacle_on_a_network_stands_in_every_lane_it_blocks(
                     assert gap_m >= traffic_model.PASS_CLEARANCE_M - 1e-3, (kind, offset_m)
 
 
-def grid_spec(net: Path, front_m: float, kind: str, seed: int) -> ScenarioSpec:
+def grid_spec(net: Path, front_m: float, kind: str, seed: int,
+              lateral_offset_m: float = 0.0) -> ScenarioSpec:
     """A 4 x 4 netgenerate city (2 lanes each way, 3.0 m lanes, 80 m edges, 20 m
     junctions), 80 cars, a route through three edges, an obstacle of ``kind`` whose
-    front is asked at ``front_m`` along it (edges end at 80 and 180 m), the ego
-    standing at 10 m."""
+    front is asked at ``front_m`` along it (edges end at 80 and 180 m),
+    ``lateral_offset_m`` left of the lane's centre, the ego standing at 10 m."""
     length_m = {"car": 4.5, "truck": 12.0}[kind]
     return ScenarioSpec.from_plain({
         "scenario": {"name": "edge", "duration_s": 30.0, "step_s": 0.064, "seed": seed},
         "road": {"kind": "sumo_net", "net_file": str(net), "length_m": 250.0,
                  "route_edges": ["A1B1", "B1C1", "C1D1"]},
         "traffic": {"vehicles": 80, "speed_dev": 0.1},
-        "obstacles": [{"kind": kind, "lane": 0, "position_m": front_m - length_m / 2}],
+        "obstacles": [{"kind": kind, "lane": 0, "position_m": front_m - length_m / 2,
+                       "lateral_offset_m": lateral_offset_m}],
         "ego": {"lane": 0, "start_m": 10.0, "speed_mps": 0.0},
         "controller": {"name": "lane-keep"}})
 
@@ -426,3 +428,25 @@ def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
                     traffic = world.step(ego, 0.0).traffic_boxes
                     overlaps = pairs_overlap(traffic, np.repeat(box[None], len(traffic), 0))
                     assert not overlaps.any(), (kind, front_m, seed, k)
+
+
+def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(tmp_path):
+    """An obstacle reaching into the next lane is shown there as a second stopped
+    vehicle wherever along its edge it stands: at 9 positions with every fraction of a
+    metre (its stop was asked at SUMO's position unrounded, its departure rounded to a
+    micrometre: half the positions departed past their own stop and SUMO refused it)."""
+    import libsumo
+
+    net = tmp_path / "grid.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
+                    "--grid.length", "100", "--default.lanenumber", "2",
+                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
+                   check=True, capture_output=True)
+    for k in range(9):
+        spec = grid_spec(net, 30.0 + k * 7.123457, "car", seed=3, lateral_offset_m=1.0)
+        road = make_road(spec)
+        ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
+        with SumoWorld(spec, road) as world:
+            world.start(ego, 0.0)
+            world.step(ego, 0.0)
+            assert {"obstacle.0", "obstacle.0.1"} <= set(libsumo.vehicle.getIDList()), k

@@ -17,8 +17,10 @@ from sdc.batch.run_task import RunTask, execute
 from sdc.batch.warm_up_clock import ClockWriter, clock_path, read_clock
 
 WARM_UP_S = 8.0
-#: a warm-up of several seconds of wall time on the highway [s of SUMO]
-LONG_WARM_UP_S = 600.0
+#: a warm-up of several seconds of wall time on the highway (at 600 s it took under
+#: one, and on a loaded machine it once ended between two of the driver's reads of
+#: its clock) [s of SUMO]
+LONG_WARM_UP_S = 2400.0
 
 
 def warm_task(seed: int, warm_up_s: float = WARM_UP_S) -> RunTask:

@@ -70,8 +70,18 @@ def _lanes_into(sumo, edge: str, lane_id: str) -> list[str]:
             chain, via = [from_id], link[4]
             while via and via != lane_id:
                 chain.append(via)
-                onward = lane.getLinks(via)
-                via = onward[0][0] if onward and onward[0][0].startswith(":") else ""
+                via = _next_internal(lane.getLinks(via))
             if via == lane_id or link[0] == lane_id:
                 return chain
     return []
+
+
+def _next_internal(links) -> str:
+    """The junction lane a junction lane's ``links`` (libsumo's ``lane.getLinks``) lead
+    on to, or "" where they leave the junction. A turn that waits inside the junction
+    (a left turn at lights) is two lanes: the first's link names the lane after the
+    junction and, as its via, the second."""
+    if not links:
+        return ""
+    to_lane, via = links[0][0], links[0][4]
+    return via or (to_lane if to_lane.startswith(":") else "")

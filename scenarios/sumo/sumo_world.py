@@ -473,7 +473,9 @@ class SumoWorld:
                 beside = road.net.lanes.get(f"{edge}_{own + step}")
                 if beside is None:  # its front is on an edge without that lane
                     continue
-                pos_m = front_m * beside.sumo_length_m / own_length_m
+                # one number for its departure and its stop: a departure past the
+                # stop (rounded up) is refused
+                pos_m = round(front_m * beside.sumo_length_m / own_length_m, 6)
                 vid = f"{slot.names.obstacle_prefix}{i}.{beside.index}"
                 self._sumo.route.add(vid, [edge])
                 vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
