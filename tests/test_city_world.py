@@ -450,3 +450,43 @@ def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(tmp_path
             world.start(ego, 0.0)
             world.step(ego, 0.0)
             assert {"obstacle.0", "obstacle.0.1"} <= set(libsumo.vehicle.getIDList()), k
+
+
+@pytest.mark.slow
+def test_an_obstacle_over_a_two_way_streets_centre_line_stands_in_the_opposite_lane(
+        tmp_path):
+    """A car or a truck in the left lane of a two-way street, reaching 1.0 or 1.8 m
+    over its centre line into the opposite lane (3.0 m lanes), stands there too, as a
+    stopped vehicle of that lane: oncoming traffic came near it and no traffic body
+    overlaps it (before, SUMO saw it in its own lane only and oncoming cars drove
+    through it), 2 seeds each."""
+    from analysis.measures.world_audit import pairs_overlap
+    from scenarios.scene.snapshot import obstacle_boxes
+
+    net = tmp_path / "grid.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
+                    "--grid.length", "100", "--default.lanenumber", "2",
+                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
+                   check=True, capture_output=True)
+    oncoming_near = 0
+    for kind, width_m in (("car", 1.8), ("truck", 2.5)):
+        for reach_m in (1.0, 1.8):
+            for seed in (1, 2):
+                lane_index = make_road(grid_spec(net, 140.0, kind, seed)).pieces[0].lane.index
+                # from the route's lane to the centre line, then the reach
+                offset_m = (1 - lane_index) * 3.0 + 1.5 - width_m / 2 + reach_m
+                spec = grid_spec(net, 140.0, kind, seed, offset_m)
+                road = make_road(spec)
+                box = obstacle_boxes(spec, road)[0]
+                ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)),
+                                4.85, 1.93])
+                with SumoWorld(spec, road) as world:
+                    world.start(ego, 0.0)
+                    for k in range(400):
+                        traffic = world.step(ego, 0.0).traffic_boxes
+                        overlaps = pairs_overlap(traffic, np.repeat(box[None], len(traffic), 0))
+                        assert not overlaps.any(), (kind, reach_m, seed, k)
+                        facing = np.cos(traffic[:, 2] - box[2]) < -0.9
+                        near = np.hypot(*(traffic[:, :2] - box[:2]).T) < 15.0
+                        oncoming_near += bool((facing & near).any())
+    assert oncoming_near > 50, oncoming_near

@@ -27,7 +27,12 @@ from scenarios.common.errors import SdcError
 from scenarios.scene import road_kernels, traffic_model
 from scenarios.scene.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_MIN_M, LanePaths
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import Snapshot, in_start_zone, near_obstacles
+from scenarios.scene.snapshot import (
+    OBSTACLE_ZONE_BEHIND_M,
+    Snapshot,
+    in_start_zone,
+    near_obstacles,
+)
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.shared_worlds import world_fields
 from scenarios.sumo.ego_slot import EgoSlot, others_seen
@@ -59,6 +64,8 @@ from scenarios.sumo.warm_state import (
 from scenarios.sumo.warm_up_process import computed_apart
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
+from scenarios.sumo_net.lanes_reached import lanes_reached
+from scenarios.sumo_net.net_xml import NetFile, NetLane
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import DEMAND, scenario_stream
@@ -411,6 +418,32 @@ class SumoWorld:
             vehicle.remove(vid)
         return removed
 
+    def _clear_lane(self, net: NetFile, lane: NetLane, back_m: float, front_m: float
+                    ) -> None:
+        """Take the traffic off where a body appears on ``lane`` (lane positions
+        ``back_m`` to ``front_m``) and off the :data:`OBSTACLE_ZONE_BEHIND_M` before it,
+        on that lane and on the junction's lanes and lanes leading into it: cars too
+        close to stop for it (else SUMO holds the body back until they have passed,
+        through it)."""
+        vehicle = self._sumo.vehicle
+        # each lane's end is this far before the body's back
+        before = {lane.id: back_m - lane.sumo_length_m}
+        for from_id, turns in net.turns.items():
+            for turn in turns:
+                if turn.to == lane.id:
+                    gap_m = back_m
+                    for k in (*reversed(turn.via), from_id):
+                        before[k] = gap_m
+                        gap_m += net.lanes[k].sumo_length_m
+        for lane_id, gap_m in before.items():
+            length_m = net.lanes[lane_id].sumo_length_m
+            for vid in self._sumo.lane.getLastStepVehicleIDs(lane_id):
+                to_back_m = length_m - vehicle.getLanePosition(vid) + gap_m
+                behind_front_m = to_back_m + (front_m - back_m) + vehicle.getLength(vid)
+                if (self.is_traffic(vid) and to_back_m < OBSTACLE_ZONE_BEHIND_M
+                        and behind_front_m > 0):
+                    vehicle.remove(vid)
+
     def _ego_pose(self, slot: EgoSlot, box: np.ndarray
                   ) -> tuple[tuple[float, float, float], dict[int, tuple[float, float]]]:
         """SUMO's front-bumper x, y and angle for the ego of ``slot`` at ``box``, its
@@ -463,25 +496,39 @@ class SumoWorld:
             self._show_beside(slot)
 
     def _show_beside(self, slot: EgoSlot) -> None:
-        road, vehicle = slot.road, self._sumo.vehicle
+        """Each of ``slot``'s obstacles in the lanes it blocks beside its own: its
+        edge's (``obstacle.<i>.<lane index>``) and other edges' (the opposite lanes of
+        a two-way street: ``obstacle.<i>.<lane id>``, :func:`lanes_reached`)."""
+        road, width_m = slot.road, self._traffic_width_m()
         for i, (obstacle, box) in enumerate(zip(slot.spec.obstacles, slot.obstacle_boxes,
                                                 strict=True)):
             s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
             edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
             own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
-            for step in lanes_blocked(road, box, 0, self._traffic_width_m()):
+            prefix, kind = f"{slot.names.obstacle_prefix}{i}", obstacle.kind
+            for step in lanes_blocked(road, box, 0, width_m):
                 beside = road.net.lanes.get(f"{edge}_{own + step}")
-                if beside is None:  # its front is on an edge without that lane
-                    continue
-                # one number for its departure and its stop: a departure past the
-                # stop (rounded up) is refused
-                pos_m = round(front_m * beside.sumo_length_m / own_length_m, 6)
-                vid = f"{slot.names.obstacle_prefix}{i}.{beside.index}"
-                self._sumo.route.add(vid, [edge])
-                vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
-                            depart="now", departLane=str(beside.index),
-                            departPos=f"{pos_m:.6f}", departSpeed="0")
-                vehicle.setStop(vid, edge, pos=pos_m, laneIndex=beside.index, duration=1e9)
+                if beside is not None:  # else its front is on an edge without that lane
+                    self._stand(f"{prefix}.{beside.index}", kind, beside,
+                                front_m * beside.sumo_length_m / own_length_m, road.net)
+            for lane, pos_m in lanes_reached(road.net, box, edge, width_m):
+                self._stand(f"{prefix}.{lane.id}", kind, lane, pos_m, road.net)
+
+    def _stand(self, vid: str, kind: str, lane: NetLane, pos_m: float, net: NetFile
+               ) -> None:
+        """A vehicle of obstacle ``kind`` stopped for good on ``lane`` of ``net``, its
+        front at ``pos_m``, the traffic too close to stop for it taken off."""
+        # one number for its departure and its stop: a departure rounded past its
+        # stop is refused
+        pos_m = round(pos_m, 6)
+        self._clear_lane(net, lane, pos_m - self._sumo.vehicletype.getLength(
+            f"{OBSTACLE_TYPE_PREFIX}{kind}"), pos_m)
+        self._sumo.route.add(vid, [lane.edge])
+        self._sumo.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{kind}",
+                               depart="now", departLane=str(lane.index),
+                               departPos=f"{pos_m:.6f}", departSpeed="0")
+        self._sumo.vehicle.setStop(vid, lane.edge, pos=pos_m, laneIndex=lane.index,
+                                   duration=1e9)
 
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot:
         """Place the ego at ``ego_box``, advance SUMO one step, return the new state
