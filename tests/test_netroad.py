@@ -149,6 +149,27 @@ def test_an_obstacle_on_a_junction_moves_onto_the_next_lane(town):
     assert road.place_s_m(lane_s, 4.5) == lane_s
 
 
+@pytest.mark.parametrize("length_m", [0.6, 4.5, 12.0])
+def test_a_body_stands_whole_on_a_lane_off_the_junctions_at_both_its_ends(town, length_m):
+    """Asked anywhere along the route, a body stands with both its ends on one lane
+    (the town's lanes are long enough), and one moved off a junction stands
+    JUNCTION_CLEARANCE_M off it: SUMO holds stops on lanes only, and never inserted a
+    stopped car reaching back into a junction (SUMO's Braunschweig: its traffic drove
+    through ours)."""
+    from scenarios.sumo_net.route_road import JUNCTION_CLEARANCE_M
+
+    road = network_road(load_spec(GRID_TOWN))
+    for asked_m in np.arange(length_m, road.length_m - length_m, 0.25):
+        s_m = road.place_s_m(float(asked_m), length_m)
+        piece = road.piece_at(s_m)
+        start_m, end_m = piece.start_s_m, piece.start_s_m + piece.length_m
+        assert not piece.lane.internal
+        assert start_m - 1e-9 <= s_m - length_m / 2 < s_m + length_m / 2 <= end_m + 1e-9
+        if s_m != asked_m:
+            gaps_m = (s_m - length_m / 2 - start_m, end_m - s_m - length_m / 2)
+            assert min(gaps_m) == pytest.approx(JUNCTION_CLEARANCE_M), asked_m
+
+
 def test_a_relative_net_file_is_read_from_the_scenario_folder(tmp_path):
     spec = load_spec(GRID_TOWN)
     assert spec.road.net_file == str((CATALOG_DIR / "networks" / "grid-10x10.net.xml").resolve())

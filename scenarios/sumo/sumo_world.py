@@ -690,8 +690,8 @@ class SumoWorld:
         and of its spec's ``obstacles`` (indices) as SUMO's own lanes hold them: each
         (P, 5) boxes laid along its lane in
         :data:`scenarios.scene.lane_bodies.BODY_PIECES` boxes, an obstacle with the vehicles
-        it stands as in lanes beside, a person on foot (no lane holds it) as its own
-        box."""
+        it stands as in lanes beside (no box: SUMO has not inserted it), a person on foot
+        (no lane holds it) as its own box."""
         vehicle = self._sumo.vehicle
         standing = vehicle.getIDList()
         people = frozenset(self._sumo.person.getIDList()) if self.people_subscribed else ()
@@ -709,8 +709,9 @@ class SumoWorld:
             bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
         for i in obstacles:
             own = f"{self._slots[slot_index].names.obstacle_prefix}{i}"
-            bodies.append(np.vstack([laid(vid) for vid in standing
-                                     if vid == own or vid.startswith(own + ".")]))
+            # none where SUMO holds it nowhere (not inserted yet): no alibi for SUMO
+            bodies.append(np.vstack([np.empty((0, 5)), *(
+                laid(vid) for vid in standing if vid == own or vid.startswith(own + "."))]))
         return bodies
 
     def _on_other_levels(self, slot: EgoSlot, nearby: dict) -> frozenset[str]:

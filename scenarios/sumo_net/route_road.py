@@ -329,20 +329,24 @@ class NetworkRoad(RoadGeometry):
 
     def place_s_m(self, s_m: float, length_m: float) -> float:
         """Where a body ``length_m`` long centred at ``s_m`` can stand: moved ahead
-        off a junction onto the next lane, and back off the junction its front would
-        reach into (SUMO holds stops on lanes only, and shows nobody the part of a
-        body in a junction: traffic would wait or cross inside it), its ends
-        :data:`JUNCTION_CLEARANCE_M` off the junction (at its lane's middle on a lane
-        too short for that)."""
+        off a junction onto the next lane, back off the junction its front would
+        reach into, and ahead off the one its back would reach back into (SUMO holds
+        stops on lanes only, shows nobody the part of a body in a junction, and never
+        inserts a stopped vehicle reaching back into one: traffic would wait, cross or
+        drive inside it), its ends :data:`JUNCTION_CLEARANCE_M` off the junction (at its
+        lane's middle on a lane too short for that)."""
         piece, half_m = self.piece_at(s_m), length_m / 2 + JUNCTION_CLEARANCE_M
         if piece.lane.internal:
             following = self._lane_after(s_m)
             if following is None:
                 return s_m
             return following.start_s_m + min(half_m, following.length_m / 2)
-        end_m = piece.start_s_m + piece.length_m
+        start_m, end_m = piece.start_s_m, piece.start_s_m + piece.length_m
         if s_m + length_m / 2 >= end_m and self.piece_at(end_m).lane.internal:
             return end_m - min(half_m, piece.length_m / 2)
+        if (s_m - length_m / 2 <= start_m and start_m > 0
+                and self.piece_at(start_m - 1e-6).lane.internal):
+            return start_m + min(half_m, piece.length_m / 2)
         return s_m
 
     def _lane_after(self, s_m: float) -> RoutePiece | None:
