@@ -6,9 +6,12 @@ its start; the ego from 200 m at 8 m/s under ``examples/straddler.py``, its body
 0.5-0.9 m over its left line (from the right lane) or its right line (from the left
 lane). Each run is judged on its trace with ``boxes_overlap`` (never a gap clamped at
 0): the runs in which a traffic body overlapped the ego, and the least gap of a body
-beside it in the lane it reaches into. Prints one line a width::
+beside it in the lane it reaches into. With ``--three-lanes`` the second family: three
+lanes, the ego in the middle one at 6 m/s reaching over its right line, traffic at
+22 m/s. Prints one line a width::
 
     python benchmarks/straddle_family.py [--widths 2.8,3.0] [--seeds 20] [--workers 2]
+    python benchmarks/straddle_family.py --three-lanes --widths 2.9,3.1
 """
 
 from __future__ import annotations
@@ -32,22 +35,29 @@ from sdc.run.episode import run_episode
 STRADDLER = Path(__file__).resolve().parents[1] / "examples" / "straddler.py"
 
 
-def family_spec(width_m: float, seed: int, reach_m: float, side: int) -> ScenarioSpec:
+def family_spec(width_m: float, seed: int, reach_m: float, side: int,
+                three_lanes: bool = False) -> ScenarioSpec:
+    """A run of the family; ``three_lanes``: the second family (three lanes, the ego
+    in the middle one at 6 m/s reaching over its right line, traffic at 22 m/s)."""
+    lanes, ego_mps, traffic_mps = (3, 6.0, 22.0) if three_lanes else (2, 8.0, 27.0)
     plain = copy.deepcopy(read_toml(CATALOG_DIR / "seed-lesson.toml"))
     plain["scenario"].update(seed=seed, duration_s=60.0, step_s=0.1)
-    plain["road"].update(length_m=1000.0, lanes=2, lane_width_m=width_m, speed_limit_mps=33.33)
-    plain["traffic"] = {"flow_vph_per_lane": 600.0, "speed_mean_mps": 27.0, "speed_dev": 0.1}
+    plain["road"].update(length_m=1000.0, lanes=lanes, lane_width_m=width_m,
+                         speed_limit_mps=33.33)
+    plain["traffic"] = {"flow_vph_per_lane": 600.0, "speed_mean_mps": traffic_mps,
+                        "speed_dev": 0.1}
     plain["obstacles"] = []
-    plain["ego"].update(lane=0 if side > 0 else 1, start_m=200.0, speed_mps=8.0)
+    lane = 1 if three_lanes else (0 if side > 0 else 1)
+    plain["ego"].update(lane=lane, start_m=200.0, speed_mps=ego_mps)
     plain["controller"] = {"name": f"{STRADDLER}:Straddler", "reach_m": reach_m,
-                           "side": side, "speed_mps": 8.0}
+                           "side": side, "speed_mps": ego_mps}
     return ScenarioSpec.from_plain(plain)
 
 
-def one_run(case: tuple[float, int, float, int]) -> dict:
+def one_run(case: tuple[float, int, float, int, bool]) -> dict:
     """One run of the family, judged on its trace."""
-    width_m, seed, reach_m, side = case
-    spec = family_spec(width_m, seed, reach_m, side)
+    width_m, seed, reach_m, side, three_lanes = case
+    spec = family_spec(width_m, seed, reach_m, side, three_lanes)
     episode = run_episode(spec)
     road, model = make_road(spec), VEHICLE_MODELS[spec.vehicle.model]
     line_d_m = road.lane_center_d_m(spec.ego.lane) + side * width_m / 2
@@ -80,8 +90,12 @@ def main() -> None:
                         help="lane widths [m], comma-separated")
     parser.add_argument("--seeds", type=int, default=20, help="runs a width (sides alternate)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--three-lanes", action="store_true",
+                        help="the second family: three lanes, the ego in the middle one at "
+                             "6 m/s reaching over its right line, traffic at 22 m/s")
     args = parser.parse_args()
-    cases = [(float(w), 94665 + k, 0.5 + 0.4 * k / max(1, args.seeds - 1), 1 if k % 2 == 0 else -1)
+    cases = [(float(w), 94665 + k, 0.5 + 0.4 * k / max(1, args.seeds - 1),
+              -1 if args.three_lanes or k % 2 else 1, args.three_lanes)
              for w in args.widths.split(",") for k in range(args.seeds)]
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(one_run, cases))
