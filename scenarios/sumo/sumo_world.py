@@ -451,8 +451,9 @@ class SumoWorld:
         (:func:`~scenarios.scene.traffic_model.inside_lane_m`); and for each lane beside
         it that it blocks (-1 right, +1 left:
         :func:`~scenarios.scene.traffic_model.sides_blocked`) the front-bumper x, y of
-        the body standing in for it there (same angle). Off its road's lanes, the ego
-        as it is and none."""
+        the body standing in for it there (same angle). Its lane is the one its centre
+        is in: its road's, or one beside a network route's (a pass). Off those lanes,
+        the ego as it is and none."""
         x, y, angle_deg = _sumo_pose(box)
         road, model = slot.road, slot.model
         s_m, d_m = road.locate_near(float(box[0]), float(box[1]), slot.s_m)
@@ -461,6 +462,12 @@ class SumoWorld:
         lane = min(max(road.lane_at_d(d_m), 0), road.lanes - 1)
         lane_d_m = road.lane_center_d_m(lane)
         width_m, beside_m = road.lane_widths_m(s_m, lane)
+        side = 1 if d_m > lane_d_m else -1
+        if abs(d_m - lane_d_m) > width_m / 2 and beside_m[side > 0] is not None:
+            # its centre is in the lane beside (only a route's lane has one here: a
+            # built road's lanes are all its road's)
+            lane, lane_d_m = lane + side, lane_d_m + side * (width_m + beside_m[side > 0]) / 2
+            width_m, beside_m = road.lane_widths_m(s_m, lane)
         if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
             return (x, y, angle_deg), {}
         lo_m, hi_m = across_m(box, heading, d_m)

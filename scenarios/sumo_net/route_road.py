@@ -366,15 +366,16 @@ class NetworkRoad(RoadGeometry):
 
     def lane_widths_m(self, s_m: float, lane: int) -> tuple[float, tuple[float | None,
                                                                      float | None]]:
-        """The width of the route's lane at ``s_m`` and of its edge's lanes on its
+        """The width at ``s_m`` of the route's lane (``lane`` 0), or of its edge's lane
+        ``lane`` places left of it (negative: right), and of that edge's lanes on its
         right and left (None: the edge has none there) [m]."""
         own = self.piece_at(s_m).lane
 
-        def beside(step: int) -> float | None:
+        def width(step: int) -> float | None:
             other = self.net.lanes.get(f"{own.edge}_{own.index + step}")
             return None if other is None else other.width_m
 
-        return own.width_m, (beside(-1), beside(1))
+        return width(lane), (width(lane - 1), width(lane + 1))
 
     def route_edges(self, s_m: float) -> list[str]:
         """The route's SUMO edges from the lane at ``s_m`` on (junctions aside)."""
