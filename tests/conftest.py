@@ -38,10 +38,17 @@ def lesson_plain() -> dict:
 
 @pytest.fixture(scope="session", autouse=True)
 def temporary_cache(tmp_path_factory):
-    """The whole session caches in a temporary directory (each xdist worker its own),
-    and so do the processes its tests start: they inherit ``SDC_CACHE_DIR``."""
+    """The whole session caches in a temporary directory, one for all its xdist
+    workers (what one builds or warms up, the other finds: the cache writes each file
+    whole under its final name), and so do the processes its tests start: they inherit
+    ``SDC_CACHE_DIR``. A test that needs an empty cache gives itself one."""
     before = os.environ.get("SDC_CACHE_DIR")
-    os.environ["SDC_CACHE_DIR"] = str(tmp_path_factory.mktemp("sdc-cache"))
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # the session's folder, beside the workers'
+        shared = tmp_path_factory.getbasetemp().parent / "sdc-cache"
+        shared.mkdir(exist_ok=True)
+        os.environ["SDC_CACHE_DIR"] = str(shared)
+    else:
+        os.environ["SDC_CACHE_DIR"] = str(tmp_path_factory.mktemp("sdc-cache"))
     yield
     if before is None:
         del os.environ["SDC_CACHE_DIR"]
