@@ -96,11 +96,18 @@ def inside_lane_m(centre_m: float, lane_d_m: float, lane_width_m: float,
     return min(max(centre_m, lane_d_m - inside_m), lane_d_m + inside_m)
 
 
+def beside_centre_m(side: int, lane_d_m: float, lane_width_m: float,
+                    beside_width_m: float) -> float:
+    """The centre of the lane on the ``side`` (-1 right, +1 left) of the lane centred at
+    ``lane_d_m``, that lane ``beside_width_m`` wide [m, across the road]."""
+    return lane_d_m + side * (lane_width_m + beside_width_m) / 2
+
+
 def stand_in_lateral_m(side: int, lane_d_m: float, lane_width_m: float, beside_width_m: float,
                        body_width_m: float) -> float:
     """Where the body standing in for a body in the lane centred at ``lane_d_m`` is
     shown in the lane on its ``side`` (-1 right, +1 left; that lane ``beside_width_m``
     wide): inside that lane, as near the shared line as it fits [m, across the road]."""
-    beside_d_m = lane_d_m + side * (lane_width_m + beside_width_m) / 2
-    return inside_lane_m(lane_d_m + side * lane_width_m / 2, beside_d_m, beside_width_m,
-                         body_width_m)
+    return inside_lane_m(lane_d_m + side * lane_width_m / 2,
+                         beside_centre_m(side, lane_d_m, lane_width_m, beside_width_m),
+                         beside_width_m, body_width_m)

@@ -33,7 +33,7 @@ from scenarios.scene.snapshot import (
     in_start_zone,
     near_obstacles,
 )
-from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_spec import ObstacleSpec, ScenarioSpec
 from scenarios.spec.shared_worlds import world_fields
 from scenarios.sumo.ego_slot import EgoSlot, others_seen
 from scenarios.sumo.lane_laying import lanes_behind, lay
@@ -466,7 +466,8 @@ class SumoWorld:
         if abs(d_m - lane_d_m) > width_m / 2 and beside_m[side > 0] is not None:
             # its centre is in the lane beside (only a route's lane has one here: a
             # built road's lanes are all its road's)
-            lane, lane_d_m = lane + side, lane_d_m + side * (width_m + beside_m[side > 0]) / 2
+            lane, lane_d_m = lane + side, traffic_model.beside_centre_m(
+                side, lane_d_m, width_m, beside_m[side > 0])
             width_m, beside_m = road.lane_widths_m(s_m, lane)
         if not (abs(d_m - lane_d_m) <= width_m / 2 and 0 <= s_m <= road.length_m):
             return (x, y, angle_deg), {}
@@ -512,26 +513,25 @@ class SumoWorld:
             s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
             edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
             own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
-            prefix, kind = f"{slot.names.obstacle_prefix}{i}", obstacle.kind
+            prefix = f"{slot.names.obstacle_prefix}{i}"
             for step in lanes_blocked(road, box, 0, width_m):
                 beside = road.net.lanes.get(f"{edge}_{own + step}")
                 if beside is not None:  # else its front is on an edge without that lane
-                    self._stand(f"{prefix}.{beside.index}", kind, beside,
+                    self._stand(f"{prefix}.{beside.index}", obstacle, beside,
                                 front_m * beside.sumo_length_m / own_length_m, road.net)
             for lane, pos_m in lanes_reached(road.net, box, edge, width_m):
-                self._stand(f"{prefix}.{lane.id}", kind, lane, pos_m, road.net)
+                self._stand(f"{prefix}.{lane.id}", obstacle, lane, pos_m, road.net)
 
-    def _stand(self, vid: str, kind: str, lane: NetLane, pos_m: float, net: NetFile
-               ) -> None:
-        """A vehicle of obstacle ``kind`` stopped for good on ``lane`` of ``net``, its
+    def _stand(self, vid: str, obstacle: ObstacleSpec, lane: NetLane, pos_m: float,
+               net: NetFile) -> None:
+        """A vehicle of ``obstacle``'s kind stopped for good on ``lane`` of ``net``, its
         front at ``pos_m``, the traffic too close to stop for it taken off."""
         # one number for its departure and its stop: a departure rounded past its
         # stop is refused
         pos_m = round(pos_m, 6)
-        self._clear_lane(net, lane, pos_m - self._sumo.vehicletype.getLength(
-            f"{OBSTACLE_TYPE_PREFIX}{kind}"), pos_m)
+        self._clear_lane(net, lane, pos_m - obstacle.size_m[0], pos_m)
         self._sumo.route.add(vid, [lane.edge])
-        self._sumo.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{kind}",
+        self._sumo.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
                                depart="now", departLane=str(lane.index),
                                departPos=f"{pos_m:.6f}", departSpeed="0")
         self._sumo.vehicle.setStop(vid, lane.edge, pos=pos_m, laneIndex=lane.index,
