@@ -31,6 +31,8 @@ class World(Protocol):
     road: RoadGeometry
     #: the warm state the traffic started from (None: warmed up in the run, or none)
     warm_state_key: str | None
+    #: each light along the route: its program's cycle [s] (filled as the world starts)
+    signal_cycles_s: dict[str, float]
 
     def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...
     def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...

@@ -12,7 +12,7 @@ import pytest
 from test_avoid import FRONT_AHEAD_M, LANE_W, MODEL, STEP_S, FakeRoad, car_at
 
 from scenarios.spec.controller_params import AvoidParams
-from sdc.car.avoid.controller import AVOID_LEFT, AVOID_RIGHT, AvoidController
+from sdc.car.avoid.controller import AVOID_LEFT, AVOID_RIGHT, CRUISE, WAIT, AvoidController
 from sdc.car.avoid.leader_watch import LeaderWatch
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, LanesBeside, StopLine
 from sdc.car.vehicle import Vehicle, VehicleState
@@ -193,9 +193,11 @@ def test_red_is_stopped_for_before_its_line_and_green_goes():
         fronts = [x + FRONT_AHEAD_M for *_, x in rows]
         assert max(fronts) < line_x  # stopped short of it
         assert max(fronts) > line_x - 3 * AvoidParams().stop_margin_m
+        assert rows[-1][1] == WAIT  # the phase says what it does there
     for colour in (GREEN, NO_SIGNAL):
         rows = drive(lambda t: [], 15.0, 12.0, line_at=line(colour))
         assert rows[-1][4] + FRONT_AHEAD_M > line_x + 50.0
+        assert {phase for _, phase, *_ in rows} == {CRUISE}
 
 
 def test_a_red_too_close_to_stop_for_is_crossed_and_a_late_yellow_too():
@@ -214,6 +216,7 @@ def test_what_stands_before_a_red_light_is_a_queue_waited_behind_not_passed():
     rows = drive(lambda t: queue, 30.0, 12.0, line_at=line, lane_watch_s=0.0)
     assert not any(phase in PASSING for _, phase, *_ in rows)
     assert rows[-1][2] == 0.0 and rows[-1][3] == pytest.approx(AvoidParams().wait_gap_m, 0.2)
+    assert rows[-1][1] == WAIT
     green = lambda t, front_x: StopLine(60.0 - front_x, GREEN, False)  # noqa: E731
     rows = drive(lambda t: queue, 30.0, 12.0, line_at=green, lane_watch_s=0.0)
     assert any(phase in PASSING for _, phase, *_ in rows)  # it stands through green: passed

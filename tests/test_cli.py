@@ -54,7 +54,8 @@ def _spec_file(tmp_path, lesson_plain, edit) -> str:
 
 # (how to break the input, the field the message must name)
 BAD = [
-    (lambda p: p["obstacles"][0].update(lane=4), "obstacles[0].lane: 4 >= lanes (3)"),
+    (lambda p: p["obstacles"][0].update(lane=4),
+     "obstacles[0].lane: 4, but the road has lanes 0 to 2 (road.lanes = 3; 0 is the rightmost)"),
     (lambda p: p["ego"].update(start_m=40.0), "ego.start_m"),
     (lambda p: p["obstacles"][0].update(position_m=1000.0), "obstacles[0].position_m"),
     (lambda p: p["road"].update(kind="spiral"), "road.kind"),
@@ -93,6 +94,76 @@ def test_bad_arguments_exit_2_naming_the_option(args, message):
     result = invoke(*args)
     assert result.exit_code == 2
     assert message in result.output
+
+
+SWEEP = str(CATALOG_DIR / "sweeps" / "seed-envelope.toml")
+
+
+@pytest.mark.parametrize("args", [["run", SWEEP], ["settle", SWEEP]])
+def test_a_sweep_file_where_a_scenario_belongs_names_sdc_sweep(args):
+    result = invoke(*args)
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {SWEEP}: this is a sweep file ([sweep]), not a scenario: "
+                             "use `sdc sweep FILE --out DIR`, or run its base scenario "
+                             '(sweep.base = "../seed-lesson.toml")\n')
+
+
+@pytest.mark.parametrize("args", [["sweep", LESSON, "--dry-run"],
+                                  ["search", LESSON, "--out", "o", "--budget", "4"],
+                                  ["estimate", LESSON, "--out", "o"]])
+def test_a_scenario_file_where_a_sweep_belongs_names_sdc_run(args, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke(*args)
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {LESSON}: this is a scenario file, not a sweep: use `sdc "
+                             "run FILE`; to sweep it, write a sweep file whose [sweep] base "
+                             "names it (docs/how-to/sweeps.md)\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_set_changes_one_run_and_its_row_records_the_values():
+    result = invoke("run", LESSON, "--json", "--set", "ego.speed_mps=9",
+                    "--set", "scenario.duration_s=2", "--set", 'scenario.name="short"')
+    assert result.exit_code == 0, result.output
+    row = json.loads(result.output.strip().splitlines()[-1])
+    assert list(row) == [*JSON_COLUMNS, "p.ego.speed_mps", "p.scenario.duration_s",
+                         "p.scenario.name"]
+    # the values as the spec holds them: 9 is a float speed
+    assert (row["p.ego.speed_mps"], row["p.scenario.duration_s"]) == (9.0, 2.0)
+    assert row["p.scenario.name"] == "short" and row["run_id"] == "short-seed-1"
+    assert row["sim_time_s"] <= 2.0 + 0.064 and row["progress_m"] > 2 * 3.74 + 5  # at 9 m/s
+    text = invoke("run", LESSON, "--set", "scenario.duration_s=2", "--set", "road.kind=curve",
+                  "--set", "road.curve_radius_m=-80")
+    assert text.exit_code == 0, text.output
+    assert text.output.splitlines()[1] == (
+        "  set:       scenario.duration_s=2, road.kind=curve, road.curve_radius_m=-80")
+
+
+BAD_SETS = [
+    ("ego.sped_mps=9", "--set ego.sped_mps=9: unknown key (known: lane, speed_mps, start_m)"),
+    ("ego.speed_mps=-1", "--set ego.speed_mps=-1: must be >= 0, got -1.0"),
+    ("ego.speed_mps=fast", "--set ego.speed_mps=fast: must be a number, got 'fast'"),
+    ("ego.speed_mps.max=9", "--set ego.speed_mps.max=9: ego.speed_mps is not a table"),
+    ("obstacles[3].lane=1",
+     "--set obstacles[3].lane=1: obstacles[3] does not exist: the file has 1 [[obstacles]]"),
+    ("weather.rain=1", "--set weather.rain=1: weather: unknown table (known: controller, ego, "
+                       "lidar, obstacles, road, scenario, traffic, vehicle)"),
+    ("ego.speed_mps", "--set ego.speed_mps: expected PATH=VALUE, e.g. ego.speed_mps=9"),
+    ("ego..lane=1", "--set ego..lane=1: bad path segment '' (expected name or name[index])"),
+    # a rule the changed file breaks elsewhere: the file's error, read with the option
+    ("road.kind=curve", f'{LESSON}: road.curve_radius_m: is required for kind "curve" '
+                        "(with --set road.kind=curve)"),
+]
+
+
+@pytest.mark.parametrize(("value", "message"), BAD_SETS, ids=[v for v, _ in BAD_SETS])
+@pytest.mark.parametrize("command", ["run", "settle"])
+def test_a_bad_set_exits_2_naming_it(command, value, message, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = invoke(command, LESSON, "--set", value)
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {message}\n"
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_invalid_toml_exits_2(tmp_path):

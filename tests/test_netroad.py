@@ -240,6 +240,41 @@ def test_a_bad_network_file_is_bad_input_for_run_and_sweep(tmp_path):
         assert "road.net_file" in result.stderr and "not a SUMO network" in result.stderr
 
 
+def test_network_errors_name_the_scenario_file_the_field_and_the_network_as_written(
+        tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from sdc.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "nets").mkdir()
+    (tmp_path / "nets" / "broken.net.xml").write_text("<net><edge")
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('[sweep]\nname = "x"\nbase = "town.toml"\nsamples = 2\n'
+                     '[sweep.params]\n"ego.speed_mps" = { uniform = [3.0, 5.0] }\n')
+    for net, problem in [("nets/missing.net.xml", "no such file: nets/missing.net.xml"),
+                         ("nets/broken.net.xml", "nets/broken.net.xml: the SUMO network is "
+                                                 "not well-formed XML (unclosed token")]:
+        (tmp_path / "town.toml").write_text(
+            GRID_TOWN.read_text().replace("networks/grid-10x10.net.xml", net))
+        ran = CliRunner().invoke(main, ["run", "town.toml"])
+        assert ran.exit_code == 2 and ran.stderr.startswith(
+            f"error: town.toml: road.net_file: {problem}")
+        swept = CliRunner().invoke(main, ["sweep", "sweep.toml", "--dry-run"])
+        assert swept.exit_code == 2 and swept.stderr.startswith(
+            f"error: sweep.toml: sweep.base: town.toml: road.net_file: {problem}")
+
+
+def test_a_lane_off_a_network_route_says_its_lane_is_0():
+    plain = load_spec(GRID_TOWN).to_plain()
+    plain["obstacles"][0]["lane"] = 5
+    with pytest.raises(SpecError) as raised:
+        ScenarioSpec.from_plain(plain)
+    assert str(raised.value) == (
+        'obstacles[0].lane: 5, but a "sumo_net" road is the ego\'s route, one lane: every lane '
+        "index is 0 (a body beside the route: lateral_offset_m, + to the left)")
+
+
 def dead_end_road(tmp_path) -> tuple[dict, object]:
     """A sumo_net road on a network of one straight 200 m two-lane edge: its route
     ends where the network does (SUMO's vehicles leave it there)."""

@@ -310,6 +310,7 @@ def test_the_example_plugins_sweep_file_runs_as_its_docstring_says(tmp_path):
     assert (rows.status == "ok").all()
     braking = rows[rows.controller == "Cautious"]
     assert len(braking) == 10 and (braking.outcome == "stuck").all()
+    assert (braking.stood_for == "obstacle").all()  # the barrel, not a light
     assert not braking.collision.any()
 
     report = subprocess.run([*SDC, "report", str(tmp_path / "out")], capture_output=True,
@@ -321,5 +322,5 @@ def test_the_example_plugins_sweep_file_runs_as_its_docstring_says(tmp_path):
     lines = report.stdout.splitlines()
     table = lines[1:5]  # the verdict table's header and its three rows, ranked
     assert table[0].startswith("controller") and table[-1].startswith("Cautious")
-    assert "Cautious: completed 0.0% [0.0%, 27.8%], stuck 100.0%: not safe to ship, it " \
-           "completes fewer than 50% of its runs" in lines
+    assert "Cautious: completed 0.0% [0.0%, 27.8%], stuck 100.0% (stood for: obstacle 10): " \
+           "not safe to ship, it completes fewer than 50% of its runs" in lines

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 import subprocess
 from pathlib import Path
 
@@ -16,12 +17,15 @@ import numpy as np
 import pytest
 
 from analysis.measures.world_audit import pairs_overlap
+from analysis.report.look_at import what_happened
 from scenarios import CATALOG_DIR
-from scenarios.scene.snapshot import sensing_radius_m
+from scenarios.scene.snapshot import OTHER_EGO, OTHER_OBSTACLE, TRAFFIC, Snapshot, sensing_radius_m
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec, read_toml
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import make_road
+from sdc.car.collision import ROAD_EDGE, VEHICLE, describe
+from sdc.car.geometry_kernels import Contacts
 from sdc.run.episode import Episode, run_episode
 from sdc.run.shared_world import Failed, placed_apart, run_group, run_world
 
@@ -183,6 +187,54 @@ def test_another_runs_barrel_is_a_body_with_its_kind_for_a_class():
     assert "barrel" in run_a.trace.traffic_class[0]
     assert rb["termination"] == "duration" and not rb["collision"]
     assert len(ra["trace_sha256"]) == len(rb["trace_sha256"]) == 64
+
+
+def test_a_collision_with_another_runs_body_is_told_from_one_with_traffic():
+    """A runs into B, who stands in its lane; in a second world C runs into D's barrel;
+    E, alone with flows of traffic and a parked car, runs into it. Each row says whose
+    the body hit was (collision_body: other_ego, other_obstacle, obstacle), collision_with
+    staying what the body is (a vehicle, a vehicle, an obstacle), and the report's words
+    say it too."""
+    a = straight(50.0, speed_mps=10.0, duration_s=8.0)
+    b = straight(100.0, speed_mps=0.0, duration_s=8.0, seed=2)
+    run_a, run_b = episodes(run_world(with_roads([a, b]), ["a", "b"]))
+    for row in (run_a.row, run_b.row):
+        assert (row["collision_with"], row["collision_vclass"]) == ("vehicle", "passenger")
+        assert row["collision_body"] == "other_ego"
+    assert what_happened(run_a.row).startswith("hit another run's ego (passenger) with its front")
+    assert what_happened(run_b.row).startswith(
+        "was hit by another run's ego (passenger) with its rear")
+
+    c = straight(50.0, speed_mps=10.0, duration_s=8.0)
+    d = straight(20.0, lane=1, speed_mps=5.0, duration_s=8.0, seed=2,
+                 obstacles=({"kind": "barrel", "lane": 0, "position_m": 100.0},))
+    run_c, run_d = episodes(run_world(with_roads([c, d]), ["c", "d"]))
+    assert run_c.row["collision_body"] == "other_obstacle"
+    assert run_c.row["collision_vclass"] == "barrel"
+    assert run_d.row["collision_body"] is None and not run_d.row["collision"]
+
+    e = straight(50.0, speed_mps=10.0, duration_s=8.0, flow_vph=600.0,
+                 obstacles=({"kind": "car", "lane": 0, "position_m": 100.0},))
+    alone = run_episode(e, run_id="e").row
+    assert (alone["collision_with"], alone["collision_body"]) == ("obstacle", "obstacle")
+
+
+def test_a_vehicle_hit_is_traffic_unless_the_world_says_it_is_another_runs():
+    """sdc.car.collision.describe: a car touching the ego's side is SUMO's traffic, or
+    another run's ego or obstacle where the snapshot's owners say so; a road edge is no
+    body."""
+    road = make_road(straight(50.0))
+    ego = np.array([100.0, 1.75, 0.0, 4.85, 1.93])
+    car = np.array([[100.0, 3.4, 0.0, 4.5, 1.8]])
+    contacts = Contacts(-1, 0, math.inf)
+    traffic = Snapshot(0.0, car, np.zeros((0, 5)), np.zeros(1), np.array(["passenger"]))
+    assert describe(VEHICLE, ego, 5.0, contacts, traffic, road, 0.0).body == TRAFFIC
+    for owner in (OTHER_EGO, OTHER_OBSTACLE):
+        shared = traffic._replace(traffic_owners=np.array([owner], dtype=object))
+        assert describe(VEHICLE, ego, 5.0, contacts, shared, road, 0.0).body == owner
+    off = np.array([100.0, 8.0, 0.0, 4.85, 1.93])
+    assert describe(ROAD_EDGE, off, 5.0, Contacts(-1, -1, math.inf), traffic, road,
+                    0.0).body is None
 
 
 #: city lane widths and a wide one: the egos are bodies to each other on each

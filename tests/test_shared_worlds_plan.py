@@ -316,6 +316,36 @@ def test_a_sweep_of_shared_worlds_fills_the_world_columns(swept):
 
 
 @pytest.mark.slow
+def test_the_report_says_what_the_shared_worlds_cost_and_how_wide_they_made_the_intervals(
+        swept, tmp_path):
+    """The report of the town sweep: SUMO's steps and the wall time of its simulations
+    against the runs alone, each said measured or estimated, and each controller's
+    design effect; in summary.json the same numbers, measured from the rows: the runs of
+    one simulation each timed the whole of it."""
+    from analysis.report.sweep_report import write_report
+
+    _, reference = swept
+    out = tmp_path / "report"
+    shutil.copytree(reference, out)
+    report = write_report(out)
+    results = pd.read_parquet(out / "results.parquet")
+    sharing = json.loads((out / "summary.json").read_text())["shared_worlds"]
+    assert sharing["steps_alone"] == results.steps.sum()
+    assert sharing["sumo_steps"] < sharing["steps_alone"]  # fewer steps shared
+    for (_, egos), runs in results.groupby(["world_id", "world_egos"]):
+        if egos > 1 and len(runs) == egos:  # one simulation: its runs timed it
+            assert runs.wall_time_s.max() < 1.1 * runs.wall_time_s.min(), runs.wall_time_s
+    text = "\n".join(report.terminal)
+    assert f"SUMO stepped {sharing['sumo_steps']:,} steps for the 16 runs (measured" in text
+    assert "had each run a world of its own (estimated: the sum of the runs' steps)" in text
+    assert "s of wall time (measured: a run's wall_time_s is its simulation's)" in text
+    assert "seed's completed rate: design effect" in text
+    assert "lane-keep's completed rate: design effect" in text
+    page = (out / "report.html").read_text()
+    assert "Cost of sharing" in page and "Clustering: runs that share their traffic" in page
+
+
+@pytest.mark.slow
 def test_a_resumed_sweep_of_shared_worlds_is_the_uninterrupted_one(swept, tmp_path):
     path, reference = swept
     out = tmp_path / "resumed"

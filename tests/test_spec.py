@@ -113,6 +113,45 @@ def test_an_obstacle_behind_the_ego_start_is_bad_input_naming_it(lesson_plain):
     assert ScenarioSpec.from_plain(lesson_plain).obstacles[0].position_m == 40.0
 
 
+@pytest.mark.parametrize(("lanes", "which"), [(3, "lanes 0 to 2"), (1, "lane 0 only")])
+def test_a_lane_the_road_lacks_says_which_lanes_it_has(lesson_plain, lanes, which):
+    lesson_plain["road"]["lanes"] = lanes
+    lesson_plain["ego"]["lane"] = 3
+    with pytest.raises(SpecError) as raised:
+        ScenarioSpec.from_plain(lesson_plain)
+    assert str(raised.value) == (f"ego.lane: 3, but the road has {which} (road.lanes = "
+                                 f"{lanes}; 0 is the rightmost)")
+
+
+def test_set_changes_the_file_before_it_is_checked(tmp_path):
+    lesson = CATALOG_DIR / "seed-lesson.toml"
+    spec = load_spec(lesson, ["ego.speed_mps=9", "vehicle.friction_mu=0.5",  # a table added
+                              "road.kind=curve", "road.curve_radius_m=-80",  # a bare word
+                              'obstacles[0].kind="car"', "controller.keep_steer_rad=0.2"])
+    assert (spec.ego.speed_mps, spec.vehicle.friction_mu) == (9.0, 0.5)
+    assert (spec.road.kind, spec.road.curve_radius_m, spec.obstacles[0].kind) == (
+        "curve", -80.0, "car")
+    assert spec.controller.params.keep_steer_rad == 0.2
+    assert load_spec(lesson, ()) == load_spec(lesson)
+    # a file path set is the file's folder's, as in the file
+    (tmp_path / "nets").mkdir()
+    town = tmp_path / "town.toml"
+    town.write_text((CATALOG_DIR / "grid-town.toml").read_text())
+    moved = load_spec(town, ["road.net_file=nets/x.net.xml"])
+    assert moved.road.net_file == str(tmp_path / "nets" / "x.net.xml")
+
+
+@pytest.mark.parametrize(("value", "field"), [("ego.speed_mps=-1", "--set ego.speed_mps=-1"),
+                                              ("ego.spede=1", "--set ego.spede=1"),
+                                              ("lidar.beams=2.5", "--set lidar.beams=2.5")])
+def test_a_bad_set_is_an_option_error_naming_no_file(value, field):
+    from scenarios.common.errors import OptionError
+
+    with pytest.raises(OptionError) as raised:
+        load_spec(CATALOG_DIR / "seed-lesson.toml", [value])
+    assert raised.value.field == field and raised.value.file is None
+
+
 def test_curve_needs_a_radius_and_a_sane_one(lesson_plain):
     lesson_plain["road"]["kind"] = "curve"
     with pytest.raises(SpecError, match=r"^road\.curve_radius_m: is required"):

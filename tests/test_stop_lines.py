@@ -10,13 +10,14 @@ import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec
 from scenarios.scene.road_geometry import RouteStop
+from scenarios.scene.signals import LINK_SIGNALS
 from scenarios.spec.toml_io import read_toml
 from scenarios.sumo.routes_xml import EGO_ID
 from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation, run_episode
-from sdc.run.stop_lines import LINK_SIGNALS, StopLineWatch, stop_line
+from sdc.run.stop_lines import StopLineWatch, stop_line
 
 LIGHT = RouteStop(100.0, "J1", 2, False)
 

@@ -380,6 +380,69 @@ def test_the_resume_hint_repeats_the_options_that_shaped_the_plan(tmp_path):
         "--ray-address", "10.0.0.1:6379", "--run-timeout", "30.0", "--resume"]
 
 
+def test_the_resume_hint_repeats_the_set_options(tmp_path):
+    from sdc.cli.sweep import resume_command
+
+    hint = resume_command(tmp_path / "s.toml", tmp_path / "out", samples=None, traces="failures",
+                          executor="local", workers=2, ray_address=None, run_timeout=None,
+                          batch_runs=None, overrides=("scenario.duration_s=4",
+                                                      "sweep.params.ego.lane={ choice = [1] }"))
+    assert shlex.split(hint)[3:] == [
+        "sweep", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"),
+        "--set", "scenario.duration_s=4", "--set", "sweep.params.ego.lane={ choice = [1] }",
+        "--workers", "2", "--resume"]
+
+
+# two short lane-keep runs: the base's duration and obstacle offset changed by --set
+SET_SWEEP = f"""[sweep]
+name = "set"
+base = "{BASE}"
+sampler = "grid"
+controllers = ["lane-keep"]
+
+[sweep.params]
+"ego.speed_mps" = {{ choice = [3.0, 9.0] }}
+"""
+SETS = ("scenario.duration_s=4", "obstacles[0].lateral_offset_m=0.5")
+
+
+def test_a_sweep_made_with_set_resumes_and_replays_with_its_values(tmp_path):
+    import pyarrow.parquet as pq
+
+    path = write(tmp_path, "set", SET_SWEEP)
+    sets = [word for text in SETS for word in ("--set", text)]
+    out = tmp_path / "out"
+    made = sweep_cli(path, "--out", out, "--workers", "1", "--traces", "all", *sets)
+    assert made.returncode == 0, made.stderr
+    full = comparable(out)
+    assert (full.sim_time_s <= 4.0).all() and len(full) == 2
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["overrides"] == list(SETS)
+    assert manifest["base_scenario"]["scenario"]["duration_s"] == 4.0
+    assert manifest["base_scenario"]["obstacles"][0]["lateral_offset_m"] == 0.5
+    # a sweep killed after its first row: the second run has none
+    results = pq.read_table(out / "results.parquet")
+    pq.write_table(results.slice(0, 1), out / "results.parquet")
+
+    refused = sweep_cli(path, "--out", out, "--workers", "1", "--resume")
+    assert refused.returncode == 2
+    assert ("resume it with the sweep file and options that started it (it was made with "
+            "--set scenario.duration_s=4 --set 'obstacles[0].lateral_offset_m=0.5')"
+            in refused.stderr)
+    resumed = sweep_cli(path, "--out", out, "--workers", "1", "--traces", "all", "--resume",
+                        *sets)
+    assert resumed.returncode == 0, resumed.stderr
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert [s["runs_to_do"] for s in manifest["sessions"]] == [2, 1]
+    assert manifest["overrides"] == list(SETS)
+    pd.testing.assert_frame_equal(comparable(out).sort_values("run_id").reset_index(drop=True),
+                                  full.sort_values("run_id").reset_index(drop=True))
+    replayed = subprocess.run([*SDC, "replay", str(out), "--run", "00001-lane-keep", "--verify"],
+                              capture_output=True, text=True, timeout=300)
+    assert replayed.returncode == 0, replayed.stdout + replayed.stderr
+    assert "identical" in replayed.stdout
+
+
 @pytest.mark.slow
 def test_a_ray_session_the_process_holds_is_used_and_left_running(tmp_path, ray_session):
     import ray

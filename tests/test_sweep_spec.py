@@ -213,6 +213,68 @@ def test_cli_dry_run_prints_the_plan(tmp_path):
     assert all(2.0 <= s <= 4.0 for s in speeds) and not any(math.isnan(s) for s in speeds)
 
 
+def test_set_changes_the_sweep_table_its_parameters_or_its_base(tmp_path):
+    path = write_sweep(tmp_path, 'samples = 3\n[sweep.params]\n'
+                                 '"ego.speed_mps" = { uniform = [2.0, 4.0] }\n')
+    sets = ["sweep.samples=2", "sweep.params.obstacles[0].kind={ choice = ['car'] }",
+            "scenario.duration_s=5", "traffic.speed_dev=0"]
+    sweep = load_sweep(path, sets)
+    assert sweep.overrides == tuple(sets) and sweep.samples == 2
+    assert [p.path for p in sweep.params] == ["ego.speed_mps", "obstacles[0].kind"]
+    assert (sweep.base.scenario.duration_s, sweep.base.traffic.speed_dev) == (5.0, 0.0)
+    plan = expand(sweep)
+    assert len(plan) == 2 and {run.spec.obstacles[0].kind for run in plan} == {"car"}
+    assert {run.spec.scenario.duration_s for run in plan} == {5.0}
+    result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run",
+                                       *[w for s in sets for w in ("--set", s)]])
+    assert result.exit_code == 0, result.output
+    lines = result.output.strip().splitlines()
+    assert "2 samples x 1 controllers = 2 runs" in lines[0]
+    assert lines[1].split() == ["run_id", "seed", "ego.speed_mps", "obstacles[0].kind"]
+    assert [line.split()[3] for line in lines[2:]] == ["car", "car"]
+
+
+@pytest.mark.parametrize(("value", "message"), [
+    ("sweep.sampels=2", "--set sweep.sampels=2: unknown key (known: base, controllers, "
+                        "egos_per_world, levels, name, params, sampler, samples, seed, "
+                        "warm_states)"),
+    ("sweep.samples=0", "--set sweep.samples=0: must be > 0, got 0"),
+    ("sweep.params.ego.speed_mps={ uniform = [5.0, 1.0] }",
+     '--set sweep.params.ego.speed_mps={ uniform = [5.0, 1.0] }: sweep.params."ego.speed_mps"'
+     ".uniform: inverted range: 5.0 >= 1.0"),
+    ("ego.sped_mps=9", "--set ego.sped_mps=9: unknown key (known: lane, speed_mps, start_m)"),
+    ("ego.speed_mps=9", "--set ego.speed_mps=9: the sweep's plan sets ego.speed_mps: it is "
+                        "swept; set its distribution instead, e.g. --set "
+                        "'sweep.params.ego.speed_mps={ choice = [9] }'"),
+    ("scenario.seed=3", "--set scenario.seed=3: the sweep's plan sets scenario.seed: each "
+                        "sample's seed is drawn from sweep.seed"),
+    ("controller.name=avoid", "--set controller.name=avoid: the sweep's plan sets "
+                              "controller.name: the runs' controllers are sweep.controllers"),
+])
+@pytest.mark.parametrize("command", ["sweep", "search", "estimate"])
+def test_a_bad_set_of_a_sweep_exits_2_naming_it(tmp_path, monkeypatch, command, value, message):
+    monkeypatch.chdir(tmp_path)
+    path = write_sweep(tmp_path, 'samples = 3\n[sweep.params]\n'
+                                 '"ego.speed_mps" = { uniform = [2.0, 4.0] }\n')
+    result = CliRunner().invoke(main, [command, str(path), "--out", "out", "--budget", "4",
+                                       "--set", value] if command == "search" else
+                                [command, str(path), "--out", "out", "--set", value])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {message}\n"
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_base_error_a_set_brings_names_the_sweep_its_base_and_the_set(tmp_path):
+    path = write_sweep(tmp_path, "samples = 3\n")
+    result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run",
+                                       "--set", "ego.start_m=100", "--set", "sweep.samples=2"])
+    assert result.exit_code == 2
+    assert result.stderr == (
+        f"error: {path}: sweep.base: {BASE}: obstacles[0].position_m: 40.0 puts the barrel "
+        "behind the ego, which starts at ego.start_m = 100.0: the run would never meet it "
+        "(with --set ego.start_m=100)\n")
+
+
 def test_cli_sweep_needs_an_out_dir_and_checks_samples(tmp_path):
     path = write_sweep(tmp_path, "samples = 3\n")
     result = CliRunner().invoke(main, ["sweep", str(path)])

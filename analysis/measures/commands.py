@@ -7,10 +7,13 @@ call from Python."""
 from __future__ import annotations
 
 import os
+import re
 import shlex
 import shutil
 import sys
 from pathlib import Path
+
+from analysis.measures.numbers import time_text
 
 #: the console script pyproject.toml installs
 SCRIPT = "sdc"
@@ -53,3 +56,11 @@ def replay_command(sweep_dir: Path, run_id: str) -> str:
     """The command that re-simulates run ``run_id`` of a sweep directory and compares its
     trace with the recorded one (``sdc replay``)."""
     return sdc_command("replay", sweep_dir, "--run", run_id)
+
+
+def draw_overlap_command(sweep_dir: Path, run_id: str, t_s: float) -> str:
+    """The command that re-simulates run ``run_id`` and draws its step at ``t_s`` (an
+    overlap, marked) to ``<run_id>-<t_s>s.png`` in the working directory."""
+    at = time_text(t_s)
+    png = re.sub(r"[^A-Za-z0-9._-]", "_", f"{run_id}-{at}s.png")
+    return sdc_command("replay", sweep_dir, "--run", run_id, "--out", png, "--at", at)

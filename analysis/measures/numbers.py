@@ -37,3 +37,9 @@ def params_text(row: Mapping[str, Any], columns: list[str]) -> str:
     """A run's swept values, ``name=value`` without the ``p.`` prefix."""
     return ", ".join(f"{column.removeprefix('p.')}={number_text(row[column])}"
                      for column in columns)
+
+
+def time_text(t_s: float) -> str:
+    """A simulated time [s] to the millisecond (a step is whole milliseconds), trailing
+    zeros off: ``12.3``, ``40``; read back by ``--at``, it is the same step."""
+    return f"{t_s:.3f}".rstrip("0").rstrip(".")

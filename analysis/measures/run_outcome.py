@@ -5,8 +5,11 @@
   completes unless it collided).
 - ``collided``: the ego's body touched something.
 - ``stuck``: neither, and it stood still (speed under :data:`STUCK_SPEED_MPS`) for at
-  least :data:`STUCK_HOLD_S` before the run ended.
-- ``unfinished``: neither, and still moving when the run ended.
+  least :data:`STUCK_HOLD_S` before the run ended, but not at a red light, or in the
+  queue before one, for less than the light's cycle
+  (:func:`analysis.measures.stood_for.waited_for_light`).
+- ``unfinished``: neither, and still moving when the run ended, or waiting at a red
+  light for less than its cycle: the run was too short to tell.
 
 Error and timeout rows have no outcome. Over a result table, :func:`collided` and
 :func:`failed_or_collided` are the one home of "which runs failed".
@@ -18,6 +21,8 @@ import math
 
 import numpy as np
 import pandas as pd
+
+from analysis.measures.stood_for import QUEUE, RED_LIGHT, Standing, waited_for_light
 
 #: the statuses a run ends with (as the sweep runner writes them); only ``ok`` has an outcome
 STATUSES = ("ok", "error", "timeout")
@@ -44,6 +49,26 @@ def failed_or_collided(rows: pd.DataFrame) -> pd.Series:
     """Per result row: True when the run did not run ok (error, timeout) or collided;
     missing evidence is never safety."""
     return (rows.status != "ok") | collided(rows)
+
+
+def too_short_at_light(rows: pd.DataFrame) -> pd.Series:
+    """Per result row: True when the run ended waiting at a red light, or in the queue
+    before one, for less than the light's cycle (unfinished: too short to tell)."""
+    if "stood_for_cycle_s" not in rows:  # results from before the column
+        return pd.Series(False, index=rows.index)
+    return ((rows.status == "ok") & (rows.outcome == UNFINISHED)
+            & rows.stood_for.isin([RED_LIGHT, QUEUE]) & rows.stood_for_cycle_s.notna())
+
+
+def duration_to_tell_s(rows: pd.DataFrame) -> float | None:
+    """The shortest run duration [s] by which every run of ``rows`` that ended too
+    short at a light (:func:`too_short_at_light`) would have waited a whole cycle
+    there (where it stood since, plus the cycle), rounded up to 10 s; None: none did."""
+    short = rows[too_short_at_light(rows)]
+    if not len(short):
+        return None
+    need_s = (short.sim_time_s - short.stood_at_end_s + short.stood_for_cycle_s).max()
+    return float(math.ceil(need_s / 10.0) * 10.0)
 
 
 def rest_step(speed_mps: np.ndarray) -> int:
@@ -74,13 +99,16 @@ def passed_every_obstacle(s_m: np.ndarray, ego_length_m: float, obstacle_s_m: np
     return bool(np.all(farthest_m >= need_m))
 
 
-def run_outcome(collided: bool, passed: bool, t_s: np.ndarray, speed_mps: np.ndarray) -> str:
-    """One of :data:`OUTCOMES` (the module's docstring)."""
+def run_outcome(collided: bool, passed: bool, t_s: np.ndarray, speed_mps: np.ndarray,
+                standing: Standing | None = None) -> str:
+    """One of :data:`OUTCOMES` (the module's docstring); ``standing``: what the car
+    stood for at the end (None: nothing known, or it ended moving)."""
     if collided:
         return COLLIDED
     if passed:
         return COMPLETED
-    if still_at_end_s(t_s, speed_mps) >= STUCK_HOLD_S - 1e-9:
+    stood_s = still_at_end_s(t_s, speed_mps)
+    if stood_s >= STUCK_HOLD_S - 1e-9 and not waited_for_light(standing, stood_s):
         return STUCK
     return UNFINISHED
 

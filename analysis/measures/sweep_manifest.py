@@ -121,6 +121,9 @@ class SweepManifest(Record):
 
     sweep: dict | None = None  # the sweep file, plain (SweepSpec.to_plain)
     base_scenario: dict | None = None
+    #: the --set options it was made with (PATH=VALUE, as given; None: none); its sweep
+    #: and base_scenario hold their values, and a resume must give the same
+    overrides: list | None = None
     plan_sha256: str | None = None  # a search's or estimate's: its settings' digest
     runs: int | None = None  # planned
     samples: int | None = None

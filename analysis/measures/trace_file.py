@@ -35,6 +35,11 @@ CLASS_COLUMN = "traffic_class"
 #: list-of-int column: which body each traffic box is of, at steps where a vehicle is
 #: several boxes (laid along its lane's bend); empty where each box is its own
 BODY_COLUMN = "traffic_body"
+#: string column: what every light along the route showed the car's way, one character
+#: per stop line of the road (``road.stops`` in the metadata, in order): SUMO's link
+#: state (r, y, G, g, ...; ``scenarios.scene.signals``), ``-`` where a line has no
+#: light; empty at every step of a route without lights, and in a trace before it
+SIGNAL_COLUMN = "signals"
 METADATA_KEY = b"sdc"
 
 
@@ -46,7 +51,8 @@ class Trace:
     ``traffic_class`` their SUMO vehicle classes (passenger, truck, bus, ...), box by
     box; ``traffic_body`` which body each box is of, at the steps where some vehicle
     is several boxes (other steps, and a trace without the column: none, each box its
-    own)."""
+    own); ``signals`` the lights along the route at each step (:data:`SIGNAL_COLUMN`;
+    empty: none)."""
 
     floats: dict[str, np.ndarray]
     phase: list[str]
@@ -54,6 +60,7 @@ class Trace:
     traffic: list[np.ndarray]
     traffic_class: list[list[str]]
     traffic_body: list[list[int]] = field(default_factory=list)
+    signals: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.phase)
@@ -77,7 +84,15 @@ class Trace:
             h.update(BODY_COLUMN.encode())
             for bodies in self.traffic_body:
                 h.update((" ".join(map(str, bodies)) + "\n").encode())
+        if any(self.signals):  # a route without lights: as before
+            h.update(SIGNAL_COLUMN.encode())
+            h.update("\n".join(self.signals).encode())
         return h.hexdigest()
+
+    def signals_at(self, step: int) -> str:
+        """The lights along the route at ``step`` (:data:`SIGNAL_COLUMN`); empty: none
+        recorded."""
+        return self.signals[step] if step < len(self.signals) else ""
 
     def bodies(self, step: int) -> np.ndarray | None:
         """Which body each traffic box of ``step`` is of, or None: each its own."""
@@ -101,6 +116,7 @@ class Trace:
         columns[CLASS_COLUMN] = pa.array(self.traffic_class, pa.list_(pa.string()))
         columns[BODY_COLUMN] = pa.array(self.traffic_body or [[] for _ in self.phase],
                                         pa.list_(pa.int32()))
+        columns[SIGNAL_COLUMN] = pa.array(self.signals or ["" for _ in self.phase], pa.string())
         table = pa.table(columns)
         return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
 
@@ -143,7 +159,8 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
     is not one of this sdc version is a :class:`FileError`."""
     path = Path(path)
     table = read_parquet(path, "the trace", schema=TRACE_SCHEMA, optional=pa.schema(
-        [(CLASS_COLUMN, pa.list_(pa.string())), (BODY_COLUMN, pa.list_(pa.int32()))]))
+        [(CLASS_COLUMN, pa.list_(pa.string())), (BODY_COLUMN, pa.list_(pa.int32())),
+         (SIGNAL_COLUMN, pa.string())]))
     metadata = _metadata(table, path)
     floats = {name: table.column(name).to_numpy() for name in FLOAT_COLUMNS}
     lists = {name: [np.asarray(r, np.float32) for r in table.column(name).to_pylist()]
@@ -154,5 +171,7 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
         classes = [["passenger"] * (len(row) // 5) for row in lists["traffic"]]
     bodies = (table.column(BODY_COLUMN).to_pylist() if BODY_COLUMN in table.column_names
               else [])
+    signals = (table.column(SIGNAL_COLUMN).to_pylist() if SIGNAL_COLUMN in table.column_names
+               else [])
     return Trace(floats, table.column("phase").to_pylist(), **lists,
-                 traffic_class=classes, traffic_body=bodies), metadata
+                 traffic_class=classes, traffic_body=bodies, signals=signals), metadata

@@ -29,17 +29,34 @@ def _axes(yaw_rad: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], axis=-2)
 
 
-def pairs_overlap(a: np.ndarray, b: np.ndarray, tolerance_m: float = OVERLAP_TOLERANCE_M
-                  ) -> np.ndarray:
-    """(M,) bool: does box ``a[k]`` overlap box ``b[k]`` by more than ``tolerance_m``
-    along every separating axis (the separating-axis theorem, 4 axes a pair)?"""
+def _shadows_m(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """On each of the 4 axes of the separating-axis test (the two boxes' length and
+    width axes), for each pair ``a[k]``, ``b[k]``: the distance between the centres'
+    shadows and the sum of the two boxes' half shadows, each (M, 4) [m]."""
     a, b = as_boxes(a), as_boxes(b)
     axes_a, axes_b = _axes(a[:, 2]), _axes(b[:, 2])
     test = np.concatenate([axes_a, axes_b], axis=1)  # (M, 4, 2)
     radius_a = np.einsum("mak,mk->ma", np.abs(test @ axes_a.transpose(0, 2, 1)), a[:, 3:5] / 2)
     radius_b = np.einsum("mak,mk->ma", np.abs(test @ axes_b.transpose(0, 2, 1)), b[:, 3:5] / 2)
     gap = np.abs(np.einsum("mad,md->ma", test, b[:, :2] - a[:, :2]))
-    return np.all(gap < radius_a + radius_b - tolerance_m, axis=1)
+    return gap, radius_a + radius_b
+
+
+def pairs_overlap(a: np.ndarray, b: np.ndarray, tolerance_m: float = OVERLAP_TOLERANCE_M
+                  ) -> np.ndarray:
+    """(M,) bool: does box ``a[k]`` overlap box ``b[k]`` by more than ``tolerance_m``
+    along every separating axis (the separating-axis theorem, 4 axes a pair)?"""
+    gap, reach = _shadows_m(a, b)
+    return np.all(gap < reach - tolerance_m, axis=1)
+
+
+def overlap_depth_m(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(M,) how deep box ``a[k]`` and box ``b[k]`` are inside each other: the least
+    overlap of their shadows over the 4 axes of :func:`pairs_overlap`, which for two
+    rectangles is the shortest distance one must move to part them (their penetration
+    depth) [m]; negative: apart."""
+    gap, reach = _shadows_m(a, b)
+    return np.min(reach - gap, axis=1)
 
 
 def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray,
@@ -65,7 +82,7 @@ def _overlapping_pairs(bodies: np.ndarray, traffic: int, people: np.ndarray,
 _PAIRS_PER_PASS = 1 << 20
 
 
-def _owners(count: int, bodies, obstacles: int) -> np.ndarray:
+def box_owners(count: int, bodies, obstacles: int) -> np.ndarray:
     """Which body each of ``count`` traffic boxes (``bodies``: their labels, or
     None/empty: each its own) and then ``obstacles`` obstacle boxes is of."""
     own = (np.arange(count) if bodies is None or len(bodies) == 0
@@ -101,7 +118,7 @@ def overlap_steps(traffic_rows: list[np.ndarray], obstacle_boxes: np.ndarray,
             if traffic_classes is not None:
                 people[k, : len(row)] = are_people(traffic_classes[start + k])
             if traffic_bodies:
-                owners[k, : len(row)] = _owners(len(row), traffic_bodies[start + k], 0)
+                owners[k, : len(row)] = box_owners(len(row), traffic_bodies[start + k], 0)
         bodies[:, most:] = obstacles
         people[:, most:] = are_people(obstacle_classes or [None] * len(obstacles))
         steps.append(start + np.unique(_overlapping_pairs(bodies, most, people, owners)[0]))
@@ -125,6 +142,6 @@ def overlapping_pairs(traffic_boxes: np.ndarray, obstacle_boxes: np.ndarray,
     traffic, obstacles = as_boxes(traffic_boxes), as_boxes(obstacle_boxes)
     bodies = np.vstack([traffic, obstacles])[None]
     people = are_people([*traffic_classes, *(obstacle_classes or [None] * len(obstacles))])
-    owners = _owners(len(traffic), traffic_bodies, len(obstacles))
+    owners = box_owners(len(traffic), traffic_bodies, len(obstacles))
     _, i, j = _overlapping_pairs(bodies, len(traffic), people[None], owners[None])
     return list(zip(i.tolist(), j.tolist(), strict=True))

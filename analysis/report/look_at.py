@@ -12,6 +12,8 @@ import pandas as pd
 
 from analysis.measures.numbers import params_text
 from analysis.measures.run_outcome import COLLIDED, STUCK, UNFINISHED, collided
+from analysis.measures.stood_for import stood_for_text
+from analysis.report.sweep_world import OTHER_RUNS_BODIES
 from analysis.stats.verdicts import completed_runs
 
 #: the classes, in the order they are listed
@@ -96,8 +98,8 @@ def ranked_runs(results: pd.DataFrame) -> pd.DataFrame:
 
 def what_happened(row: Mapping[str, Any]) -> str:
     """A run that did not complete, in words: its error; what it hit, with which part,
-    how fast and when; or how long it stood, how far it got and how near it came to an
-    obstacle."""
+    how fast and when; or how long it stood, how far it got and what it stood for
+    (:func:`stood_for_text`; results from before it: how near it came to an obstacle)."""
     if row["status"] != "ok":
         return f"{row['status']}: {row['error']}"
     value = {k: None if pd.isna(v) else v for k, v in row.items() if not isinstance(v, list)}
@@ -110,6 +112,7 @@ def what_happened(row: Mapping[str, Any]) -> str:
     if outcome == COLLIDED or (outcome is None and value["collision"]):
         what = {"obstacle": "the obstacle", "road_edge": "the road edge",
                 "pedestrian": "a pedestrian"}.get(value["collision_with"], "a vehicle")
+        what = OTHER_RUNS_BODIES.get(value.get("collision_body"), what)  # a shared world's
         if value.get("collision_vclass") and value["collision_with"] != "pedestrian":
             what += f" ({value['collision_vclass']})"
         speed = value.get("collision_speed_mps")
@@ -119,10 +122,19 @@ def what_happened(row: Mapping[str, Any]) -> str:
                 + f", {value['collision_time_s']:.1f} s in"
                 + ("; braking alone could have stopped" if value.get("stop_possible") else ""))
     stood = value.get("stood_at_end_s")
+    what = stood_for_text(value)
     if outcome == STUCK:
         return ((f"stood still for the last {stood:.1f} s" if stood is not None
-                 else "stood still at the end") + f"{progress}{nearest}")
+                 else "stood still at the end") + f"{progress}, "
+                + (what or nearest.removeprefix(", ")))
+    if what:  # unfinished, standing
+        cycle = value.get("stood_for_cycle_s")
+        short = (f" (less than its light's {cycle:.0f} s cycle: the run ended too soon)"
+                 if cycle is not None else "")
+        return f"stood still for the last {stood:.1f} s{short}{progress}, {what}"
     return f"still moving when the run ended{progress}{nearest}"
+
+
 
 
 def thumbnail(sweep_dir: Path, run_id: str) -> bytes | None:

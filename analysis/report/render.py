@@ -29,6 +29,7 @@ from analysis.measures.run_outcome import rest_step
 from analysis.measures.trace_file import Trace
 from scenarios.scene.boxes import box_corners
 from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.signals import GREEN, NO_LIGHT, NO_SIGNAL, RED, YELLOW, link_signal
 from scenarios.scene.snapshot import obstacle_boxes
 from scenarios.spec.bodies import are_people
 from scenarios.spec.scenario_spec import ScenarioSpec, beam_angles_rad
@@ -61,6 +62,10 @@ class Scene:
     lane_lines: list[np.ndarray]  # polylines (P, 2): lane separators
     edges: list[np.ndarray]  # the two road edges
     title: str
+    #: the route's stop lines, each a segment across its lane (L, 2, 2), and per step
+    #: what their lights showed the car's way (the trace's signals: a state a line)
+    stop_lines: np.ndarray = dataclasses.field(default_factory=lambda: np.empty((0, 2, 2)))
+    signals: list[str] = dataclasses.field(default_factory=list)
 
 
 def road_lines(road: RoadGeometry, edge_segments=None) -> tuple[list[np.ndarray],
@@ -91,6 +96,27 @@ def standing_people_xy(spec: ScenarioSpec, obstacles: np.ndarray) -> np.ndarray:
     """(Q, 2): where the standing persons among the spec's ``obstacles`` are."""
     return people_xy(obstacles, [o.vehicle_class for o in spec.obstacles]
                      if len(spec.obstacles) == len(obstacles) else [None] * len(obstacles))
+
+
+#: a stop line's colour by what its light shows (SUMO's link state; none: no light)
+SIGNAL_COLORS = {RED: "#d62728", YELLOW: "#ffbf00", GREEN: "#2ca02c", NO_SIGNAL: "#7f7f7f"}
+
+
+def signal_colors(states: str, lines: int) -> list[str]:
+    """Each of ``lines`` stop lines' colour from a step's signals (a line without a
+    recorded state: no light)."""
+    return [SIGNAL_COLORS[link_signal(states[i] if i < len(states) else NO_LIGHT)[0]]
+            for i in range(lines)]
+
+
+def stop_line_segments(road: RoadGeometry, stops: list) -> np.ndarray:
+    """The road's stop lines (its plain ``stops``: ``[s_m, tl, link, give_way]``) as
+    segments across the road (L, 2, 2)."""
+    if not stops:
+        return np.empty((0, 2, 2))
+    s_m = np.array([stop[0] for stop in stops], float)
+    half_m = road.half_width_m
+    return np.stack([road.xy_at(s_m, -half_m), road.xy_at(s_m, half_m)], axis=1)
 
 
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
@@ -125,10 +151,14 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
         central_range_m=np.array([central_range_m(r, spec.controller.detect_beams)
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
+        stop_lines=stop_line_segments(road, plain_road.get("stops", [])),
+        signals=[trace.signals_at(k) for k in range(len(trace))],
         title=(f"{spec.scenario.name}  controller {spec.controller.label}  seed "
                f"{spec.scenario.seed}  ({run.get('outcome') or run.get('termination', '?')}"
                + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
-                  else "") + f"; ended by {run.get('termination', '?')})"),
+                  else "")
+               + (f", stood for {run['stood_for']}" if run.get("stood_for") else "")
+               + f"; ended by {run.get('termination', '?')})"),
     )
 
 
@@ -172,6 +202,8 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
         ax.plot(line[:, 0], line[:, 1], color="0.7", linestyle="--", linewidth=0.8)
     for edge in scene.edges:
         ax.plot(edge[:, 0], edge[:, 1], color="0.2", linewidth=1.5)
+    stop_lines = LineCollection(scene.stop_lines, linewidths=4.0, zorder=2.5)  # over the beams
+    ax.add_collection(stop_lines)
     # the beams under the bodies (a 360-degree lidar fans out all round the ego), what
     # the ego touches over it (a contact shows)
     beams = LineCollection([], linewidths=0.6, zorder=1)
@@ -191,7 +223,10 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
                            Patch(facecolor="tab:red", edgecolor="k", label="obstacle"),
                            Line2D([], [], marker="o", linestyle="", color=PERSON_COLOR,
                                   markeredgecolor="k", label="person"),
-                           Line2D([], [], color=(1.0, 0.5, 0.0), label="lidar return")],
+                           Line2D([], [], color=(1.0, 0.5, 0.0), label="lidar return"),
+                           *([Line2D([], [], color=SIGNAL_COLORS[RED], linewidth=3,
+                                     label="stop line: its light")]
+                             if len(scene.stop_lines) else [])],
                   loc="lower right", fontsize=7, framealpha=0.8)
     label = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=9,
                     family="monospace", bbox={"facecolor": "white", "alpha": 0.8})
@@ -204,6 +239,8 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
         beams.set_segments(segments)
         beams.set_colors(np.where(hit[:, None], [[1.0, 0.5, 0.0, 0.9]], [[0.5, 0.5, 0.5, 0.12]]))
         traffic.set_verts(box_corners(scene.traffic[k]) if len(scene.traffic[k]) else [])
+        if len(scene.stop_lines):
+            stop_lines.set_colors(signal_colors(_signals_at(scene, k), len(scene.stop_lines)))
         people.set_offsets(np.vstack([scene.people[k], scene.standing_people]))
         ego.set_verts(box_corners(scene.ego[k : k + 1]))
         cx, cy, yaw = scene.ego[k, :3]
@@ -222,6 +259,10 @@ def _scene_axes(ax, scene: Scene, zoom: float = 1.0, legend: bool = True):
                        f"v {scene.speed_mps[k]:5.2f} m/s  yaw {math.degrees(yaw):6.1f} deg")
 
     return draw
+
+
+def _signals_at(scene: Scene, k: int) -> str:
+    return scene.signals[k] if k < len(scene.signals) else ""
 
 
 def _figure(**kwargs) -> Figure:
@@ -257,13 +298,43 @@ def step_at(scene: Scene, t_s: float) -> int:
                        len(scene.t_s) - 1))
 
 
+#: how the bodies a frame marks are drawn (overlapping bodies other than the ego): the
+#: colour, and the least width and height of the view around them [m]
+MARK_COLOR, MARK_VIEW_M = "red", 24.0
+
+
+def _mark(ax, marks) -> None:
+    """Outline each ``(box, label)`` of ``marks`` in red with its label, the view on
+    them (the ego may be elsewhere), its aspect kept."""
+    corners = box_corners(np.array([box for box, _ in marks], float))
+    ax.add_collection(PolyCollection(corners, facecolors="none", edgecolors=MARK_COLOR,
+                                     linewidths=2.0, zorder=5))
+    centres = corners.mean(axis=1)
+    for (_, label), points, centre in zip(marks, corners, centres, strict=True):
+        away = np.sign(centre - centres.mean(axis=0) + 1e-9)  # each label on its far side
+        ax.annotate(label, xy=points[np.argmax(points @ away)], xytext=4 * away,
+                    textcoords="offset points", ha="left" if away[0] > 0 else "right",
+                    va="bottom" if away[1] > 0 else "top", color=MARK_COLOR, fontsize=8,
+                    zorder=6, bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
+    lo, hi = corners.reshape(-1, 2).min(axis=0), corners.reshape(-1, 2).max(axis=0)
+    size, mid = np.maximum(hi - lo + MARK_VIEW_M / 2, MARK_VIEW_M), (hi + lo) / 2
+    extent = ax.get_window_extent()
+    size = np.maximum(size, size[::-1] * [extent.width / extent.height,
+                                          extent.height / extent.width])
+    ax.set_xlim(mid[0] - size[0] / 2, mid[0] + size[0] / 2)
+    ax.set_ylim(mid[1] - size[1] / 2, mid[1] + size[1] / 2)
+
+
 def frame_png(scene: Scene, k: int, width_px: int = 800, height_px: int = 420,
-              title: bool = True) -> bytes:
+              title: bool = True, marks=()) -> bytes:
     """Step ``k`` drawn top-down as PNG bytes: road, obstacles, traffic, the ego and its
-    lidar rays, with the time, phase and speed; ``title``: the run's title above."""
+    lidar rays, with the time, phase and speed; ``title``: the run's title above;
+    ``marks``: ``(box, label)`` pairs outlined in red (:func:`_mark`)."""
     fig = _figure(figsize=(width_px / 80, height_px / 80), dpi=80)
     ax = fig.add_axes([0.09, 0.12, 0.89, 0.78 if title else 0.85])
     _scene_axes(ax, scene)(k)
+    if len(marks):
+        _mark(ax, marks)
     if title:
         fig.suptitle(scene.title, fontsize=8)
     buffer = io.BytesIO()
@@ -344,6 +415,7 @@ def html_data(scene: Scene, every: int = 1) -> dict:
         "edges": [_round(edge, 2) for edge in scene.edges],
         "obstacles": _round(scene.obstacles),
         "standingPeople": _round(scene.standing_people, 2),
+        "stopLines": [_round(line, 2) for line in scene.stop_lines],
         "series": {"t": _round(scene.t_s), "speed": _round(scene.speed_mps),
                    "offset": _round(scene.lane_offset_m),
                    "range": _round(np.minimum(scene.central_range_m, 20.0))},
@@ -353,6 +425,7 @@ def html_data(scene: Scene, every: int = 1) -> dict:
             "people": _round(scene.people[k], 2),
             "mount": _round(scene.mount_xy[k]), "ranges": _round(scene.ranges_m[k], 2),
             "view": round(float(scene.view_yaw_rad[k]), 4),
+            "signals": signal_colors(_signals_at(scene, k), len(scene.stop_lines)),
         } for k in steps],
     }
 

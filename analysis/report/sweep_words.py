@@ -11,7 +11,14 @@ from analysis.report.settling_report import settling_lines
 from analysis.report.sweep_summary import SweepSummary
 from analysis.report.sweep_world import plural, world_lines
 from analysis.stats.gate import gate_bounds_line
-from analysis.stats.rates import HIT_ORDER, CollisionRate, Method, PairedTest, SafeEnvelope
+from analysis.stats.rates import (
+    HIT_ORDER,
+    CollisionRate,
+    Method,
+    PairedTest,
+    SafeEnvelope,
+    interval_of,
+)
 from analysis.stats.verdicts import NO_OUTCOME, completes_rarely, percent, verdict_sentence
 
 #: runs sharing fewer distinct warm states than this: a warning that the traffic's
@@ -26,8 +33,10 @@ def summary_world_lines(summary: SweepSummary) -> list[str]:
 
 
 def shares_traffic(summary: SweepSummary) -> bool:
-    """Did any two of the counted runs start from the same warm state?"""
-    return summary.warm_states is not None and summary.warm_states.shared
+    """Did any two of the counted runs share their traffic: start from the same warm
+    state, or run in one shared world?"""
+    return ((summary.warm_states is not None and summary.warm_states.shared)
+            or summary.shared_worlds is not None)
 
 
 DEFF_HEAD = "design effect"
@@ -56,10 +65,10 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     from, that the intervals are widened (each controller's design effect on its
     collision rate), and a WARNING when the warm states are fewer than
     :data:`FEW_WARM_STATES`."""
-    lines = settling_lines(summary.settling) + shared_world_lines(summary.shared_worlds)
-    if not shares_traffic(summary):
-        return lines
+    lines = settling_lines(summary.settling) + shared_world_lines(summary)
     warm = summary.warm_states
+    if warm is None or not warm.shared:
+        return lines
     effects = ", ".join(f"{c} {deff_text(rate.deff)}" for c, rate in summary.by_controller.items())
     lines.append(
         f"Shared traffic: the {warm.runs} runs drew their background traffic from "
@@ -77,8 +86,11 @@ def warm_state_lines(summary: SweepSummary) -> list[str]:
     return lines
 
 
-def shared_world_lines(worlds: dict | None) -> list[str]:
-    """How many worlds the runs shared and how many egos each held (none: [])."""
+def shared_world_lines(summary: SweepSummary) -> list[str]:
+    """How many worlds the runs shared and how many egos each held, what that cost
+    against the runs alone (:func:`sharing_cost_line`), and how much wider it made the
+    intervals (:func:`clustering_line`); none: []."""
+    worlds = summary.shared_worlds
     if worlds is None:
         return []
     fewer = worlds["runs_with_fewer"]
@@ -88,7 +100,64 @@ def shared_world_lines(worlds: dict | None) -> list[str]:
             + (f"; {fewer} of them shared theirs with fewer egos (the placement rule keeps "
                "each ego's sensing radius clear of the others at the start)" if fewer else "")
             + ". A world's runs share its traffic: each world is one cluster in every "
-            "interval, and each ego was a body to the others (column world_egos)."]
+            "interval, and each ego was a body to the others (column world_egos).",
+            sharing_cost_line(worlds), clustering_line(summary)]
+
+
+def _times(ratio: float, more: str, fewer: str) -> str:
+    """``2.4x fewer`` for a ratio of 2.4, ``1.3x more`` for 1 / 1.3."""
+    return f"{ratio:.1f}x {fewer}" if ratio >= 1 else f"{1 / ratio:.1f}x {more}"
+
+
+def sharing_cost_line(worlds: dict) -> str:
+    """What the shared worlds cost in SUMO steps and wall time against the same runs
+    alone, each number said measured or estimated
+    (:func:`analysis.measures.world_sharing.sharing_cost`)."""
+    steps, alone = worlds["sumo_steps"], worlds["steps_alone"]
+    bound = ("" if worlds["sumo_steps_exact"] else "; at most, where a world took several "
+             "simulations of as many egos")
+    text = (f"Cost of sharing: SUMO stepped {steps:,} steps for the {worlds['ok_runs']} runs "
+            f"(measured: each simulation as long as its longest run{bound}) against "
+            f"{alone:,} had each run a world of its own (estimated: the sum of the runs' "
+            f"steps): {_times(alone / steps, 'more', 'fewer') if steps else '-'}; the "
+            f"simulations took {worlds['wall_time_s']:.1f} s of wall time (measured: a run's "
+            "wall_time_s is its simulation's) against ")
+    alone_s = worlds["wall_time_alone_s"]
+    if alone_s is None or not worlds["wall_time_s"]:
+        return text + ("an unknown wall time alone (no run ran in a simulation of its own "
+                       "to time a step by).")
+    ratio = alone_s / worlds["wall_time_s"]
+    return text + (f"about {alone_s:.1f} s alone (estimated: {1000 * alone_s / alone:.2f} ms "
+                   f"a step, the wall time per step of the {worlds['alone_runs']} runs that "
+                   f"ran alone, times every run's steps): "
+                   + _times(ratio, "slower shared", "faster shared")
+                   + (": sharing did not pay here (docs/how-to/shared-worlds.md says when "
+                      "it does not)." if ratio < 1 else "."))
+
+
+def clustering_line(summary: SweepSummary) -> str:
+    """How much wider counting each world (or warm state) as one cluster made each
+    controller's headline interval than were its runs independent: the completed rate's,
+    else (results from before the outcome column) the collision rate's."""
+    parts = []
+    if summary.verdicts is not None:
+        for controller, numbers in summary.verdicts.by_controller.items():
+            done = numbers.completed
+            parts.append((f"{controller}'s completed rate", done.runs, numbers.runs,
+                          done.low, done.high, done.deff, done.n_eff))
+    else:
+        for controller, rate in summary.by_controller.items():
+            parts.append((f"{controller}'s collision rate", rate.collisions, rate.n_ok,
+                          *rate.interval(summary.interval), rate.deff, rate.n_eff))
+    said = []
+    for what, k, n, low, high, deff, n_eff in parts:
+        plain_low, plain_high = interval_of(k, n, summary.interval)
+        said.append(f"{what}: design effect {deff_text(deff)}, its 95% interval "
+                    f"[{percent(low)}, {percent(high)}] as wide as {n_eff:.1f} independent "
+                    f"runs' (were its {n} runs independent: [{percent(plain_low)}, "
+                    f"{percent(plain_high)}])")
+    return ("Clustering: runs that share their traffic count as one cluster, so the "
+            "intervals are wider than independent runs' would be; " + "; ".join(said) + ".")
 
 
 def coverage_lines(summary: SweepSummary) -> list[str]:
@@ -150,8 +219,9 @@ def collision_notes(summary: SweepSummary) -> str:
             "counts as people, whatever else was touched); errors and "
             "timeouts: runs without an outcome, never counted as safe (the gate counts them "
             "as collisions). "
-            + ("Design effect: how much the runs' shared traffic (runs from one warm state) "
-               "widens the interval (1: independent runs). " if shares_traffic(summary) else "")
+            + ("Design effect: how much the runs' shared traffic (runs from one warm state, "
+               "or in one shared world) widens the interval (1: independent runs). "
+               if shares_traffic(summary) else "")
             + "The tables by parameter add failed: the group's errors and timeouts.")
 
 
@@ -271,13 +341,29 @@ def people_lines(summary: SweepSummary) -> list[str]:
             for c, rate in summary.by_controller.items() if rate.people_hit]
 
 
+def too_short_lines(summary: SweepSummary) -> list[str]:
+    """Once, when runs ended waiting at a red light for less than its cycle: that they
+    were too short to tell, and the duration that would tell."""
+    verdicts = summary.verdicts.by_controller.values() if summary.verdicts else []
+    short = sum(numbers.too_short for numbers in verdicts)
+    if not short:
+        return []
+    tell_s = max(n.duration_to_tell_s for n in verdicts if n.duration_to_tell_s is not None)
+    return [f"{plural(short, 'run')} ended waiting at a red light, or in the queue before "
+            "one, for less than the light's cycle: too short to tell whether the car was "
+            f"stuck, they read unfinished. With scenario.duration_s = {tell_s:g} every "
+            "one of them would have waited a whole cycle (a run still standing there then "
+            "is stuck)."]
+
+
 def lead_lines(summary: SweepSummary) -> list[str]:
     """What the report leads with, under the verdict table: a sentence per controller
-    (:func:`verdict_sentence`), the controllers that hit people, and the gate's bounds
-    where it was asked for (its verdict: the command's last line)."""
+    (:func:`verdict_sentence`), runs too short to tell (:func:`too_short_lines`), the
+    controllers that hit people, and the gate's bounds where it was asked for (its
+    verdict: the command's last line)."""
     verdicts = summary.verdicts.by_controller if summary.verdicts else {}
     lines = [*(verdict_sentence(c, numbers) for c, numbers in verdicts.items()),
-             *people_lines(summary)]
+             *too_short_lines(summary), *people_lines(summary)]
     return lines + ([gate_bounds_line(summary.gate)] if summary.gate is not None else [])
 
 

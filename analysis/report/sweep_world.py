@@ -8,10 +8,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.measures.commands import replay_command
+from analysis.measures.commands import draw_overlap_command, replay_command
 from analysis.measures.run_outcome import collided
 from analysis.measures.world_audit import ROLE_TEXT
+from scenarios.scene.snapshot import OTHER_EGO, OTHER_OBSTACLE
 from scenarios.spec.bodies import PEDESTRIAN
+
+#: a body of another run of a shared world, in words (column collision_body)
+OTHER_RUNS_BODIES = {OTHER_EGO: "another run's ego", OTHER_OBSTACLE: "another run's obstacle"}
 
 
 def world_summary(results: pd.DataFrame) -> dict:
@@ -26,13 +30,18 @@ def world_summary(results: pd.DataFrame) -> dict:
     classes = (hits[hits.collision_vclass.notna() & (hits.collision_vclass != PEDESTRIAN)]
                if "collision_vclass" in hits.columns
                else hits.iloc[:0].assign(collision_vclass=None))
+    others = (hits[hits.collision_body.isin(list(OTHER_RUNS_BODIES))]
+              if "collision_body" in hits.columns else hits.iloc[:0])
+    classes = classes.drop(index=others.index, errors="ignore")  # traffic's classes only
     sumo = ok.sumo_overlaps.fillna(0) if "sumo_overlaps" in ok.columns else overlaps * 0
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
             "overlap_steps": int(overlaps.sum()),
             "first_overlap_run": _first_run(ok, overlaps),
+            **_first_overlap(ok, overlaps, "first_overlap"),
             "runs_with_sumo_overlaps": int((sumo > 0).sum()),
             "sumo_overlap_steps": int(sumo.sum()),
             "first_sumo_overlap_run": _first_run(ok, sumo),
+            **_first_overlap(ok, sumo, "first_sumo_overlap"),
             "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
                                                  by_role.collision_part.value_counts().items()}
                                     for role, by_role in rows.groupby("collision_role")}
@@ -40,12 +49,27 @@ def world_summary(results: pd.DataFrame) -> dict:
             "vehicle_classes": {str(c): {str(k): int(n) for k, n in
                                          rows.collision_vclass.value_counts().items()}
                                 for c, rows in classes.groupby("controller", sort=False)},
+            # collisions with another run's ego or obstacle (a shared world)
+            "other_runs": {str(c): {str(k): int(n) for k, n in
+                                    rows.collision_body.value_counts().items()}
+                           for c, rows in others.groupby("controller", sort=False)},
             "red_lights": _red_lights(ok)}
 
 
 def _first_run(ok: pd.DataFrame, steps: pd.Series) -> str | None:
     """The id of the first run with ``steps`` > 0 (None: none)."""
     return str(ok.run_id[steps > 0].iloc[0]) if (steps > 0).any() else None
+
+
+def _first_overlap(ok: pd.DataFrame, steps: pd.Series, column: str) -> dict:
+    """The first run's first overlap (``column``: in words; ``column``_s: its time),
+    where the row names it (sweeps before the column: not at all)."""
+    if column not in ok.columns or not (steps > 0).any():
+        return {}
+    row = ok[steps > 0].iloc[0]
+    if pd.isna(row[column]):
+        return {}
+    return {column: str(row[column]), f"{column}_s": float(row[f"{column}_s"])}
 
 
 def _red_lights(ok: pd.DataFrame) -> dict | None:
@@ -87,7 +111,8 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      f"other than the ego overlapped where SUMO's own lanes hold them apart "
                      f"({world['overlap_steps']} steps in all, column world_overlaps): sdc's "
                      "world made something up, and their verdicts are suspect; see one with "
-                     f"{replay(world.get('first_overlap_run'))} and report it.")
+                     f"{replay(world.get('first_overlap_run'))} and report it."
+                     + _overlap_told(world, "first_overlap", sweep_dir))
     else:
         lines.append("World audit: no two bodies other than the ego overlapped in any run "
                      "where SUMO's own lanes hold them apart (world_overlaps 0).")
@@ -97,7 +122,8 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      f"({world['sumo_overlap_steps']} steps, column sumo_overlaps: vehicles "
                      "waiting on a junction's crossing lanes, bicycles through pedestrians); "
                      "that is SUMO's world as it is, not sdc's coupling, and the ego's verdicts "
-                     f"stand; to see one: {replay(world['first_sumo_overlap_run'])}.")
+                     f"stand; to see one: {replay(world['first_sumo_overlap_run'])}."
+                     + _overlap_told(world, "first_sumo_overlap", sweep_dir))
     for controller, roles in world["collisions"].items():
         parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
                  + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"
@@ -106,6 +132,10 @@ def world_lines(world: dict, traffic_model: str | None = None,
     for controller, classes in world.get("vehicle_classes", {}).items():
         hit = ", ".join(f"{vclass} {n}" for vclass, n in sorted(classes.items()))
         lines.append(f"{controller}'s collisions with vehicles by vehicle class: {hit}.")
+    for controller, bodies in world.get("other_runs", {}).items():
+        hit = ", ".join(f"{OTHER_RUNS_BODIES[body]} {n}" for body, n in sorted(bodies.items()))
+        lines.append(f"{controller}'s collisions with another run's bodies in a shared world "
+                     f"(column collision_body): {hit}.")
     red = world.get("red_lights")
     if red:
         lines.append("Red lights crossed (column red_light_violations: stop lines the front "
@@ -113,6 +143,17 @@ def world_lines(world: dict, traffic_model: str | None = None,
                          f"{c} {v['crossings']} in {v['runs']} of {v['of']} runs"
                          for c, v in red.items()) + ".")
     return lines
+
+
+def _overlap_told(world: dict, column: str, sweep_dir: str | None) -> str:
+    """The first run's first overlap in words and the command that draws it, last on
+    the line so that it copies whole (a sweep before the column: nothing)."""
+    if column not in world:
+        return ""
+    run_id = world[f"{column}_run"]
+    draw = draw_overlap_command(Path(sweep_dir) if sweep_dir else Path("DIR"), run_id,
+                                world[f"{column}_s"])
+    return f" {run_id} overlapped first {world[column]}; draw it: {draw}"
 
 
 def plural(count: int, noun: str) -> str:

@@ -17,7 +17,15 @@ import itertools
 
 import pandas as pd
 
-from analysis.measures.run_outcome import COLLIDED, COMPLETED, OUTCOMES
+from analysis.measures.run_outcome import (
+    COLLIDED,
+    COMPLETED,
+    OUTCOMES,
+    STUCK,
+    UNFINISHED,
+    duration_to_tell_s,
+    too_short_at_light,
+)
 from analysis.stats.rates import (
     Method,
     PairedTest,
@@ -49,20 +57,22 @@ def shared_samples(results: pd.DataFrame) -> pd.Index:
 @dataclasses.dataclass(frozen=True)
 class OutcomeRate:
     """How many runs ended one way, their rate over all the runs and its 95% interval,
-    clustered by warm state (``deff``: its design effect)."""
+    clustered by warm state (``deff``: its design effect; ``n_eff``: the independent
+    runs as wide an interval is worth)."""
 
     runs: int
     rate: float | None  # None without a run
     low: float
     high: float
     deff: float
+    n_eff: float
 
 
 def _rate(flags: pd.Series, rows: pd.DataFrame, method: Method = "wilson") -> OutcomeRate:
     """The :class:`OutcomeRate` of ``flags`` over ``rows`` (interval by ``method``)."""
     (low, high), counts = flag_interval(flags, rows, method)
     k, n = int(flags.sum()), len(rows)
-    return OutcomeRate(k, k / n if n else None, low, high, counts.deff)
+    return OutcomeRate(k, k / n if n else None, low, high, counts.deff, float(counts.n_eff))
 
 
 def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
@@ -83,13 +93,19 @@ class OutcomeSummary:
     runs (what passing the obstacles cost against driving on at the start speed: a run
     that collided or got stuck lost no time, it failed) and the median progress of its
     ok runs; the distinct warm states of its runs (None for results without the
-    column)."""
+    column); what its stuck and unfinished runs that ended standing stood for
+    (``stood_for``: outcome -> what -> runs, most first) and how many of them waited at
+    a red light for less than its cycle (``too_short``), and the run duration that
+    would tell (``duration_to_tell_s``)."""
 
     runs: int
     outcomes: dict[str, OutcomeRate]
     warm_states: int | None
     median_time_lost_s: float | None
     median_progress_m: float | None
+    stood_for: dict[str, dict[str, int]] = dataclasses.field(default_factory=dict)
+    too_short: int = 0
+    duration_to_tell_s: float | None = None
 
     @property
     def completed(self) -> OutcomeRate:
@@ -106,7 +122,23 @@ def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> OutcomeSum
         warm_states=count_warm_states(rows),
         median_time_lost_s=float(time_lost.median()) if len(time_lost) else None,
         median_progress_m=float(ok.progress_m.median()) if len(ok) else None,
+        stood_for=stood_for_counts(ok),
+        too_short=int(too_short_at_light(rows).sum()),
+        duration_to_tell_s=duration_to_tell_s(rows),
     )
+
+
+def stood_for_counts(ok: pd.DataFrame) -> dict[str, dict[str, int]]:
+    """Of ok runs that were stuck or unfinished and ended standing: per outcome, how
+    many stood for what (most first); {} for results without the column."""
+    if "stood_for" not in ok:
+        return {}
+    counts = {}
+    for outcome in (STUCK, UNFINISHED):
+        stood = ok.stood_for[(ok.outcome == outcome) & ok.stood_for.notna()]
+        if len(stood):
+            counts[outcome] = {str(k): int(v) for k, v in stood.value_counts().items()}
+    return counts
 
 
 def outcomes_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> pd.DataFrame:
@@ -170,21 +202,28 @@ def completes_rarely(summary: OutcomeSummary) -> bool:
 def verdict_sentence(controller: str, summary: OutcomeSummary) -> str:
     """A controller's runs in one sentence, led by the share that completed without
     collision and its interval, then every other way its runs ended, then what that
-    says: ``avoid: completed 36.0% [31.9%, 40.3%], collided 6.0%, stuck 58.0%: not
-    safe to ship, it completes fewer than half its runs``. Only a controller that
+    says: ``avoid: completed 36.0% [31.9%, 40.3%], collided 6.0%, stuck 58.0% (stood
+    for: nothing 20, obstacle 9): not safe to ship, it completes fewer than half its
+    runs``. A controller that completes fewer than half only because runs ended waiting
+    at a red light (too short to tell) reads "not judged". Only a controller that
     completes most runs and never collided nor failed reads "no collision", with the
     bound the runs give; nothing reads safe."""
     outcomes, done = summary.outcomes, summary.completed
-    rest = [f"{name} {percent(outcomes[name].rate)}"
+    rest = [f"{name} {percent(outcomes[name].rate)}{_stood_text(summary.stood_for.get(name))}"
             for name in (*OUTCOMES[1:], NO_OUTCOME) if outcomes[name].runs]
     text = ", ".join([f"{controller}: completed {percent(done.rate)} "
                       f"[{percent(done.low)}, {percent(done.high)}]", *rest])
     collided, failed = outcomes[COLLIDED], outcomes[NO_OUTCOME]
-    if completes_rarely(summary):
+    # runs that ended waiting at a light could still complete: the runs were too short
+    could_complete = (done.runs + summary.too_short) / summary.runs if summary.runs else 0.0
+    if completes_rarely(summary) and could_complete < RARELY_COMPLETES:
         why = (f"not safe to ship, it completes fewer than {RARELY_COMPLETES:.0%} of its "
                "runs")
     elif collided.runs:
         why = f"not safe to ship, it collided in {collided.runs} of {summary.runs} runs"
+    elif completes_rarely(summary):
+        why = (f"not judged, {summary.too_short} of its {summary.runs} runs ended waiting at "
+               "a red light for less than its cycle: the runs were too short")
     elif failed.runs:
         why = (f"not judged, {failed.runs} of {summary.runs} runs ended without an outcome "
                "(error or timeout)")
@@ -192,6 +231,13 @@ def verdict_sentence(controller: str, summary: OutcomeSummary) -> str:
         why = (f"no collision in {summary.runs} runs (collided at most "
                f"{percent(collided.high)}, 95%)")
     return f"{text}: {why}"
+
+
+def _stood_text(counts: dict[str, int] | None) -> str:
+    """`` (stood for: red_light 8, nothing 2)``, or nothing."""
+    if not counts:
+        return ""
+    return " (stood for: " + ", ".join(f"{what} {runs}" for what, runs in counts.items()) + ")"
 
 
 def percent(value: float | None) -> str:

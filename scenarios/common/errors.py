@@ -25,6 +25,15 @@ class SpecError(SdcError):
         return self if self.file is not None else SpecError(self.field, self.message, file)
 
 
+class OptionError(SpecError):
+    """A command-line option's value is wrong (``--set ego.sped_mps=9``): the message
+    starts with the option as given, and names no file (the option, not the file it
+    changes, is at fault)."""
+
+    def in_file(self, file: str | Path) -> OptionError:
+        return self
+
+
 class FileError(SpecError):
     """A file that cannot be used: missing, a directory, unreadable, not in its
     format, truncated, or written by another sdc version. The message starts with

@@ -69,6 +69,7 @@ class HighwayWorld:
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry):
         self.spec = spec
         self.road = road
+        self.signal_cycles_s: dict[str, float] = {}  # a highway has no lights
         self._obstacle_boxes = obstacle_boxes(spec, road)
         self._rng = np.random.default_rng(spec.scenario.seed)
         self._radius_m = sensing_radius_m(spec)

@@ -53,6 +53,13 @@ class Snapshot(NamedTuple):
     #: is several boxes (``scenarios.scene.lane_bodies``), all of one body; None: each box
     #: is a body of its own
     traffic_bodies: np.ndarray | None = None
+    #: (N,) whose each traffic box is: :data:`TRAFFIC` (SUMO's), :data:`OTHER_EGO` or
+    #: :data:`OTHER_OBSTACLE` (another run's, in a shared world); None: all SUMO's
+    traffic_owners: np.ndarray | None = None
+
+
+#: whose a traffic box is: SUMO's traffic, or another run's ego or obstacle (a shared world)
+TRAFFIC, OTHER_EGO, OTHER_OBSTACLE = "traffic", "other_ego", "other_obstacle"
 
 
 #: the vehicle class of a car (SUMO's vClass), the only kind highway-env drives

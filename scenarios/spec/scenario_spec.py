@@ -306,6 +306,11 @@ class ControllerSpec:
             {"name": name, **{k: v for k, v in merged.items() if self.takes(name, k)}})
 
 
+#: the tables of a scenario file
+SCENARIO_TABLES = frozenset({"scenario", "road", "ego", "traffic", "obstacles", "lidar",
+                             "vehicle", "controller"})
+
+
 @dataclasses.dataclass(frozen=True)
 class ScenarioSpec:
     scenario: ScenarioMeta
@@ -325,11 +330,17 @@ class ScenarioSpec:
         """Build from the plain mapping of a TOML file; errors name the field path."""
         if not isinstance(data, dict):
             raise SpecError("", "a scenario must be a table")
-        tables = {"scenario", "road", "ego", "traffic", "obstacles", "lidar", "vehicle",
-                  "controller"}
+        if "sweep" in data:
+            sweep = data["sweep"]
+            base = sweep.get("base") if isinstance(sweep, dict) else None
+            raise SpecError("", "this is a sweep file ([sweep]), not a scenario: use `sdc "
+                            "sweep FILE --out DIR`" + (f", or run its base scenario "
+                            f"(sweep.base = {json.dumps(base)})" if isinstance(base, str)
+                            else ""))
         for key in data:
-            if key not in tables:
-                raise SpecError(key, f"unknown table (known: {', '.join(sorted(tables))})")
+            if key not in SCENARIO_TABLES:
+                raise SpecError(key, f"unknown table (known: "
+                                f"{', '.join(sorted(SCENARIO_TABLES))})")
         for key in ("scenario", "road", "ego"):
             if key not in data:
                 raise SpecError(key, "table is required")
@@ -417,8 +428,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
 
     model = VEHICLE_MODELS[spec.vehicle.model]
     ego = spec.ego
-    if ego.lane >= road.lane_count:
-        raise SpecError("ego.lane", f"{ego.lane} >= lanes ({road.lane_count})")
+    _check_lane(road, ego.lane, "ego.lane")
     if ego.start_m - model.length_m / 2 < 0 or ego.start_m + model.length_m / 2 >= road.length_m:
         raise SpecError(
             "ego.start_m",
@@ -429,8 +439,7 @@ def _check_consistency(spec: ScenarioSpec) -> None:
     for i, obstacle in enumerate(spec.obstacles):
         path = f"obstacles[{i}]"
         length_m, width_m = obstacle.size_m
-        if obstacle.lane >= road.lane_count:
-            raise SpecError(f"{path}.lane", f"{obstacle.lane} >= lanes ({road.lane_count})")
+        _check_lane(road, obstacle.lane, f"{path}.lane")
         if obstacle.position_m + length_m / 2 > road.length_m or obstacle.position_m < length_m / 2:
             raise SpecError(
                 f"{path}.position_m",
@@ -454,6 +463,20 @@ def _check_consistency(spec: ScenarioSpec) -> None:
                 f"{obstacle.position_m} puts the {obstacle.kind} behind the ego, which starts "
                 f"at ego.start_m = {ego.start_m}: the run would never meet it",
             )
+
+
+def _check_lane(road: RoadSpec, lane: int, field: str) -> None:
+    """A lane the road has, or an error saying which it has."""
+    if lane < road.lane_count:
+        return
+    if road.on_network:
+        beside = (" (a body beside the route: lateral_offset_m, + to the left)"
+                  if field.startswith("obstacles") else "")
+        raise SpecError(field, f"{lane}, but a \"{road.kind}\" road is the ego's route, "
+                        f"one lane: every lane index is 0{beside}")
+    lanes = f"lanes 0 to {road.lane_count - 1}" if road.lane_count > 1 else "lane 0 only"
+    raise SpecError(field, f"{lane}, but the road has {lanes} (road.lanes = "
+                    f"{road.lane_count}; 0 is the rightmost)")
 
 
 def _check_speed_factor(spec: ScenarioSpec) -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import types
 import typing
 from collections.abc import Mapping
@@ -101,6 +102,22 @@ class Spec:
 
 def join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
+
+
+_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
+
+
+def parse_path(path: str) -> list[tuple[str, int | None]]:
+    """A field's path as a sweep parameter and ``--set`` address it:
+    ``"obstacles[0].kind"`` -> ``[("obstacles", 0), ("kind", None)]``."""
+    segments = []
+    for part in path.split("."):
+        match = _SEGMENT.match(part)
+        if match is None:
+            raise ValueError(f"bad path segment {part!r} (expected name or name[index])")
+        name, index = match.groups()
+        segments.append((name, None if index is None else int(index)))
+    return segments
 
 
 def build(cls, data: Any, path: str, **nested):

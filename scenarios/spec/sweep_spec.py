@@ -18,16 +18,15 @@ import hashlib
 import itertools
 import json
 import math
-import re
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from statistics import NormalDist
 from typing import Any, Literal
 
 import numpy as np
 
-from scenarios.common.errors import SpecError
+from scenarios.common.errors import OptionError, SpecError
 from scenarios.common.seeding import (
     POINTS_STREAM,
     RUN_SEEDS_STREAM,
@@ -38,9 +37,10 @@ from scenarios.common.seeding import (
 )
 from scenarios.spec.controller_params import CONTROLLER_PARAMS
 from scenarios.spec.controller_ref import controller_label, resolve_file
-from scenarios.spec.scenario_spec import ControllerSpec, ScenarioSpec
+from scenarios.spec.overrides import Override, blame
+from scenarios.spec.scenario_spec import SCENARIO_TABLES, ControllerSpec, ScenarioSpec
 from scenarios.spec.shared_worlds import WorldSeat, group_worlds
-from scenarios.spec.spec_fields import Spec, build, num
+from scenarios.spec.spec_fields import Spec, build, num, parse_path
 from scenarios.spec.toml_io import load_spec, read_toml
 
 #: a swept parameter's result column: p.<path>, e.g. p.ego.speed_mps
@@ -54,19 +54,6 @@ MAX_RUNS = 100_000
 MAX_EGOS_PER_WORLD = 16
 #: how often planning says how far it got [runs]
 PLAN_PROGRESS_RUNS = 1000
-_SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
-
-
-def parse_path(path: str) -> list[tuple[str, int | None]]:
-    """``"obstacles[0].kind"`` -> ``[("obstacles", 0), ("kind", None)]``."""
-    segments = []
-    for part in path.split("."):
-        match = _SEGMENT.match(part)
-        if match is None:
-            raise ValueError(f"bad path segment {part!r} (expected name or name[index])")
-        name, index = match.groups()
-        segments.append((name, None if index is None else int(index)))
-    return segments
 
 
 def _field_names(obj: Any) -> set[str]:
@@ -271,8 +258,19 @@ class SweepSpec:
     #: runs that share one world (scenarios/spec/shared_worlds.py); 1: none share
     egos_per_world: int = 1
 
+    #: the ``--set`` options it was read with (``PATH=VALUE``, as given), its
+    #: manifest's ``overrides``
+    overrides: tuple[str, ...] = ()
+
     @classmethod
-    def from_plain(cls, data: Any, base_dir: Path) -> SweepSpec:
+    def from_plain(cls, data: Any, base_dir: Path,
+                   base_overrides: Sequence[str] = ()) -> SweepSpec:
+        """The sweep in a file's plain ``data``, its base scenario (relative to
+        ``base_dir``) changed by ``base_overrides`` (``toml_io.load_spec``)."""
+        if isinstance(data, dict) and "sweep" not in data and SCENARIO_TABLES & set(data):
+            raise SpecError("", "this is a scenario file, not a sweep: use `sdc run FILE`; "
+                            "to sweep it, write a sweep file whose [sweep] base names it "
+                            "(docs/how-to/sweeps.md)")
         if not isinstance(data, dict) or set(data) != {"sweep"}:
             extra = sorted(set(data) - {"sweep"}) if isinstance(data, dict) else []
             raise SpecError(extra[0] if extra else "sweep",
@@ -304,9 +302,9 @@ class SweepSpec:
         except (OSError, ValueError, RuntimeError) as e:  # a NUL byte, a symlink loop
             raise SpecError("sweep.base", f"is not a usable path ({e})") from None
         try:
-            base = load_spec(base_path)
-        except SpecError as e:  # names the base file
-            raise SpecError("sweep.base", str(e)) from None
+            base = load_spec(base_path, base_overrides)
+        except SpecError as e:
+            raise base_error(e, meta.base) from None
         parsed = []
         for path, dist in params.items():
             field = f'sweep.params."{path}"'
@@ -390,6 +388,16 @@ class SweepSpec:
         return {"sweep": table}
 
 
+def base_error(error: SpecError, base: str) -> SpecError:
+    """An error of the base scenario as the sweep file shows it: under ``sweep.base``,
+    the base file as the sweep names it (``base``), then the field (an option's error
+    is left as it is)."""
+    if isinstance(error, OptionError):
+        return error
+    text = f"{error.field}: {error.message}" if error.field else error.message
+    return SpecError("sweep.base", f"{base}: {text}")
+
+
 def check_runs(field: str, what: str, samples: int, controllers: int, fewer: str) -> None:
     """Refuse a sweep of more than :data:`MAX_RUNS` runs, before anything is planned,
     saying why and what to do instead."""
@@ -432,13 +440,45 @@ def warm_seeds(sweep: SweepSpec) -> list[int] | None:
     return draw_seeds(warm_rng(sweep.seed), sweep.warm_states)
 
 
-def load_sweep(path: str | Path) -> SweepSpec:
-    """The sweep in a TOML file; every error names the file."""
+def load_sweep(path: str | Path, overrides: Sequence[str] = ()) -> SweepSpec:
+    """The sweep in a TOML file, changed by ``overrides`` (``PATH=VALUE``): a path
+    under ``sweep.`` changes the sweep file's own table, any other its base scenario
+    (``scenarios/spec/overrides.py``). Every error names the file, or the override
+    it is about."""
     data = read_toml(path, "the sweep file")
+    parsed = [Override.parse(text) for text in overrides]
+    own = [o for o in parsed if o.table == "sweep"]
+    base = [o for o in parsed if o.table != "sweep"]
     try:
-        return SweepSpec.from_plain(data, Path(path).resolve().parent)
-    except SpecError as e:
-        raise e.in_file(path) from None
+        for override in own:
+            override.apply(data)
+        sweep = SweepSpec.from_plain(data, Path(path).resolve().parent, [o.text for o in base])
+    except SpecError as e:  # the base's errors name the overrides they were read with
+        of_base = e.field == "sweep.base"
+        raise blame(e, [o for o in parsed if not of_base or o.path == "sweep.base"],
+                    path) from None
+    _check_base_overrides(sweep, base)
+    return dataclasses.replace(sweep, overrides=tuple(overrides))
+
+
+#: base scenario fields a sweep's plan sets itself, and where to change them instead
+_PLANNED = {"scenario.seed": "each sample's seed is drawn from sweep.seed",
+            "controller.name": "the runs' controllers are sweep.controllers"}
+
+
+def _check_base_overrides(sweep: SweepSpec, overrides: list[Override]) -> None:
+    """Refuse an override of a base field the plan sets itself (it would be lost),
+    saying where to change it."""
+    for override in overrides:
+        why = _PLANNED.get(override.path)
+        if override.path in sweep.param_types:
+            value = override.text.partition("=")[2].strip()
+            why = (f"it is swept; set its distribution instead, e.g. --set "
+                   f"'sweep.params.{override.path}={{ choice = [{value}] }}'")
+        elif override.path == "traffic.warm_seed" and sweep.warm_states is not None:
+            why = "the warm-ups' seeds are drawn from sweep.seed (sweep.warm_states)"
+        if why is not None:
+            raise override.error(f"the sweep's plan sets {override.path}: {why}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
 import tomllib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from scenarios.common.errors import FileError, SpecError
 from scenarios.common.file_read import read_text
 from scenarios.spec.controller_ref import resolve_file
+from scenarios.spec.overrides import apply_overrides, blame
 from scenarios.spec.scenario_spec import SUMO_HOME_PREFIX, ScenarioMeta, ScenarioSpec
 from scenarios.spec.spec_fields import build
 
@@ -30,20 +33,26 @@ def _resolved(path: Path, spec_path: str | Path, field: str) -> str:
         raise SpecError(field, f"is not a usable path ({e})", spec_path) from None
 
 
-def load_spec(path: str | Path) -> ScenarioSpec:
-    """The scenario in a TOML file; a relative ``road.net_file``, ``road.config_file``
-    or controller file is taken from the file's folder (and kept absolute, so the
-    spec runs from anywhere); ``sumo:<path>`` is inside SUMO's installation. On a
-    ``sumo_config`` road without ``scenario.step_s`` the step is the one the
-    configuration asks for (its ``step-length``), where it asks one. Every error
-    names the file."""
+#: the road's fields that name a file, relative to the scenario file's folder
+_FILE_FIELDS = ("net_file", "config_file")
+
+
+def load_spec(path: str | Path, overrides: Sequence[str] = ()) -> ScenarioSpec:
+    """The scenario in a TOML file, changed by ``overrides`` (``PATH=VALUE``, as if
+    the file said so: ``scenarios/spec/overrides.py``); a relative ``road.net_file``,
+    ``road.config_file`` or controller file is taken from the file's folder (and kept
+    absolute, so the spec runs from anywhere); ``sumo:<path>`` is inside SUMO's
+    installation. On a ``sumo_config`` road without ``scenario.step_s`` the step is the
+    one the configuration asks for (its ``step-length``), where it asks one. Every
+    error names the file, or the override it is about."""
     data = read_toml(path, "the scenario file")
-    road = data.get("road")
-    for name in ("net_file", "config_file"):
-        value = road.get(name) if isinstance(road, dict) else None
-        if isinstance(value, str) and value and not value.startswith(SUMO_HOME_PREFIX):
-            road[name] = _resolved(Path(path).parent / value, path, f"road.{name}")
+    changes = apply_overrides(data, overrides)
     try:
+        road = data.get("road")
+        for name in _FILE_FIELDS:
+            value = road.get(name) if isinstance(road, dict) else None
+            if isinstance(value, str) and value and not value.startswith(SUMO_HOME_PREFIX):
+                road[name] = _resolved(Path(path).parent / value, path, f"road.{name}")
         _config_step(data)
         controller = data.get("controller")
         if isinstance(controller, dict) and "name" in controller:
@@ -51,7 +60,31 @@ def load_spec(path: str | Path) -> ScenarioSpec:
                                               "controller.name")
         return ScenarioSpec.from_plain(data)
     except SpecError as e:
-        raise e.in_file(path) from None
+        raise blame(e, changes, path) from None
+
+
+def written_path(path: str | Path, folder: str | Path) -> str:
+    """``path`` as a file in ``folder`` names it: relative to the folder, unless its
+    absolute path is shorter (a file far away)."""
+    try:
+        relative = os.path.relpath(path, Path(folder).resolve())
+    except ValueError:  # another drive
+        return str(path)
+    return min(relative, str(path), key=len)
+
+
+def as_written(error: SpecError, spec: ScenarioSpec, path: str | Path) -> SpecError:
+    """``error``, about a file ``spec`` names (its network), as the scenario file ``path``
+    it was loaded from writes it: naming that file and the field, the network's path
+    relative to its folder rather than as :func:`load_spec` resolved it."""
+    named = {value: f"road.{name}" for name in _FILE_FIELDS
+             if (value := getattr(spec.road, name)) and not value.startswith(SUMO_HOME_PREFIX)}
+    field, message = error.field, error.message
+    if error.file is not None:  # a file's own error (the network's: its field names it)
+        field, message = named.get(error.file, field), f"{error.file}: {message}"
+    for value in named:
+        message = message.replace(value, written_path(value, Path(path).parent))
+    return SpecError(field, message, path)
 
 
 def _config_step(data: dict) -> None:

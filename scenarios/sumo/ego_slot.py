@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import obstacle_boxes, sensing_radius_m
+from scenarios.scene.snapshot import OTHER_EGO, OTHER_OBSTACLE, obstacle_boxes, sensing_radius_m
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.routes_xml import EgoNames, ego_names
@@ -56,20 +56,23 @@ class EgoSlot:
 
 
 def others_seen(slot: EgoSlot, slots: list[EgoSlot], with_ids: bool = False
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str] | None]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str] | None]:
     """The bodies of the world's other egos in their runs (each ego's box, then its
     obstacles' boxes) whose centres lie within ``slot``'s sensing radius of its body
-    centre: (N, 5) boxes, (N,) speeds and (N,) vehicle classes, in slot order, and
-    their SUMO ids when asked ``with_ids`` (only the world's audit reads them), else
+    centre: (N, 5) boxes, (N,) speeds, (N,) vehicle classes and (N,) owners
+    (:data:`~scenarios.scene.snapshot.OTHER_EGO` or ``OTHER_OBSTACLE``), in slot order,
+    and their SUMO ids when asked ``with_ids`` (only the world's audit reads them), else
     None."""
     others = [other for other in slots if other is not slot and other.active]
     if not others:
-        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=object), [] if with_ids else None
-    boxes, speeds, classes = [], [], []
+        none = np.zeros(0, dtype=object)
+        return np.zeros((0, 5)), np.zeros(0), none, none, [] if with_ids else None
+    boxes, speeds, classes, owners = [], [], [], []
     for other in others:
         boxes += [other.box[None, :], other.obstacle_boxes]
         speeds += [[other.speed_mps], np.zeros(len(other.obstacle_boxes))]
         classes += [[EGO_CLASS], other.obstacle_classes]
+        owners += [OTHER_EGO, *[OTHER_OBSTACLE] * len(other.obstacle_boxes)]
     all_boxes = np.vstack(boxes)
     d = all_boxes[:, :2] - slot.box[:2]
     near = d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] <= slot.radius_m * slot.radius_m
@@ -78,4 +81,5 @@ def others_seen(slot: EgoSlot, slots: list[EgoSlot], with_ids: bool = False
         every_id = [vid for other in others for vid in other.body_ids]
         ids = [vid for vid, seen in zip(every_id, near, strict=True) if seen]
     return (all_boxes[near], np.concatenate(speeds)[near],
-            np.concatenate(classes).astype(object)[near], ids)
+            np.concatenate(classes).astype(object)[near], np.array(owners, dtype=object)[near],
+            ids)

@@ -29,6 +29,7 @@ from scenarios.scene.lane_bodies import BODY_PIECES, PIECE_TOLERANCE_M, STRETCH_
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import (
     OBSTACLE_ZONE_BEHIND_M,
+    TRAFFIC,
     Snapshot,
     in_start_zone,
     near_obstacles,
@@ -103,18 +104,19 @@ def _with_others(slot: EgoSlot, slots: list[EgoSlot], boxes: np.ndarray, speeds:
                  classes: np.ndarray, bodies: np.ndarray | None, ids: list[str] | None):
     """The traffic ``slot`` reads from SUMO, and after it the other egos and their
     obstacles within its sensing radius, each a body of its own (their SUMO ids added
-    to ``ids``, when kept)."""
-    more_boxes, more_speeds, more_classes, more_ids = others_seen(
+    to ``ids``, when kept); and whose each box is (SUMO's traffic, another run's)."""
+    more_boxes, more_speeds, more_classes, more_owners, more_ids = others_seen(
         slot, slots, with_ids=ids is not None)
     if ids is not None:
         ids += more_ids
+    owners = np.concatenate([np.full(len(boxes), TRAFFIC, dtype=object), more_owners])
     if not len(more_boxes):
-        return boxes, speeds, classes, bodies
+        return boxes, speeds, classes, bodies, owners
     if bodies is not None:
         first = int(bodies[-1]) + 1 if len(bodies) else 0
         bodies = np.concatenate([bodies, first + np.arange(len(more_boxes))])
     return (np.vstack([boxes, more_boxes]), np.concatenate([speeds, more_speeds]),
-            np.concatenate([classes, more_classes]), bodies)
+            np.concatenate([classes, more_classes]), bodies, owners)
 
 
 def _sumo_pose(box: np.ndarray) -> tuple[float, float, float]:
@@ -171,6 +173,8 @@ class SumoWorld:
         self._sumo = None
         self._paths: LanePaths | None = None  # the lanes' shapes, read as bodies are laid
         self.warm_state_key: str | None = None  # the key of the warm state it started from
+        #: each light along the egos' routes: its program's cycle as it started [s]
+        self.signal_cycles_s: dict[str, float] = {}
 
     @property
     def people_subscribed(self) -> bool:
@@ -306,6 +310,7 @@ class SumoWorld:
         for tl in sorted({stop.tl for slot in self._slots for stop in slot.road.stops()
                           if stop.tl is not None}):
             sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
+            self.signal_cycles_s[tl] = _cycle_s(sim.trafficlight, tl)
         self._watch_types()
         self._show_obstacles_beside()
         self._push(egos)
@@ -611,8 +616,8 @@ class SumoWorld:
                    in self._sumo.trafficlight.getAllSubscriptionResults().items()}
         t_s = self._sumo.simulation.getTime()
         return {index: Snapshot(t_s, boxes, self._slots[index].obstacle_boxes, speeds, classes,
-                                signals, bodies)
-                for index, (boxes, speeds, classes, bodies) in read.items()}
+                                signals, bodies, owners)
+                for index, (boxes, speeds, classes, bodies, owners) in read.items()}
 
     def _advance(self) -> None:
         """One SUMO step of the warm-up, before the ego enters."""
@@ -636,14 +641,15 @@ class SumoWorld:
                                    departSpeed="0")
 
     def _traffic(self, slot: EgoSlot, taken: frozenset[str] = frozenset()
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None,
+                            np.ndarray | None]:
         """Boxes, speeds and vehicle classes of the vehicles and the persons on foot
         within ``slot``'s sensing radius, its ego and obstacles aside, in SUMO's order,
         then the world's other egos and their obstacles where they are in their runs
         (:func:`scenarios.sumo.ego_slot.others_seen`; SUMO's copies of them aside); each one's
         size and class its type's, a person's class ``pedestrian``
-        (:mod:`scenarios.sumo.vehicle_types`); and which body each box is of (None: each
-        its own).
+        (:mod:`scenarios.sumo.vehicle_types`); which body each box is of (None: each
+        its own); and whose each box is in a shared world (None: a world of one ego).
 
         A vehicle's body is laid along its lane where SUMO holds it (its lane
         position, its lateral offset: :mod:`scenarios.scene.lane_bodies`), in as many boxes
@@ -685,10 +691,9 @@ class SumoWorld:
             self.last_ids[slot.slot] = list(ids) if bodies is None else [ids[b] for b in bodies]
         classes = self._types.names(kinds)
         if len(self._slots) > 1:
-            boxes, speeds, classes, bodies = _with_others(
-                slot, self._slots, boxes, speeds, classes, bodies,
-                self.last_ids[slot.slot] if self.keep_ids else None)
-        return boxes, speeds, classes, bodies
+            return _with_others(slot, self._slots, boxes, speeds, classes, bodies,
+                                self.last_ids[slot.slot] if self.keep_ids else None)
+        return boxes, speeds, classes, bodies, None
 
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles, slot_index: int = 0
                        ) -> list[np.ndarray]:
@@ -784,3 +789,13 @@ class SumoWorld:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _cycle_s(lights, tl: str) -> float:
+    """The cycle of light ``tl``'s running program [s]: its phases' longest durations
+    (an actuated phase's ``maxDur``; a static one's is its duration)."""
+    program = lights.getProgram(tl)
+    logic = next((lg for lg in lights.getAllProgramLogics(tl) if lg.programID == program), None)
+    if logic is None:  # switched off: no cycle to wait for
+        return 0.0
+    return float(sum(max(phase.duration, phase.maxDur) for phase in logic.phases))

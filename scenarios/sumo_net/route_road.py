@@ -424,6 +424,9 @@ class NetworkRoad(RoadGeometry):
             "net_sha256": self.net.sha256,
             "route_lanes": [p.lane.id for p in self.pieces],
             "edge_segments": self.drawn_edge_segments().round(3).tolist(),
+            # the stop lines, in order (the trace's signals have one state per line)
+            "stops": [[round(stop.s_m, 6), stop.tl, stop.link_index, stop.give_way]
+                      for stop in self._stops],
         }
 
 

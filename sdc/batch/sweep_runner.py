@@ -13,6 +13,7 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import json
+import shlex
 import time
 from collections import Counter
 from pathlib import Path
@@ -137,9 +138,12 @@ def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
             raise SdcError(f"--out: {out_dir} already holds a sweep; pass --resume to "
                            "continue it, or choose another directory")
         if manifest.plan_sha256 != digest:
+            made_with = shlex.join(word for text in manifest.overrides or ()
+                                   for word in ("--set", text))
             raise SdcError(f"--resume: {out_dir} holds a different sweep "
                            f"({manifest.sweep_name!r}, another plan); "
-                           "resume it with the sweep file and options that started it")
+                           "resume it with the sweep file and options that started it"
+                           + (f" (it was made with {made_with})" if made_with else ""))
         changes = controller_changes(manifest) + network_file_changes(manifest)
         if changes:
             raise SdcError(f"--resume: {changes[0]}; the sweep would mix two versions of "
@@ -171,6 +175,7 @@ def new_manifest(sweep: SweepSpec, digest: str, runs: int, samples: int,
     return SweepManifest.new(
         sweep=sweep.to_plain(),
         base_scenario=sweep.base.to_plain(),
+        **({"overrides": list(sweep.overrides)} if sweep.overrides else {}),
         plan_sha256=digest,
         runs=runs,
         samples=samples,

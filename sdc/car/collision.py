@@ -13,7 +13,7 @@ import numpy as np
 
 from scenarios.scene.boxes import box_corners
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import Snapshot
+from scenarios.scene.snapshot import TRAFFIC, Snapshot
 from scenarios.spec.bodies import PEDESTRIAN, are_people
 from sdc.car.geometry import boxes_overlap, one_box_corners
 from sdc.car.geometry_kernels import Contacts
@@ -29,13 +29,17 @@ class Collision(NamedTuple):
     part: str  # FRONT, SIDE or REAR: the part of the ego's body that was hit
     role: str  # RAN_INTO or WAS_HIT
     vehicle_class: str | None = None  # a vehicle's SUMO vClass (passenger, truck, ...)
+    #: whose the body hit was: OBSTACLE (the run's own), TRAFFIC (SUMO's), OTHER_EGO or
+    #: OTHER_OBSTACLE (another run's, a shared world: scenarios.scene.snapshot); None: a
+    #: road edge
+    body: str | None = None
 
 
-def person_touched(ego_box: np.ndarray, snapshot: Snapshot,
-                   obstacle_classes: tuple[str | None, ...]) -> tuple[np.ndarray, float] | None:
+def person_touched(ego_box: np.ndarray, snapshot: Snapshot, obstacle_classes: tuple[str | None, ...]
+                   ) -> tuple[np.ndarray, float, str] | None:
     """The box and speed [m/s] of a person the ego's box touches (a standing person
     among the obstacles, whose ``obstacle_classes`` say which, before SUMO's persons),
-    or None."""
+    and whose the person is (:func:`owner`), or None."""
     for boxes, people, speeds in (
             (snapshot.obstacle_boxes, are_people(obstacle_classes), None),
             (snapshot.traffic_boxes, are_people(snapshot.traffic_classes),
@@ -43,8 +47,18 @@ def person_touched(ego_box: np.ndarray, snapshot: Snapshot,
         touched = np.flatnonzero(people)
         touched = touched[boxes_overlap(ego_box, boxes[touched])] if len(touched) else touched
         if len(touched):
-            return boxes[touched[0]], 0.0 if speeds is None else float(speeds[touched[0]])
+            if speeds is None:
+                return boxes[touched[0]], 0.0, OBSTACLE
+            return (boxes[touched[0]], float(speeds[touched[0]]),
+                    owner(snapshot, int(touched[0])))
     return None
+
+
+def owner(snapshot: Snapshot, index: int) -> str:
+    """Whose traffic box ``index`` of ``snapshot`` is: SUMO's traffic, or another run's
+    ego or obstacle in a shared world."""
+    owners = snapshot.traffic_owners
+    return TRAFFIC if owners is None else str(owners[index])
 
 
 def collision_with(ego_box: np.ndarray, contacts: Contacts, road: RoadGeometry,
@@ -111,11 +125,11 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     front or rear one along it, the ego ``ran_into`` it when it closed in on the
     contact faster than the other body did, else it ``was_hit``. Obstacles, road edges,
     standing cars and standing people are always run into. A vehicle's class comes
-    with it (``pedestrian`` for a person)."""
+    with it (``pedestrian`` for a person), and whose the body hit was."""
     ego_box = np.asarray(ego_box, float)
-    vehicle_class = None
+    vehicle_class, body = None, None
     if hit == PEDESTRIAN:
-        other, other_speed_mps = person_touched(ego_box, snapshot, obstacle_classes)
+        other, other_speed_mps, body = person_touched(ego_box, snapshot, obstacle_classes)
         point = contact_point(ego_box, other)
         other_mps = _velocity(float(other[2]), other_speed_mps)
         vehicle_class = PEDESTRIAN
@@ -124,13 +138,14 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
         point, other_mps = corners[road.off_road(corners)].mean(axis=0), np.zeros(2)
     elif hit == OBSTACLE:
         point = contact_point(ego_box, snapshot.obstacle_boxes[contacts.obstacle])
-        other_mps = np.zeros(2)
+        other_mps, body = np.zeros(2), OBSTACLE
     else:
         other = snapshot.traffic_boxes[contacts.vehicle]
         point = contact_point(ego_box, other)
         other_mps = _velocity(float(other[2]),
                               float(snapshot.traffic_speeds_mps[contacts.vehicle]))
         vehicle_class = str(snapshot.traffic_classes[contacts.vehicle])
+        body = owner(snapshot, contacts.vehicle)
     part = hit_part(ego_box, point)
     c, s = math.cos(road_heading_rad), math.sin(road_heading_rad)
     axis = np.array([-s, c]) if part == SIDE else np.array([c, s])
@@ -138,4 +153,4 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     ego_closing = float(_velocity(float(ego_box[2]), ego_speed_mps) @ toward)
     other_closing = float(-other_mps @ toward)
     moved_in = ego_closing > other_closing or not other_mps.any()  # what stands is hit
-    return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT, vehicle_class)
+    return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT, vehicle_class, body)

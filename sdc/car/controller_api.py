@@ -21,15 +21,14 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
+from scenarios.scene.signals import GREEN, NO_SIGNAL, RED, YELLOW
 from scenarios.spec.bodies import VehicleModel
 from sdc.car.sensors import LaneReading
 from sdc.car.vehicle import Command
 
-__all__ = ["Command", "Controller", "Crosswalk", "LaneReading", "LanesBeside", "Observation",
-           "StopLine", "VehicleModel"]
+__all__ = ["GREEN", "NO_SIGNAL", "RED", "YELLOW", "Command", "Controller", "Crosswalk",
+           "LaneReading", "LanesBeside", "Observation", "StopLine", "VehicleModel"]
 
-#: a stop line's signal: its light's colour for the car's way, or none (no light)
-RED, YELLOW, GREEN, NO_SIGNAL = "red", "yellow", "green", "none"
 
 
 class StopLine(NamedTuple):

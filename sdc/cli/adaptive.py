@@ -11,8 +11,8 @@ from scenarios.common.errors import SdcError, SpecError
 from scenarios.spec.controller_ref import resolve_file
 from sdc.cli.common import (
     bad_input,
-    check_controllers,
     check_executor_options,
+    check_sweep_inputs,
     exit_after_runs,
     exit_interrupted,
     make_executor,
@@ -25,14 +25,12 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
                      stop_after: int | None = None):
     """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
     from scenarios.spec.sweep_spec import load_sweep
-    from scenarios.world_backends import check_inputs
     from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 
     check_executor_options(options)
     try:
-        spec = load_sweep(sweep_file)
-        check_inputs(spec.base)
-        check_controllers(spec, sweep_file)
+        spec = load_sweep(sweep_file, options["overrides"])
+        check_sweep_inputs(spec, sweep_file)
         controller = options["controller"]
         if controller is None:
             if len(spec.controllers) > 1:

@@ -8,7 +8,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import NoReturn
 
@@ -16,9 +16,6 @@ import click
 
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.spec.scenario_spec import ScenarioSpec
-
-#: a warm-up's progress off a terminal (a log): a line at most this often [s]
-PROGRESS_EVERY_S = 10.0
 
 EXIT_OK, EXIT_RUN_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -82,16 +79,19 @@ def warm_up_first(spec: ScenarioSpec) -> None:
 
 class WarmUpProgress:
     """SUMO's clock during a warm-up, on stderr: in place on a terminal, else a line
-    every :data:`PROGRESS_EVERY_S` of wall time."""
+    every :data:`~sdc.batch.progress.LINE_EVERY_S` of wall time."""
 
     def __init__(self, end_s: float):
+        from sdc.batch.progress import LINE_EVERY_S
+
         self.end_s, self.shown_at = end_s, -math.inf
         self.terminal = sys.stderr.isatty()
+        self.every_s = 0.2 if self.terminal else LINE_EVERY_S
 
     def __call__(self, t_s: float) -> None:
         now = time.monotonic()
         last = t_s >= self.end_s
-        if now - self.shown_at < (0.2 if self.terminal else PROGRESS_EVERY_S) and not last:
+        if now - self.shown_at < self.every_s and not last:
             return
         self.shown_at = now
         text = f"warm-up: SUMO at {t_s:,.0f} s of {self.end_s:,.0f} s"
@@ -101,7 +101,60 @@ class WarmUpProgress:
             click.echo(text, err=True)
 
 
-def check_controllers(sweep, sweep_file: Path) -> None:
+#: ``--set``'s help: what its paths address in a scenario file, and in a sweep file
+SET_HELP = {
+    "scenario": "Change a field of the scenario file, checked as if the file said so: "
+                "PATH as a sweep parameter's (ego.speed_mps, obstacles[0].lane), VALUE a "
+                "TOML value (9, true, \"curve\"; other text is a string). Repeatable.",
+    "sweep": "Change a field, checked as if the file said so: sweep.KEY of the sweep "
+             "file (sweep.samples=50, sweep.params.ego.speed_mps='{uniform = [2.0, "
+             "9.0]}'), any other PATH of its base scenario (scenario.duration_s=20). VALUE "
+             "a TOML value (other text is a string). Repeatable; recorded in the manifest, "
+             "and --resume needs the same.",
+}
+
+
+def set_option(kind: str):
+    """``--set PATH=VALUE`` (repeatable) of a command reading a ``kind`` file
+    (``scenario`` or ``sweep``): the command's ``overrides``."""
+    return click.option("--set", "overrides", multiple=True, metavar="PATH=VALUE",
+                        help=SET_HELP[kind])
+
+
+def check_spec_inputs(spec: ScenarioSpec, spec_file: Path,
+                      overrides: Sequence[str] = ()) -> None:
+    """Read what a run of ``spec`` reads besides it (a network file), so a bad one is
+    bad input before anything runs, naming ``spec_file`` (which ``spec`` was loaded
+    from, changed by ``overrides``) or the override, the field, and the network as the
+    file writes it."""
+    from scenarios.spec.overrides import Override, blame
+    from scenarios.spec.toml_io import as_written
+    from scenarios.world_backends import check_inputs
+
+    try:
+        check_inputs(spec)
+    except SpecError as e:
+        raise blame(as_written(e, spec, spec_file), [Override.parse(text) for text in overrides],
+                    spec_file) from None
+
+
+def check_sweep_inputs(sweep, sweep_file: Path) -> None:
+    """:func:`check_spec_inputs` of the sweep's base scenario, named as the sweep file
+    names it, and each of its controllers built once: bad input, before any run."""
+    from scenarios.spec.overrides import Override
+    from scenarios.spec.sweep_spec import base_error
+    from scenarios.spec.toml_io import written_path
+
+    base_overrides = [text for text in sweep.overrides if Override.parse(text).table != "sweep"]
+    try:
+        check_spec_inputs(sweep.base, sweep.base_path, base_overrides)
+    except SpecError as e:
+        shown = written_path(sweep.base_path, Path(sweep_file).parent)
+        raise base_error(e, shown).in_file(sweep_file) from None
+    _check_controllers(sweep, sweep_file)
+
+
+def _check_controllers(sweep, sweep_file: Path) -> None:
     """Build each of the sweep's controllers once on its base scenario: one that
     cannot be found or built is bad input, before any run."""
     from sdc.car.controller_plugins import make_controller
@@ -145,6 +198,7 @@ def executor_options(command):
 def adaptive_options(command):
     """The options ``sdc search`` and ``sdc estimate`` add to :func:`executor_options`."""
     return _options(executor_options(command), [
+        set_option("sweep"),
         click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
                      metavar="DIR", required=True, help="Its directory (a sweep directory)."),
         click.option("--resume", is_flag=True,
@@ -178,10 +232,11 @@ def check_executor_options(options: dict) -> None:
 
 
 def make_reporter(options: dict, label: str = "sweep"):
-    """A progress bar labelled ``label``, or none with ``--quiet``."""
-    from sdc.batch.progress import QuietReporter, RichReporter
+    """A progress bar labelled ``label`` (whole lines off a terminal), or none with
+    ``--quiet``."""
+    from sdc.batch.progress import QuietReporter, progress_reporter
 
-    return QuietReporter() if options["quiet"] else RichReporter(label=label)
+    return QuietReporter() if options["quiet"] else progress_reporter(label)
 
 
 def exit_after_runs(counts: dict) -> NoReturn:

@@ -27,7 +27,7 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     """Sweep the catalog's seed-envelope on all cores and write its collision report."""
     from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import RichReporter
+    from sdc.batch.progress import progress_reporter
     from sdc.batch.sweep_runner import run_sweep
 
     try:
@@ -38,7 +38,8 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
             click.echo(f"{out_dir} holds a demo of another plan (another --samples or sdc "
                        "version); starting anew", err=True)
             shutil.rmtree(out_dir)
-        outcome = run_sweep(spec, out_dir, LocalExecutor(workers), RichReporter(), resume=True)
+        outcome = run_sweep(spec, out_dir, LocalExecutor(workers), progress_reporter(),
+                            resume=True)
     except SdcError as e:
         bad_input(str(e))
     if outcome.interrupted:

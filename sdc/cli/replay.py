@@ -26,6 +26,7 @@ def _has_display() -> bool:
 
 
 def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -> None:
+    from analysis.measures.overlap_detail import drawn_overlaps
     from analysis.report.render import (
         animate,
         decisive_step,
@@ -39,8 +40,13 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
     if out.suffix == ".png":
         k = (decisive_step(scene, metadata.get("run", {}).get("outcome")) if at_s is None
              else step_at(scene, at_s))
-        out.write_bytes(frame_png(scene, k))
+        marked = drawn_overlaps(trace, metadata, k)
+        out.write_bytes(frame_png(scene, k, marks=[
+            (box, body.text()) for overlap, boxes in marked
+            for box, body in zip(boxes, (overlap.first, overlap.second), strict=True)]))
         click.echo(f"step {k} (t = {scene.t_s[k]:.3f} s) written to {out}")
+        for overlap, _ in marked:
+            click.echo(f"  marked in red: {overlap.text()}")
         return
     if out.suffix == ".html":
         frames = write_html(scene, out, every)
@@ -115,6 +121,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
                 at_s: float | None = None) -> bool | None:
     """Re-simulate, compare, report and draw; True when the replay is not identical
     (None: a run that failed in the sweep, not shown as far as it went)."""
+    from analysis.measures.commands import draw_overlap_command
     from analysis.measures.trace_file import read_trace
     from sdc.batch.replay_check import load_recorded_run, replay_verdict, version_warnings
     from sdc.run.episode import run_episode
@@ -135,7 +142,8 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
         return _replay_failed_run(recorded, out, every, gui, at_s)
     else:
         episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
-    for line in summary_lines(run_id, episode.row):
+    for line in summary_lines(run_id, episode.row,
+                              lambda t_s: draw_overlap_command(sweep_dir, run_id, t_s)):
         click.echo(line)
     diverged, verdict = replay_verdict(recorded.row, recorded_trace, episode.trace, sweep_dir,
                                        run_id)

@@ -8,13 +8,24 @@ from pathlib import Path
 
 import click
 
+from analysis.measures.numbers import params_text
+from analysis.measures.stood_for import stood_for_text
 from analysis.measures.world_audit import ROLE_TEXT
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.seeding import SEED_LIMIT
 from scenarios.spec.controller_ref import resolve_file
+from scenarios.spec.overrides import Override
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 from scenarios.spec.toml_io import load_spec
-from sdc.cli.common import EXIT_RUN_ERROR, bad_input, exit_interrupted, warm_up_first
+from sdc.cli.common import (
+    EXIT_RUN_ERROR,
+    bad_input,
+    check_spec_inputs,
+    exit_interrupted,
+    set_option,
+    warm_up_first,
+)
 
 
 def check_trace_path(trace: Path | None) -> None:
@@ -35,11 +46,39 @@ def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
 
 
+def set_values(spec: ScenarioSpec, overrides: tuple[str, ...]) -> dict:
+    """The fields ``--set`` changed, as the run's spec holds them: ``p.<path>`` columns,
+    as a sweep's row holds its swept values."""
+    plain = spec.to_plain()
+    return {PARAM_PREFIX + o.path: o.value_in(plain) for o in map(Override.parse, overrides)}
+
+
 def _fmt(value, unit: str = "", digits: int = 2) -> str:
     return "-" if value is None else f"{value:.{digits}f}{unit}"
 
 
-def summary_lines(name: str, row: dict) -> list[str]:
+def overlap_lines(row: dict, draw=None) -> list[str]:
+    """The first overlap of bodies other than the ego counted in world_overlaps and the
+    first in sumo_overlaps, in words; ``draw(t_s)``: the command that draws one."""
+    return [f"  overlap:   the first counted in {count}, {row[column]}"
+            + (f"; draw it: {draw(row[column + '_s'])}" if draw else "")
+            for column, count in (("first_overlap", "world_overlaps"),
+                                  ("first_sumo_overlap", "sumo_overlaps")) if row.get(column)]
+
+
+def stood_lines(row: dict) -> list[str]:
+    """Where a run that ended standing stood, and for what (none: it ended moving)."""
+    if not row.get("stood_for"):
+        return []
+    cycle = row.get("stood_for_cycle_s")
+    short = (f" (less than the light's {cycle:.0f} s cycle: too short to tell)"
+             if row["outcome"] == "unfinished" and cycle is not None else "")
+    return [f"  stood:     for the last {row['stood_at_end_s']:.1f} s, "
+            f"{stood_for_text(row)}{short}"]
+
+
+def summary_lines(name: str, row: dict, draw=None) -> list[str]:
+    """A run's row in lines; ``draw``: as :func:`overlap_lines` takes it."""
     if row["status"] != "ok":
         return [f"{name}: run failed: {row['error']}"]
     what = row["collision_with"]
@@ -62,12 +101,16 @@ def summary_lines(name: str, row: dict) -> list[str]:
         returned = (f"returned to lane after {row['return_time_s']:.2f} s"
                     if row["returned_to_lane"] else "did not return to lane")
         maneuver = f"started at {_fmt(row['detection_range_m'], ' m')}, {returned}"
+    params = [k for k in row if k.startswith(PARAM_PREFIX)]
     return [
         f"{name}  controller={row['controller']}  seed={row['seed']}  backend={row['backend']}",
+        *([f"  set:       {params_text(row, params)}"] if params else []),
         f"  outcome:   {outcome}; ended by {row['termination']} after "
         f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
         f"{row['network_vehicles']} vehicles in the network"
         + (f", warm state {row['warm_state']}" if row.get("warm_state") else "") + ")",
+        *overlap_lines(row, draw),
+        *stood_lines(row),
         f"  progress:  {_fmt(row['progress_m'], ' m', 1)} along the route, time lost "
         f"{_fmt(row['time_lost_s'], ' s', 1)} (against driving on at the start speed)",
         f"  maneuver:  {maneuver}",
@@ -94,23 +137,24 @@ def summary_lines(name: str, row: dict) -> list[str]:
 @click.option("--trace", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.parquet",
               help="Write one row per step (pose, steering, lane offset, phase, lidar, traffic).")
 @click.option("--json", "as_json", is_flag=True,
-              help="Print the result row as one JSON object on the last line.")
+              help="Print the result row as one JSON object on the last line (with "
+                   "--set, one p.<path> value per field set, as a sweep's row has).")
+@set_option("scenario")
 def run(spec_file: Path, seed: int | None, controller: str | None, backend: str | None,
-        trace: Path | None, as_json: bool) -> None:
+        trace: Path | None, as_json: bool, overrides: tuple[str, ...]) -> None:
     """Run one scenario and print its outcome."""
     check_trace_path(trace)
     try:
-        spec = load_spec(spec_file)
+        spec = load_spec(spec_file, overrides)
         if seed is not None:
             spec = spec.with_seed(seed)
         if controller is not None:
             spec = spec.with_controller(resolve_file(controller, Path.cwd(), "--controller"))
         if backend is not None:
             spec = spec.with_backend(backend)
-        from scenarios.world_backends import check_inputs
         from sdc.car.controller_plugins import make_controller
 
-        check_inputs(spec)
+        check_spec_inputs(spec, spec_file, overrides)
         try:  # a plug-in that cannot be built is bad input, before any run
             make_controller(spec.controller, "--controller" if controller else "controller.name")
         except SpecError as e:
@@ -120,12 +164,13 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
         bad_input(str(e))
     except KeyboardInterrupt:
         exit_interrupted("interrupted")
-    if as_json:
-        from sdc.run.result_row import JSON_COLUMNS
+    from sdc.run.result_row import JSON_COLUMNS
 
-        click.echo(json.dumps({k: row[k] for k in JSON_COLUMNS}))
+    shown = {**{k: row[k] for k in JSON_COLUMNS}, **set_values(spec, overrides)}
+    if as_json:
+        click.echo(json.dumps(shown))
     else:
-        for line in summary_lines(spec.scenario.name, row):
+        for line in summary_lines(spec.scenario.name, shown):
             click.echo(line)
         if trace is not None and row["status"] == "ok":
             click.echo(f"  trace written to {trace}")

@@ -11,7 +11,14 @@ import click
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.seeding import SEED_LIMIT
 from scenarios.spec.toml_io import load_spec
-from sdc.cli.common import a_number, bad_input, exit_interrupted, progress_bar
+from sdc.cli.common import (
+    a_number,
+    bad_input,
+    check_spec_inputs,
+    exit_interrupted,
+    progress_bar,
+    set_option,
+)
 
 
 @click.command()
@@ -27,8 +34,9 @@ from sdc.cli.common import a_number, bad_input, exit_interrupted, progress_bar
                    "beside it as FILE.csv.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the suggestion as one JSON object on the last line.")
+@set_option("scenario")
 def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
-           as_json: bool) -> None:
+           as_json: bool, overrides: tuple[str, ...]) -> None:
     """Watch a scenario's traffic warm up and suggest traffic.warm_up_s (on a
     sumo_config road: traffic.enter_s, on the configuration's clock).
 
@@ -47,14 +55,14 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
     from analysis.report.settling_report import settling_figure
     from analysis.stats.settling import suggest_warm_up_s
     from scenarios.sumo_net.road_source import road_source
-    from scenarios.world_backends import check_inputs, settling_series
+    from scenarios.world_backends import settling_series
 
     if out is not None and out.suffix != ".png":
         bad_input(f"--out: {out} must end in .png (the series goes beside it as .csv)")
     if out is not None and not out.parent.is_dir():
         bad_input(f"--out: directory {out.parent} does not exist")
     try:
-        spec = load_spec(spec_file)
+        spec = load_spec(spec_file, overrides)
         if spec.scenario.backend != "sumo":
             raise SpecError("scenario.backend", "sdc settle watches SUMO's traffic; "
                             f"the spec's backend is {spec.scenario.backend!r}")
@@ -65,7 +73,7 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
         if seed is not None:
             spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
                                                                          warm_seed=seed))
-        check_inputs(spec)
+        check_spec_inputs(spec, spec_file, overrides)
         with progress_bar("warming up", total=watch_s) as update:
             series = settling_series(spec, watch_s, on_sample=update)
     except SdcError as e:

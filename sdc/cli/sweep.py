@@ -12,13 +12,14 @@ from scenarios.common.errors import SdcError
 from scenarios.sumo.warm_state import uses_warm_state
 from sdc.cli.common import (
     bad_input,
-    check_controllers,
     check_executor_options,
+    check_sweep_inputs,
     executor_options,
     exit_after_runs,
     exit_interrupted,
     make_executor,
     make_reporter,
+    set_option,
 )
 
 
@@ -60,8 +61,9 @@ def _plan_lines(sweep, plan) -> list[str]:
 @click.option("--samples", type=click.IntRange(min=1), metavar="N",
               help="Override the sweep's sample count (not for the grid sampler).")
 @click.option("--dry-run", is_flag=True, help="Print the plan (one line per run) and stop.")
+@set_option("sweep")
 def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume: bool,
-          samples: int | None, dry_run: bool, **options) -> None:
+          samples: int | None, dry_run: bool, overrides: tuple[str, ...], **options) -> None:
     """Run every sample of a scenario family under each of its controllers.
 
     Results stream into DIR/parts/ as runs finish and end in DIR/results.parquet
@@ -76,7 +78,6 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     """
     from analysis.measures.run_outcome import outcomes_text
     from scenarios.spec.sweep_spec import expand, load_sweep
-    from scenarios.world_backends import check_inputs
     from sdc.batch.sweep_runner import run_sweep
 
     check_executor_options(options)
@@ -84,11 +85,10 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
         bad_input("--batch: only applies with --executor ray (local workers take one run "
                   "at a time)")
     try:
-        spec = load_sweep(sweep_file)
+        spec = load_sweep(sweep_file, overrides)
         if samples is not None:
             spec = spec.with_samples(samples)
-        check_inputs(spec.base)
-        check_controllers(spec, sweep_file)
+        check_sweep_inputs(spec, sweep_file)
         if dry_run:
             for line in _plan_lines(spec, expand(spec, make_reporter(options).planning)):
                 click.echo(line)
@@ -105,7 +105,8 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
                f"{outcomes_text(outcome.outcomes)} ({outcome.wall_time_s:.1f} s)")
     click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
     if outcome.interrupted or counts["missing"]:
-        hint = resume_command(sweep_file, out_dir, samples=samples, traces=options["traces"],
+        hint = resume_command(sweep_file, out_dir, samples=samples, overrides=overrides,
+                              traces=options["traces"],
                               executor=options["executor"], workers=options["workers"],
                               ray_address=options["ray_address"],
                               run_timeout=options["run_timeout"], batch_runs=batch_runs)
@@ -115,10 +116,13 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
 
 def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
                    executor: str, workers: int, ray_address: str | None,
-                   run_timeout: float | None, batch_runs: int | None) -> str:
+                   run_timeout: float | None, batch_runs: int | None,
+                   overrides: tuple[str, ...] = ()) -> str:
     """The command that finishes an interrupted sweep: every option that shaped its plan
-    (--samples; another plan is refused) and how it ran, then --resume; shell-quoted."""
+    (--set, --samples; another plan is refused) and how it ran, then --resume;
+    shell-quoted."""
     words = [*program_words(), "sweep", str(sweep_file), "--out", str(out_dir)]
+    words += [word for text in overrides for word in ("--set", text)]
     optional = [("--samples", samples), ("--traces", None if traces == "failures" else traces),
                 ("--executor", None if executor == "local" else executor),
                 ("--workers", workers), ("--ray-address", ray_address),

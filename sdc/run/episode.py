@@ -20,7 +20,9 @@ import numpy as np
 
 from analysis.measures import run_outcome
 from analysis.measures.metrics import trace_metrics
+from analysis.measures.overlap_detail import METADATA_KEY as OVERLAPS_KEY
 from analysis.measures.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
+from analysis.measures.stood_for import Standing, standing_at_end
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlap_steps
 from scenarios.scene.road_geometry import RoadGeometry
@@ -41,7 +43,7 @@ from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
-from sdc.run.world_witness import Judged, judge_world
+from sdc.run.world_witness import Judged, Verdict, judge_world, unjudged
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
@@ -178,7 +180,7 @@ class Simulation:
             lane.s_m if lane else math.nan,
             contacts.obstacle_gap_m, conflicts.ttc_s, conflicts.drac_mps2, conflicts.headway_s,
         ), phase, self.ranges, self.snapshot.traffic_boxes, self.snapshot.traffic_classes,
-            self.snapshot.traffic_bodies)
+            self.snapshot.traffic_bodies, self.stop_lines.states(self.snapshot.signals))
 
     def end_reason(self) -> str | None:
         """``collision``, ``route_end`` or ``duration`` when the run ends at this step."""
@@ -260,22 +262,34 @@ class Simulation:
         trace = self.trace()
         steps = overlap_steps(trace.traffic, self.snapshot.obstacle_boxes,
                               trace.traffic_class, self.obstacle_classes, trace.traffic_body)
-        return Judged(trace, self.vehicle, steps, self.obstacle_classes)
+        return Judged(trace, self.vehicle, steps, self.obstacle_classes,
+                      self.snapshot.obstacle_boxes)
 
-    def _whose_overlaps(self) -> tuple[int, int]:
-        """The steps in which bodies other than the ego overlap: (ours, SUMO's own)
-        (:mod:`sdc.run.world_witness`, on the sumo backend; elsewhere all ours)."""
+    def _whose_overlaps(self) -> Verdict:
+        """The steps in which bodies other than the ego overlap, judged: ours and SUMO's
+        own, and the first of each (:mod:`sdc.run.world_witness`, on the sumo backend;
+        elsewhere all ours)."""
         judged = self.judged()
         if self.world.backend != "sumo" or not len(judged.steps):
-            return len(judged.steps), 0
+            return unjudged(judged)
         return judge_world(self.world.twin(), [judged])[0]
 
+    def _standing(self) -> Standing | None:
+        """What the car stood for at the last step (None: it was moving)."""
+        trace, snapshot = self.trace(), self.snapshot
+        if run_outcome.rest_step(trace.floats["speed_mps"]) == len(trace):
+            return None
+        return standing_at_end(self.road, self.box, snapshot.traffic_boxes,
+                               snapshot.traffic_classes, snapshot.obstacle_boxes,
+                               self.obstacle_classes, trace.signals, trace.floats["t_s"],
+                               self.world.signal_cycles_s)
+
     def finish(self, termination: str, run_id: str | None = None,
-               overlaps: tuple[int, int] | None = None) -> Episode:
+               overlaps: Verdict | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
         :func:`default_run_id`). Called once its world is closed (judging an overlap
-        runs the world's twin); ``overlaps``: (ours, SUMO's own) where the caller judged
-        them (a shared world's runs, judged together)."""
+        runs the world's twin); ``overlaps``: the overlaps judged, where the caller
+        judged them (a shared world's runs, judged together)."""
         spec, model, road = self.spec, self.model, self.road
         trace = self.trace()
         t_end = float(trace.floats["t_s"][-1])
@@ -288,7 +302,9 @@ class Simulation:
         passed = run_outcome.passed_every_obstacle(
             floats["s_m"], model.length_m, road.to_frenet(obstacles[:, :2])[0], obstacles[:, 3])
         progress_m = run_outcome.progress_m(floats["s_m"], lane_scale(spec, road))
-        ours, sumo = self._whose_overlaps() if overlaps is None else overlaps
+        standing = self._standing()
+        judged = self._whose_overlaps() if overlaps is None else overlaps
+        firsts = [o for o in (judged.first_ours, judged.first_sumo) if o is not None]
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,
                                   spec.controller.detect_beams),
@@ -303,15 +319,23 @@ class Simulation:
             collision_part=self.collision.part if self.collision else None,
             collision_role=self.collision.role if self.collision else None,
             collision_vclass=self.collision.vehicle_class if self.collision else None,
-            world_overlaps=ours,
-            sumo_overlaps=sumo,
+            collision_body=self.collision.body if self.collision else None,
+            world_overlaps=judged.ours,
+            sumo_overlaps=judged.sumo,
+            first_overlap_s=judged.first_ours and judged.first_ours.t_s,
+            first_overlap=judged.first_ours and judged.first_ours.text(),
+            first_sumo_overlap_s=judged.first_sumo and judged.first_sumo.t_s,
+            first_sumo_overlap=judged.first_sumo and judged.first_sumo.text(),
             red_light_violations=self.stop_lines.red_light_violations,
             outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
-                                            floats["speed_mps"]),
+                                            floats["speed_mps"], standing),
             progress_m=round(progress_m, 6),
             time_lost_s=run_outcome.time_lost_s(t_end, progress_m, spec.ego.speed_mps),
             collision_speed_mps=float(floats["speed_mps"][-1]) if hit else None,
             stood_at_end_s=run_outcome.still_at_end_s(floats["t_s"], floats["speed_mps"]),
+            stood_for=standing.what if standing else None,
+            stood_for_gap_m=standing.gap_m if standing else None,
+            stood_for_cycle_s=standing.cycle_s if standing else None,
             min_road_edge_gap_m=float(np.nanmin(edge_gaps_m, initial=math.inf)),
             stop_gap_m=gap_m,
             stop_possible=stop_possible(spec.ego.speed_mps,
@@ -333,8 +357,11 @@ class Simulation:
                         "width_m": model.width_m,
                         "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
             "run": {k: row[k] for k in ("seed", "controller", "backend", "termination",
-                                        "collision_with", "outcome", "trace_sha256")},
+                                        "collision_with", "outcome", "stood_for",
+                                        "trace_sha256")},
         }
+        if firsts:  # named for a drawing (analysis.measures.overlap_detail)
+            metadata[OVERLAPS_KEY] = [o.to_plain() for o in firsts]
         return Episode(row, trace, metadata)
 
 

@@ -83,6 +83,11 @@ COLUMNS: tuple[Column, ...] = (
            "motorcycle, bicycle, ...; pedestrian for a person; in a shared world, "
            "another ego is passenger and another run's barrel barrel; None unless "
            "collision_with is vehicle or pedestrian"),
+    Column("collision_body", pa.string(), OUTCOME,
+           "whose the body hit was: traffic (SUMO's vehicles and persons) | obstacle (the "
+           "run's own) | other_ego | other_obstacle (another run's ego or obstacle, in a "
+           "shared world: collision_with vehicle, or pedestrian for a standing person); "
+           "None: a road edge, or no collision"),
     Column("world_overlaps", pa.int64(), OUTCOME,
            "steps in which a traffic vehicle or person overlapped another one or an "
            "obstacle within the sensing radius, two persons aside "
@@ -94,14 +99,27 @@ COLUMNS: tuple[Column, ...] = (
            "steps in which such an overlap is SUMO's own: its placement of the two along "
            "their lanes overlaps too (vehicles waiting inside each other on a junction's "
            "crossing lanes, a bicycle through a pedestrian); SUMO's world, not the coupling"),
+    Column("first_overlap_s", pa.float64(), OUTCOME,
+           "simulated time of the first step counted in world_overlaps; None: none [s]"),
+    Column("first_overlap", pa.string(), OUTCOME,
+           "that step's overlap in words (analysis.measures.overlap_detail): its time and "
+           "step, the two bodies (SUMO's ids where the audit's replay read them, else "
+           "traffic[i] / obstacles[j] of the trace; their vehicle classes), how deep they "
+           "are inside each other (the shortest move that parts their boxes) [m], whose"),
+    Column("first_sumo_overlap_s", pa.float64(), OUTCOME,
+           "simulated time of the first step counted in sumo_overlaps; None: none [s]"),
+    Column("first_sumo_overlap", pa.string(), OUTCOME,
+           "that step's overlap in words, as first_overlap"),
     Column("red_light_violations", pa.int64(), OUTCOME,
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),
     Column("outcome", pa.string(), OUTCOME,
            "how the run ended (analysis/measures/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under "
-           f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more) | unfinished "
-           "(neither; still moving when it ended)"),
+           f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more, and not at a red "
+           "light or in the queue before one for less than its cycle) | unfinished "
+           "(neither; still moving when it ended, or waiting at a red light for less than its "
+           "cycle: the run was too short)"),
     Column("progress_m", pa.float64(), OUTCOME,
            "distance the body centre made along the route, measured along the ego's lane [m]"),
     Column("time_lost_s", pa.float64(), OUTCOME,
@@ -112,6 +130,17 @@ COLUMNS: tuple[Column, ...] = (
     Column("stood_at_end_s", pa.float64(), OUTCOME,
            f"how long the ego had stood still (under {STUCK_SPEED_MPS:g} m/s) when the run "
            "ended; 0 when it was moving [s]"),
+    Column("stood_for", pa.string(), OUTCOME,
+           "what the ego stood for when the run ended standing (analysis/measures/"
+           "stood_for.py): red_light | queue (a vehicle in its path) | give_way | obstacle "
+           "| person | crossing | nothing (none of them within 30 m ahead); None: it ended "
+           "moving"),
+    Column("stood_for_gap_m", pa.float64(), OUTCOME,
+           "from the front bumper to what it stood for, along the road; None: nothing, or "
+           "it ended moving [m]"),
+    Column("stood_for_cycle_s", pa.float64(), OUTCOME,
+           "the cycle of the light it waited for (at a red light, or in the queue before "
+           "one); standing less than that is unfinished, not stuck; None: no light [s]"),
     Column("min_gap_obstacle_m", pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
     Column("min_ttc_s", pa.float64(), METRIC,

@@ -37,7 +37,7 @@ from scenarios.world_backends import make_road, make_shared_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import Episode, Simulation, initial_state
-from sdc.run.world_witness import judge_world
+from sdc.run.world_witness import Verdict, judge_world, unjudged
 
 
 @dataclass(frozen=True)
@@ -121,13 +121,13 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
     return out
 
 
-def _judged_together(world, sims: list[Simulation], ends: dict) -> dict[int, tuple[int, int]]:
-    """Each run's overlapping steps of bodies other than its ego, (ours, SUMO's own),
+def _judged_together(world, sims: list[Simulation], ends: dict) -> dict[int, Verdict]:
+    """Each run's overlapping steps of bodies other than its ego, ours and SUMO's own,
     judged in one replay of the world (:func:`sdc.run.world_witness.judge_world`).
     Without every run's trace (a run failed) the world cannot be replayed: none is
     judged, and every overlap counts as ours."""
     ran = {i: sim.judged() for i, sim in enumerate(sims) if not isinstance(ends[i], Failed)}
-    all_ours = {i: (len(judged.steps), 0) for i, judged in ran.items()}
+    all_ours = {i: unjudged(judged) for i, judged in ran.items()}
     if len(ran) < len(sims):
         return all_ours
     try:

@@ -11,29 +11,24 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from scenarios.scene.road_geometry import RouteStop
-from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW, StopLine
+from scenarios.scene.signals import NO_LIGHT, NO_SIGNAL, RED, link_signal
+from sdc.car.controller_api import StopLine
 
-#: SUMO's link states read as a driver reads the light: (signal, gives way)
-LINK_SIGNALS: dict[str, tuple[str, bool]] = {
-    "r": (RED, False), "u": (RED, False),  # red, red-yellow
-    "y": (YELLOW, False),
-    "G": (GREEN, False),  # green with priority
-    "g": (GREEN, True),  # green without priority: give way to the oncoming
-    "s": (GREEN, True),  # a green right-turn arrow: stop, then go
-    "o": (NO_SIGNAL, True),  # off, blinking: give way
-    "O": (NO_SIGNAL, False),  # off
-}
+
+def stop_state(stop: RouteStop, signals: Mapping[str, str]) -> str:
+    """The link state SUMO's light shows the car's way at ``stop`` (one of
+    ``LINK_SIGNALS``' keys), or ``NO_LIGHT``: the line has none, or its light does
+    not say."""
+    states = signals.get(stop.tl, "") if stop.tl is not None else ""
+    return states[stop.link_index] if 0 <= stop.link_index < len(states) else NO_LIGHT
 
 
 def stop_line(stop: RouteStop, distance_m: float, signals: Mapping[str, str]) -> StopLine:
     """What the car sees of ``stop``, ``distance_m`` ahead of its front bumper."""
-    if stop.tl is None:
+    state = stop_state(stop, signals)
+    if state == NO_LIGHT:
         return StopLine(distance_m, NO_SIGNAL, stop.give_way)
-    states = signals.get(stop.tl, "")
-    if not 0 <= stop.link_index < len(states):
-        return StopLine(distance_m, NO_SIGNAL, stop.give_way)
-    signal, give_way = LINK_SIGNALS.get(states[stop.link_index], (NO_SIGNAL, False))
-    return StopLine(distance_m, signal, give_way)
+    return StopLine(distance_m, *link_signal(state))
 
 
 class StopLineWatch:
@@ -45,6 +40,15 @@ class StopLineWatch:
         self.red_light_violations = 0
         self._next = 0  # the first line not yet crossed
         self._line: StopLine | None = None
+        self._lit = any(stop.tl is not None for stop in stops)
+
+    def states(self, signals: Mapping[str, str]) -> str:
+        """What every light along the route shows the car's way at this step, one
+        character per stop line in order (:func:`stop_state`); empty on a route
+        without lights (the trace's ``signals`` column)."""
+        if not self._lit:
+            return ""
+        return "".join(stop_state(stop, signals) for stop in self.stops)
 
     def update(self, front_s_m: float | None, signals: Mapping[str, str]) -> StopLine | None:
         """The line ahead of a front bumper at ``front_s_m`` along the road (None:

@@ -11,7 +11,9 @@ crossing lanes wait inside one another, its bicycles ride through its pedestrian
 ``sumo_overlaps``. Where they do not, what we made of SUMO's world did (a rigid box
 where SUMO holds a body along its lane, a body reaching where SUMO was not shown it):
 ``world_overlaps``. A step whose replay differs from the trace counts as ours: missing
-evidence is never SUMO's alibi. Only runs with an overlap pay for the second run.
+evidence is never SUMO's alibi. Only runs with an overlap pay for the second run. The
+first step of each kind is named with the SUMO ids this replay reads (the trace keeps
+none): :class:`Verdict`, told by :mod:`analysis.measures.overlap_detail`.
 
 A shared world's runs (:mod:`sdc.run.shared_world`) are judged in one replay of it,
 every ego pushed along its own trace and leaving when its run ended. An overlap with
@@ -26,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from analysis.measures.overlap_detail import Overlap, deepest, describe, overlaps_at
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
 from scenarios.sumo.routes_xml import ego_names
@@ -41,6 +44,7 @@ class Witnessed(NamedTuple):
     second: str
     sumo_holds_both: bool  # laid along their lanes as SUMO holds them, they overlap too
     another_ego: bool = False  # one of the two is another ego of a shared world
+    boxes: tuple[int, int] = (-1, -1)  # the two in the step's traffic boxes, then obstacles
 
 
 def _overlap_anywhere(a: np.ndarray, b: np.ndarray) -> bool:
@@ -56,6 +60,18 @@ class Judged(NamedTuple):
     vehicle: Vehicle
     steps: np.ndarray  # its overlapping steps, ascending
     obstacle_classes: tuple[str | None, ...]
+    obstacle_boxes: np.ndarray | None = None  # (K, 5); None: none
+
+
+class Verdict(NamedTuple):
+    """A run's overlapping steps judged: how many hold an overlap of ours (also every
+    step nobody judged) and how many one of SUMO's own (a step may hold both), and the
+    first of each, named (:mod:`analysis.measures.overlap_detail`; None: none)."""
+
+    ours: int
+    sumo: int
+    first_ours: Overlap | None = None
+    first_sumo: Overlap | None = None
 
 
 def _pose(run: Judged, k: int) -> tuple[np.ndarray, float]:
@@ -125,27 +141,53 @@ def _judged(world, snapshot, step: int, obstacle_classes, slot: int) -> list[Wit
     names = {**{i: ids[i] for i in range(n)}, **{n + j: f"{prefix}{j}" for j in standing}}
     return [Witnessed(step, snapshot.t_s, names[i], names[j],
                       i in body and j in body and _overlap_anywhere(body[i], body[j]),
-                      bool({names[i], names[j]} & world.ego_ids))
+                      bool({names[i], names[j]} & world.ego_ids), (i, j))
             for i, j in pairs]
 
 
-def _counted(steps: np.ndarray, witnessed: list[Witnessed]) -> tuple[int, int]:
-    """(ours, SUMO's) of ``steps``: a step may hold both; a step nobody judged is ours;
-    a step whose every pair is another ego's collision is neither."""
+def unjudged(run: Judged) -> Verdict:
+    """Every overlapping step of ``run`` counted ours, not judged (another backend, or a
+    world that cannot be replayed), the first named by its place in the trace."""
+    first = (deepest(overlaps_at(run.trace, int(run.steps[0]), _obstacles(run),
+                                 run.obstacle_classes)) if len(run.steps) else None)
+    return Verdict(len(run.steps), 0, first)
+
+
+def _obstacles(run: Judged) -> np.ndarray:
+    return np.zeros((0, 5)) if run.obstacle_boxes is None else run.obstacle_boxes
+
+
+def verdict(run: Judged, witnessed: list[Witnessed]) -> Verdict:
+    """(ours, SUMO's) of the run's steps, and the first of each: a step may hold both; a
+    step nobody judged is ours; a step whose every pair is another ego's collision is
+    neither. The first of a kind is its first step's deepest pair of that kind."""
     theirs = {w.step for w in witnessed if w.another_ego}
     judged = [w for w in witnessed if not w.another_ego]
     sumo = {w.step for w in judged if w.sumo_holds_both}
     ours = {w.step for w in judged if not w.sumo_holds_both}
-    ours |= set(steps.tolist()) - ours - sumo - theirs  # judged by nobody
-    return len(ours), len(sumo)
+    ours |= set(run.steps.tolist()) - ours - sumo - theirs  # judged by nobody
+
+    def first(steps: set[int], sumo_own: bool) -> Overlap | None:
+        if not steps:
+            return None
+        step = min(steps)
+        pairs = [w for w in judged if w.step == step and w.sumo_holds_both == sumo_own]
+        if not pairs:  # judged by nobody
+            return deepest(overlaps_at(run.trace, step, _obstacles(run), run.obstacle_classes))
+        return deepest([describe(run.trace, step, w.boxes, _obstacles(run),
+                                 run.obstacle_classes, (w.first, w.second), sumo_own)
+                        for w in pairs])
+
+    return Verdict(len(ours), len(sumo), first(ours, False), first(sumo, True))
 
 
-def judge_world(twin, runs: list[Judged]) -> list[tuple[int, int]]:
-    """Of each run's overlapping steps (``runs`` in slot order), how many hold an overlap
-    SUMO's own bodies do not have (ours: also every step the replay did not reach)
-    and how many one they have too (SUMO's; a step may hold both), judged in one
-    replay of the world (:func:`witness_world`); none when no run has an overlap."""
+def judge_world(twin, runs: list[Judged]) -> list[Verdict]:
+    """Each run's overlapping steps (``runs`` in slot order) judged in one replay of the
+    world (:func:`witness_world`): how many hold an overlap SUMO's own bodies do not
+    have (ours: also every step the replay did not reach), how many one they have too
+    (SUMO's own; a step may hold both), and the first of each; none judged when no run
+    has an overlap."""
     if not any(len(run.steps) for run in runs):
-        return [(0, 0) for _ in runs]
-    return [_counted(run.steps, witnessed)
+        return [Verdict(0, 0) for _ in runs]
+    return [verdict(run, witnessed)
             for run, witnessed in zip(runs, witness_world(twin, runs), strict=True)]

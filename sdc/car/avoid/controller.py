@@ -12,7 +12,8 @@ model, and the map's readings (stop line, lanes beside, crosswalk). Each step:
 3. what it plans (:mod:`sdc.car.avoid.plan`): on an obstacle whose time to
    collision falls under ``detect_ttc_s``, a swerve to the side whose corridor is
    free and whose lane is open (left first), or braking; the pass held until the
-   car's rear is past, then back; the phase;
+   car's rear is past, then back; the phase (``wait`` where it cruises held by a
+   rule of the road: a light, a duty to give way, a crossing, a queue at a junction);
 4. where it holds its lane, through bends, and how it steers there
    (:mod:`sdc.car.avoid.lane_line`);
 5. how it holds its speed (:mod:`sdc.car.avoid.speed_law`): following, cruising or
@@ -38,6 +39,7 @@ from sdc.car.avoid.plan import (
     BRAKE,
     CRUISE,
     SWERVES,
+    WAIT,
     Maneuver,
     Plan,
 )
@@ -46,7 +48,8 @@ from sdc.car.avoid.speed_law import SpeedLaw
 from sdc.car.controller_api import Command, Observation
 from sdc.car.lane_path import LanePath
 
-__all__ = ["AVOID_LEFT", "AVOID_RETURN", "AVOID_RIGHT", "BRAKE", "CRUISE", "AvoidController"]
+__all__ = ["AVOID_LEFT", "AVOID_RETURN", "AVOID_RIGHT", "BRAKE", "CRUISE", "WAIT",
+           "AvoidController"]
 
 
 class AvoidController:
@@ -60,11 +63,14 @@ class AvoidController:
         self.rules = RoadRules(self.params, self.speed)
         self.maneuver = Maneuver(self.params, self.perception)
         self.line = LaneLine(self.params)
+        self.held = False  # a rule of the road bound the last step's speed
 
     @property
     def phase(self) -> str:
-        """The maneuver's phase, recorded in the trace."""
-        return self.maneuver.phase
+        """The maneuver's phase, recorded in the trace: ``wait`` while it cruises held
+        by a rule of the road."""
+        phase = self.maneuver.phase
+        return WAIT if phase == CRUISE and self.held else phase
 
     @property
     def target_m(self) -> float:
@@ -79,7 +85,7 @@ class AvoidController:
         # what it perceives, and the rules' watches
         frame = self.perception.frame(obs, path)
         self.perception.watch_lanes(frame, obs, path.offset_m)
-        ahead = look_ahead(frame, obs, p, path.offset_m, self.phase in SWERVES)
+        ahead = look_ahead(frame, obs, p, path.offset_m, self.maneuver.phase in SWERVES)
         self.perception.track(frame, obs, ahead)
         self.rules.watch(frame, obs, path, ahead.half_lane_m)
         leader = self.perception.leader
@@ -97,11 +103,13 @@ class AvoidController:
         accel = self._plan_accel(plan, obs, ahead)
         if accel is None:
             accel = self._cruise_accel(obs, ahead, following, waiting, turn_mps)
-        accel = min(accel, self.rules.signal_accel(obs, turn_mps),
-                    self.rules.give_way_accel(obs, turn_mps),
-                    self.rules.crosswalk_accel(obs, turn_mps),
-                    self.speed.room_accel(line.free_m, obs, turn_mps),  # the bend's room
+        accel = min(accel, self.speed.room_accel(line.free_m, obs, turn_mps),  # the bend's room
                     self.rules.lane_end_accel(obs, self.maneuver.lane_end_side(), turn_mps))
+        held_accel = min(self.rules.signal_accel(obs, turn_mps),
+                         self.rules.give_way_accel(obs, turn_mps),
+                         self.rules.crosswalk_accel(obs, turn_mps))
+        self.held = waiting or held_accel < accel
+        accel = min(accel, held_accel)
         if lane is None:
             return Command(0.0, accel)
         preview_m = max(p.min_preview_m, obs.speed_mps * p.preview_time_s)
@@ -112,7 +120,7 @@ class AvoidController:
     def _line(self, frame: LaneFrame, obs: Observation, path: LanePath, ahead: Ahead) -> Line:
         """The line held in the phase: the own lane's (cruising, returning), the passing
         lane's, or, braking, the target as it is (no limits of its own)."""
-        phase = self.phase
+        phase = self.maneuver.phase
         if phase in (CRUISE, AVOID_RETURN):
             return self.line.hold(frame, obs, path, ahead.lane_s_m)
         if phase in SWERVES:  # the line in the lane it passes in
@@ -137,7 +145,7 @@ class AvoidController:
         behind the obstacle, it does not slow for that: the pass ends sooner."""
         p, speed, look = self.params, self.speed, self.perception
         gap_lane, gap_path = ahead.gap_lane_m, ahead.gap_path_m
-        passing = self.phase in SWERVES
+        passing = self.maneuver.phase in SWERVES
         if passing and look.path_leader.comes_toward():
             return speed.speed_accel(math.inf, obs, turn_mps)
         gap = gap_path if passing else min(gap_lane, gap_path)

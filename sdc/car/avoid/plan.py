@@ -31,6 +31,9 @@ from sdc.car.controller_api import Observation
 from sdc.car.lane_path import LanePath
 
 CRUISE, BRAKE = "cruise", "brake"
+#: cruising, held by a rule of the road: a light, a duty to give way, a crossing, a
+#: queue at a junction (the recorded phase; the maneuver's own is cruise)
+WAIT = "wait"
 AVOID_LEFT, AVOID_RIGHT, AVOID_RETURN = "avoid_left", "avoid_right", "avoid_return"
 SWERVES = (AVOID_LEFT, AVOID_RIGHT)  # out of the lane, passing
 
