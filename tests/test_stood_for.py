@@ -199,3 +199,29 @@ def test_the_replay_draws_each_stop_line_in_its_lights_colour(tmp_path):
     went = next(j for j in range(k, len(trace)) if trace.floats["speed_mps"][j] > 1.0)
     assert frames[went]["signals"][at] == SIGNAL_COLORS["green"]
     assert trace.phase[went] == "cruise"
+
+
+@pytest.mark.slow
+def test_the_replay_page_draws_the_red_light_it_waits_at(tmp_path, chromium_page):
+    from analysis.report.render import scene_from_trace, write_html
+    from sdc.run.episode import run_episode
+
+    episode = run_episode(red_light_family(1, 30.0))  # waiting at red from 12.7 s
+    scene = scene_from_trace(episode.trace, episode.metadata)
+    write_html(scene, tmp_path / "run.html", every=10)
+    page, problems = chromium_page
+    page.goto((tmp_path / "run.html").as_uri())
+    assert page.is_visible("#stop-legend")
+    red_pixels = """() => {
+      const data = document.getElementById("scene").getContext("2d")
+        .getImageData(0, 0, 960, 420).data;
+      let n = 0;
+      for (let i = 0; i < data.length; i += 4)
+        n += data[i] === 0xd6 && data[i + 1] === 0x27 && data[i + 2] === 0x28;
+      return n;
+    }"""
+    page.eval_on_selector("#step", "e => { e.value = e.max; e.dispatchEvent(new Event('input')); }")
+    assert page.evaluate(red_pixels) > 20  # the stop line at its bumper, red (no obstacle in view)
+    page.eval_on_selector("#step", "e => { e.value = 0; e.dispatchEvent(new Event('input')); }")
+    assert page.evaluate(red_pixels) == 0  # at the start no light in view shows red
+    assert problems == []
