@@ -195,6 +195,11 @@ def test_rear_ended_side_swiped_and_running_into_a_slower_car():
     assert contact(ego, standing, 20.0, 0.0)[1:3] == (SIDE, RAN_INTO)
     slower = [4.6, 0.2, 0.0, 4.5, 1.8]
     assert contact(ego, slower, 20.0, 10.0)[1:3] == (FRONT, RAN_INTO)
+    # the ego standing, a car beside it turning away swings its back into its side: the
+    # ego did not move, it was hit (it read ran_into: the car moved away from the contact)
+    turning_away = [0.5, 1.75, 0.35, 4.5, 1.8]
+    assert contact(ego, turning_away, 0.0, 5.0)[1:3] == (SIDE, WAS_HIT)
+    assert contact(ego, turning_away, 3.0, 5.0)[1:3] == (SIDE, RAN_INTO)  # moving, it did
     assert contact(ego, slower, 20.0, 10.0).vehicle_class == "passenger"
 
 

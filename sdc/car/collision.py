@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from analysis.measures.run_outcome import STUCK_SPEED_MPS
 from scenarios.scene.boxes import box_corners
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import TRAFFIC, Snapshot
@@ -124,7 +125,9 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     road heading ``road_heading_rad`` there): for a side contact across the road, for a
     front or rear one along it, the ego ``ran_into`` it when it closed in on the
     contact faster than the other body did, else it ``was_hit``. Obstacles, road edges,
-    standing cars and standing people are always run into. A vehicle's class comes
+    standing cars and standing people are always run into; a standing ego (under
+    ``STUCK_SPEED_MPS``) touched by a moving body was always hit, whichever way that
+    body moved (a car turning away can swing its corner into it). A vehicle's class comes
     with it (``pedestrian`` for a person), and whose the body hit was."""
     ego_box = np.asarray(ego_box, float)
     vehicle_class, body = None, None
@@ -152,5 +155,6 @@ def describe(hit: str, ego_box: np.ndarray, ego_speed_mps: float, contacts: Cont
     toward = axis if float((point - ego_box[:2]) @ axis) >= 0 else -axis
     ego_closing = float(_velocity(float(ego_box[2]), ego_speed_mps) @ toward)
     other_closing = float(-other_mps @ toward)
-    moved_in = ego_closing > other_closing or not other_mps.any()  # what stands is hit
+    standing = ego_speed_mps < STUCK_SPEED_MPS and other_mps.any()  # it moved, not the ego
+    moved_in = not standing and (ego_closing > other_closing or not other_mps.any())
     return Collision(hit, part, RAN_INTO if moved_in else WAS_HIT, vehicle_class, body)

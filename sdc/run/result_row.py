@@ -76,7 +76,8 @@ COLUMNS: tuple[Column, ...] = (
            "collision); None: no collision"),
     Column("collision_role", pa.string(), OUTCOME,
            "ran_into: the ego closed in on the contact faster than the other body | "
-           "was_hit: the other body did (obstacles and road edges stand still); None: no "
+           "was_hit: the other body did (obstacles and road edges stand still), and always "
+           "when the ego stood still (under 0.1 m/s) and the other body moved; None: no "
            "collision"),
     Column("collision_vclass", pa.string(), OUTCOME,
            "the SUMO vehicle class (vClass) of the vehicle hit: passenger, truck, bus, "
