@@ -124,8 +124,7 @@ def lines_at_end(stops: Sequence, signals: Sequence[str], t_s: np.ndarray,
     last step: the lights from the trace's ``signals`` (one character per stop, each
     step), holding the car if they did at the end or within :data:`START_UP_S`
     before; ``cycles_s``: each light's cycle."""
-    recent = [states for t, states in zip(t_s, signals, strict=False)
-              if t >= t_s[-1] - START_UP_S - 1e-9]
+    recent = signals[int(np.searchsorted(t_s, t_s[-1] - START_UP_S - 1e-9)):]
     lines = []
     for k, stop in enumerate(stops):
         states = [row[k] for row in recent if k < len(row)]

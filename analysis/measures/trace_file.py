@@ -89,11 +89,6 @@ class Trace:
             h.update("\n".join(self.signals).encode())
         return h.hexdigest()
 
-    def signals_at(self, step: int) -> str:
-        """The lights along the route at ``step`` (:data:`SIGNAL_COLUMN`); empty: none
-        recorded."""
-        return self.signals[step] if step < len(self.signals) else ""
-
     def bodies(self, step: int) -> np.ndarray | None:
         """Which body each traffic box of ``step`` is of, or None: each its own."""
         labels = self.traffic_body[step] if step < len(self.traffic_body) else []

@@ -63,7 +63,8 @@ class Scene:
     edges: list[np.ndarray]  # the two road edges
     title: str
     #: the route's stop lines, each a segment across its lane (L, 2, 2), and per step
-    #: what their lights showed the car's way (the trace's signals: a state a line)
+    #: what their lights showed the car's way (the trace's signals: a state a line;
+    #: empty: none recorded)
     stop_lines: np.ndarray = dataclasses.field(default_factory=lambda: np.empty((0, 2, 2)))
     signals: list[str] = dataclasses.field(default_factory=list)
 
@@ -152,7 +153,7 @@ def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
         stop_lines=stop_line_segments(road, plain_road.get("stops", [])),
-        signals=[trace.signals_at(k) for k in range(len(trace))],
+        signals=list(trace.signals),
         title=(f"{spec.scenario.name}  controller {spec.controller.label}  seed "
                f"{spec.scenario.seed}  ({run.get('outcome') or run.get('termination', '?')}"
                + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
