@@ -58,6 +58,19 @@ def replay_command(sweep_dir: Path, run_id: str) -> str:
     return sdc_command("replay", sweep_dir, "--run", run_id)
 
 
+def export_command(sweep_dir: Path, run_id: str) -> str:
+    """The command that writes run ``run_id`` of a sweep directory, from its kept trace,
+    as OpenSCENARIO ``<run_id>.xosc`` with its road ``<run_id>.xodr`` in the working
+    directory (``sdc export``)."""
+    xosc = re.sub(r"[^A-Za-z0-9._-]", "_", f"{run_id}.xosc")
+    return sdc_command("export", sweep_dir, "--run", run_id, "--out", xosc)
+
+
+def kept_trace(sweep_dir: Path, run_id: str) -> bool:
+    """Did the sweep keep the trace of ``run_id`` (what ``sdc export`` reads)?"""
+    return (Path(sweep_dir) / "traces" / f"{run_id}.parquet").is_file()
+
+
 def draw_overlap_command(sweep_dir: Path, run_id: str, t_s: float) -> str:
     """The command that re-simulates run ``run_id`` and draws its step at ``t_s`` (an
     overlap, marked) to ``<run_id>-<t_s>s.png`` in the working directory."""

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.measures.commands import replay_command
+from analysis.measures.commands import export_command, kept_trace, replay_command
 from analysis.measures.numbers import params_text
 from analysis.measures.sweep_manifest import SweepManifest
 from analysis.report import plots
@@ -91,10 +91,13 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
                          params_text(row, params)]
                 body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
                             + f"<td>{picture}</td></tr>")
+                export = (f' · export: <code class="command">'
+                          f'{html.escape(export_command(sweep_dir, row["run_id"]))}</code>'
+                          if kept_trace(sweep_dir, row["run_id"]) else "")
                 body.append(f'<tr><td></td><td colspan="{len(head) - 1}">replay: <code '
                             f'class="command">'
                             f'{html.escape(replay_command(sweep_dir, row["run_id"]))}'
-                            "</code></td></tr>")
+                            f"</code>{export}</td></tr>")
             if more:
                 body.append(f'<tr class="more"><td></td><td colspan="{len(head) - 1}">'
                             f"{more} more {html.escape(str(rank_class))} in "
@@ -154,7 +157,10 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
         for rank_class, shown, more in classes_shown(rows):
             look_at += [f"{row['rank']}. `{row['run_id']}`: {row['why']}; "
                         f"{params_text(row, params)} — "
-                        f"`{replay_command(sweep_dir, row['run_id'])}`" for row in shown]
+                        f"`{replay_command(sweep_dir, row['run_id'])}`"
+                        + (f"; export: `{export_command(sweep_dir, row['run_id'])}`"
+                           if kept_trace(sweep_dir, row["run_id"]) else "")
+                        for row in shown]
             if more:
                 look_at.append(f"- {more} more {rank_class} in [{LIST_FILE}]({LIST_FILE})")
     sections["look-at"] = look_at

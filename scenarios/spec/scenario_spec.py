@@ -65,7 +65,9 @@ class ScenarioMeta(Spec):
 
 
 #: the road kinds that are a route through a SUMO network
-NETWORK_KINDS = ("sumo_net", "sumo_config")
+NETWORK_KINDS = ("sumo_net", "sumo_config", "opendrive")
+#: the road kinds whose traffic is ``traffic.vehicles`` random trips across the network
+TRIP_KINDS = ("sumo_net", "opendrive")
 #: a file path starting with this is inside SUMO's installation (``sumo.SUMO_HOME``):
 #: the scenarios its package ships, wherever it is installed (``sumo:tools/game/...``)
 SUMO_HOME_PREFIX = "sumo:"
@@ -84,10 +86,12 @@ class RoadSpec(Spec):
     ``speed_limit_mps`` come from the network. For ``sumo_config``, ``config_file``
     names a SUMO configuration (``.sumocfg``, relative to the scenario file): its
     network is the road's, as for ``sumo_net``, and its own demand is the traffic
-    (``scenarios/sumo_net/sumo_config.py``).
+    (``scenarios/sumo_net/sumo_config.py``). For ``opendrive``, ``xodr_file`` names an
+    OpenDRIVE road network (``.xodr``, relative to the scenario file), converted by SUMO's
+    netconvert and then a road as ``sumo_net`` is (``scenarios/sumo_net/opendrive_net.py``).
     """
 
-    kind: Literal["straight", "curve", "sumo_net", "sumo_config"] = "straight"
+    kind: Literal["straight", "curve", "sumo_net", "sumo_config", "opendrive"] = "straight"
     length_m: float = num(gt=0, le=50_000)
     lanes: int | None = num(None, ge=1, le=8)  # required for straight and curve
     lane_width_m: float = num(3.5, ge=2.0, le=6.0)
@@ -95,12 +99,16 @@ class RoadSpec(Spec):
     curve_radius_m: float | None = None
     net_file: str | None = None  # sumo_net only
     config_file: str | None = None  # sumo_config only
+    xodr_file: str | None = None  # opendrive only
     #: sumo_net: "straight" goes straight on at every junction where its lane can
     #: (turning only where it must), "any" takes a random turn at each
     route_turns: Literal["straight", "any"] = "straight"
     #: sumo_net and sumo_config: the ego's route pinned, as SUMO edge ids in order
     #: (default: drawn from the seed)
     route_edges: tuple[str, ...] | None = None
+    #: with ``route_edges``: the ego's lane on the first edge, SUMO's index (0 the
+    #: rightmost; default: the rightmost lane that leads through every edge)
+    route_lane: int | None = num(None, ge=0, le=15)
     see_edges: bool = True
 
     @property
@@ -117,7 +125,8 @@ class RoadSpec(Spec):
     @property
     def network_field(self) -> str:
         """The field naming what a network road is read from."""
-        return "road.net_file" if self.kind == "sumo_net" else "road.config_file"
+        return {"sumo_net": "road.net_file", "sumo_config": "road.config_file",
+                "opendrive": "road.xodr_file"}[self.kind]
 
     @property
     def lane_count(self) -> int:
@@ -497,18 +506,25 @@ def _check_speed_factor(spec: ScenarioSpec) -> None:
 def _check_road_kind(spec: ScenarioSpec) -> None:
     """What a built-in road needs, and what a SUMO network road must not be given."""
     road, traffic = spec.road, spec.traffic
-    own = {"road.net_file": ("sumo_net",), "traffic.vehicles": ("sumo_net",),
+    own = {"road.net_file": ("sumo_net",), "traffic.vehicles": TRIP_KINDS,
            "road.config_file": ("sumo_config",), "traffic.enter_s": ("sumo_config",),
-           "road.route_turns": NETWORK_KINDS, "road.route_edges": NETWORK_KINDS}
+           "road.xodr_file": ("opendrive",),
+           "road.route_turns": NETWORK_KINDS, "road.route_edges": NETWORK_KINDS,
+           "road.route_lane": NETWORK_KINDS}
     given = {"road.net_file": road.net_file is not None, "traffic.vehicles": traffic.vehicles > 0,
              "road.config_file": road.config_file is not None,
              "traffic.enter_s": traffic.enter_s > 0,
+             "road.xodr_file": road.xodr_file is not None,
              "road.route_turns": road.route_turns != "straight",
-             "road.route_edges": road.route_edges is not None}
+             "road.route_edges": road.route_edges is not None,
+             "road.route_lane": road.route_lane is not None}
     for field, kinds in own.items():
         if given[field] and road.kind not in kinds:
             names = " or ".join(f'"{k}"' for k in kinds)
             raise SpecError(field, f"only applies to road kind {names}")
+    if road.route_lane is not None and road.route_edges is None:
+        raise SpecError("road.route_lane", "is the ego's lane on a pinned route's first edge: "
+                        "give road.route_edges too")
     if not road.on_network:
         if road.lanes is None:
             raise SpecError("road.lanes", f'is required for kind "{road.kind}"')
@@ -519,7 +535,8 @@ def _check_road_kind(spec: ScenarioSpec) -> None:
         raise SpecError("road.lanes", f'a "{road.kind}" road is its route\'s own lane: leave '
                         "lanes out (every lane index is 0)")
     if traffic.flow_vph_per_lane > 0:
-        demand = "traffic.vehicles" if road.kind == "sumo_net" else "its configuration's demand"
+        demand = ("traffic.vehicles" if road.kind in TRIP_KINDS
+                  else "its configuration's demand")
         raise SpecError("traffic.flow_vph_per_lane",
                         f'is for the built-in roads; a "{road.kind}" road takes {demand}')
     if road.kind == "sumo_config" and traffic.warm_up_s > 0:

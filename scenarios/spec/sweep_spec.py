@@ -240,8 +240,28 @@ class _SweepTable(Spec):
 
 
 @dataclasses.dataclass(frozen=True)
+class GivenSamples:
+    """Samples a sweep takes as they are given (an OpenSCENARIO parameter value
+    distribution's: ``scenarios/asam/xosc_sweep.py``), not drawn from
+    ``[sweep.params]``: each a dict of named values, made into its scenario by
+    ``scenario_of`` (a :class:`SpecError` there is that sample's error row). ``files``
+    is what the manifest records of where they came from (each file's path and sha256)."""
+
+    values: tuple[dict[str, Any], ...]
+    scenario_of: Callable[[dict[str, Any]], ScenarioSpec]
+    files: dict[str, dict[str, str]]
+
+    def value_types(self) -> dict[str, type]:
+        """Each named value's column type: text where any sample's value is text."""
+        names = dict.fromkeys(name for values in self.values for name in values)
+        return {name: str if any(isinstance(v.get(name), str) for v in self.values) else float
+                for name in names}
+
+
+@dataclasses.dataclass(frozen=True)
 class SweepSpec:
-    """A validated sweep: the base scenario, its parameters and the sampling."""
+    """A validated sweep: the base scenario, its parameters and the sampling (or its
+    samples as given)."""
 
     name: str
     base_path: Path
@@ -261,6 +281,8 @@ class SweepSpec:
     #: the ``--set`` options it was read with (``PATH=VALUE``, as given), its
     #: manifest's ``overrides``
     overrides: tuple[str, ...] = ()
+    #: its samples as given (sampler ``given``; None: drawn from ``params``)
+    given: GivenSamples | None = None
 
     @classmethod
     def from_plain(cls, data: Any, base_dir: Path,
@@ -360,9 +382,14 @@ class SweepSpec:
     @property
     def param_types(self) -> dict[str, type]:
         """Each swept path and the type of the values it takes."""
+        if self.given is not None:
+            return self.given.value_types()
         return {p.path: p.value_type for p in self.params}
 
     def with_samples(self, samples: int) -> SweepSpec:
+        if self.given is not None:
+            raise SpecError("--samples", "the samples are the distribution's (its "
+                            "numberOfTestRuns, or its deterministic product)")
         if self.sampler == "grid":
             raise SpecError("--samples", "the grid sampler takes its size from the parameters")
         if samples <= 0:
@@ -385,6 +412,8 @@ class SweepSpec:
         if self.egos_per_world > 1:
             table["egos_per_world"] = self.egos_per_world
         table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
+        if self.given is not None:
+            table["given"] = self.given.files
         return {"sweep": table}
 
 
@@ -515,6 +544,8 @@ def _unit_points(sweep: SweepSpec, rng: np.random.Generator) -> np.ndarray:
 
 def sample_values(sweep: SweepSpec) -> list[dict[str, Any]]:
     """Each sample's parameter values, in plan order."""
+    if sweep.given is not None:
+        return [dict(values) for values in sweep.given.values]
     point_rng = stream_rng(sweep.seed, POINTS_STREAM)
     if sweep.sampler == "grid":
         axes = [p.grid(sweep.levels) for p in sweep.params]
@@ -557,21 +588,28 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
     for i, (values, seed) in enumerate(zip(samples, seeds, strict=True), start=first_sample):
         if progress is not None and len(plan) % PLAN_PROGRESS_RUNS < len(controllers):
             progress(len(plan), total)
-        plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
+        shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
+        spec, error = None, None
+        if sweep.given is not None:
+            try:
+                plain = sweep.given.scenario_of(values).to_plain()
+            except SpecError as e:
+                plain, error = json.loads(json.dumps(base_plain)), (
+                    f"invalid scenario from sample {i} ({shown}): {e}")
+        else:
+            plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
         set_path(plain, "scenario.seed", int(seed))
         if warm is not None:  # the sample's warm state: one of the sweep's, by its seed
             set_path(plain, "traffic.warm_seed", warm[int(values.get("scenario.seed", seed))
                                                       % len(warm)])
         controller_values = {}  # each controller takes those it has (ControllerSpec.renamed)
-        for path, value in values.items():
+        for path, value in values.items() if sweep.given is None else ():
             if path.startswith("controller.") and path != "controller.name":
                 controller_values[path.removeprefix("controller.")] = value
             else:
                 set_path(plain, path, value)
-        shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
-        spec, error = None, None
         try:
-            spec = ScenarioSpec.from_plain(plain)
+            spec = None if error else ScenarioSpec.from_plain(plain)
         except SpecError as e:
             error = f"invalid scenario from sample {i} ({shown}): {e}"
         for controller in controllers:

@@ -34,7 +34,7 @@ def _resolved(path: Path, spec_path: str | Path, field: str) -> str:
 
 
 #: the road's fields that name a file, relative to the scenario file's folder
-_FILE_FIELDS = ("net_file", "config_file")
+_FILE_FIELDS = ("net_file", "config_file", "xodr_file")
 
 
 def load_spec(path: str | Path, overrides: Sequence[str] = ()) -> ScenarioSpec:

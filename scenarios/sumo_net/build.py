@@ -77,7 +77,7 @@ def _xml_sources(road: RoadSpec, geometry: RoadGeometry) -> tuple[str, str]:
 
 
 @functools.cache
-def _netconvert_version() -> str:
+def netconvert_version() -> str:
     """What makes netconvert's output differ between installations: its package's
     version (not its path, so nodes installed elsewhere name a network alike); read
     once a process (a sweep names a network per run)."""
@@ -90,7 +90,7 @@ def _netconvert_version() -> str:
 def network_file_name(road: RoadSpec) -> str:
     """The cache's name for the network of ``road``: a hash of netconvert's inputs."""
     nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
-    digest = hashlib.sha256(f"{_netconvert_version()}\n{nodes}\n{edges}".encode())
+    digest = hashlib.sha256(f"{netconvert_version()}\n{nodes}\n{edges}".encode())
     return f"{digest.hexdigest()[:20]}.net.xml"
 
 

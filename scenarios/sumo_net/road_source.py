@@ -5,6 +5,8 @@ the road's source and never its kind.
   the spec, traffic entering as flows per lane at the road's start;
 - :class:`NetworkFileRoad` (``sumo_net``): a network file, its traffic random trips
   across it (``traffic.vehicles``);
+- :class:`OpenDriveRoad` (``opendrive``): an OpenDRIVE file as netconvert converts it,
+  then a network file's road;
 - :class:`ConfigRoad` (``sumo_config``): a SUMO configuration with its own demand,
   which runs from the configuration's begin until ``traffic.enter_s`` as the
   warm-up of every run.
@@ -28,6 +30,7 @@ from scenarios.common.file_read import file_sha256, read_bytes, sha256_hex
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec, TrafficSpec
 from scenarios.sumo_net.build import build_network, input_path, sumo_load_error
+from scenarios.sumo_net.opendrive_net import opendrive_network
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,6 +85,22 @@ class RoadSource(Protocol):
     def manifest_entry(self, step_s: float) -> dict | None:
         """What a sweep's manifest records of its configuration, run in steps of
         ``step_s`` (None: it has none)."""
+    def network_data(self, cache_dir: Path | None = None) -> tuple[str, bytes]:
+        """The network SUMO runs: its file's name and bytes."""
+    def opendrive_file(self) -> Path | None:
+        """The OpenDRIVE file the road came as (None: it came as SUMO's own)."""
+
+
+class _Exported:
+    """What a road gives a run written out (``sdc export``): its network's bytes, and
+    no OpenDRIVE file of its own."""
+
+    def network_data(self, cache_dir: Path | None = None) -> tuple[str, bytes]:
+        path = self.network_file(cache_dir)
+        return path.name, read_bytes(path, "the SUMO network")
+
+    def opendrive_file(self) -> Path | None:
+        return None
 
 
 class _WarmsUpFromZero:
@@ -105,7 +124,7 @@ class _WarmsUpFromZero:
         return None
 
 
-class BuiltRoad(_WarmsUpFromZero):
+class BuiltRoad(_Exported, _WarmsUpFromZero):
     """A ``straight`` or ``curve`` road: netconvert builds its network from the spec."""
 
     flows = True
@@ -137,7 +156,7 @@ class BuiltRoad(_WarmsUpFromZero):
         return traffic.flow_vph_per_lane > 0
 
 
-class _NetworkRoad:
+class _NetworkRoad(_Exported):
     """A road drawn through a SUMO network: the route its seed draws."""
 
     flows = False
@@ -169,8 +188,8 @@ class NetworkFileRoad(_NetworkRoad, _WarmsUpFromZero):
             trip_edges(road.net)
         problem = sumo_load_error(road.net.path)
         if problem is not None:
-            raise SpecError("road.net_file", f"{road.net.path}: SUMO cannot load the network: "
-                                             f"{problem}")
+            raise SpecError(self.road.network_field,
+                            f"{road.net.path}: SUMO cannot load the network: {problem}")
 
     def network_file(self, cache_dir: Path | None = None) -> Path:
         return input_path(self.road.net_file)
@@ -186,6 +205,28 @@ class NetworkFileRoad(_NetworkRoad, _WarmsUpFromZero):
 
     def has_traffic(self, traffic: TrafficSpec) -> bool:
         return traffic.vehicles > 0
+
+
+class OpenDriveRoad(NetworkFileRoad):
+    """An ``opendrive`` road: an OpenDRIVE file, converted by netconvert and cached
+    (``scenarios/sumo_net/opendrive_net.py``), then a network as ``sumo_net``'s. A job
+    ships the ``.xodr``; each worker converts it once (the same bytes everywhere), and
+    the network's road edges travel beside it."""
+
+    def network_file(self, cache_dir: Path | None = None) -> Path:
+        return opendrive_network(self.road.xodr_file, cache_dir)
+
+    def shipped(self, cache_dir: Path | None = None) -> ShippedFile:
+        path = input_path(self.road.xodr_file)
+        data = read_bytes(path, "the OpenDRIVE file")
+        net_sha256 = file_sha256(self.network_file(cache_dir))
+        return ShippedFile("road.xodr_file", str(path), data, path.name, net_sha256, net_sha256)
+
+    def identity_sha256(self, cache_dir: Path | None = None) -> str:
+        return file_sha256(self.network_file(cache_dir))
+
+    def opendrive_file(self) -> Path | None:
+        return input_path(self.road.xodr_file)
 
 
 class ConfigRoad(_NetworkRoad):
@@ -246,9 +287,14 @@ class ConfigRoad(_NetworkRoad):
 
         return config_manifest(self.road.config_file, step_s)
 
+    def network_data(self, cache_dir: Path | None = None) -> tuple[str, bytes]:
+        bundle = self._bundle()
+        return Path(bundle.net_name).name, bundle.files[bundle.net_name]
+
 
 _BY_KIND: dict[str, type] = {"straight": BuiltRoad, "curve": BuiltRoad,
-                             "sumo_net": NetworkFileRoad, "sumo_config": ConfigRoad}
+                             "sumo_net": NetworkFileRoad, "sumo_config": ConfigRoad,
+                             "opendrive": OpenDriveRoad}
 
 
 def road_source(road: RoadSpec) -> RoadSource:

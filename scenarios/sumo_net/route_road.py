@@ -51,6 +51,7 @@ from scenarios.sumo_net.net_xml import (
     parse_net,
     read_net,
 )
+from scenarios.sumo_net.opendrive_net import opendrive_network
 from scenarios.sumo_net.sumo_config import FIELD as CONFIG_FIELD
 from scenarios.sumo_net.sumo_config import load_bundle
 
@@ -227,11 +228,13 @@ def _why_not(net: NetFile, edge: str, to: str, min_radius_m: float) -> str:
             f"circle ({min_radius_m:.1f} m)")
 
 
-def pinned_route(net: NetFile, edges: tuple[str, ...], min_radius_m: float) -> list[NetLane]:
+def pinned_route(net: NetFile, edges: tuple[str, ...], min_radius_m: float,
+                 lane_index: int | None = None) -> list[NetLane]:
     """The lanes (junction lanes included) of the route through ``edges`` in order: from
-    the rightmost lane of the first edge that leads through all of them, by turns a car
-    can drive (:func:`drivable_turns`). One it cannot drive is a :class:`SpecError`
-    naming ``road.route_edges`` and the edge."""
+    the rightmost lane of the first edge that leads through all of them (or its lane
+    ``lane_index``, ``road.route_lane``), by turns a car can drive
+    (:func:`drivable_turns`). One it cannot drive is a :class:`SpecError` naming
+    ``road.route_edges`` (or ``road.route_lane``) and the edge."""
     known = {lane.edge for lane in net.lanes.values() if not lane.internal}
     for edge in edges:
         if edge not in known:
@@ -251,6 +254,15 @@ def pinned_route(net: NetFile, edges: tuple[str, ...], min_radius_m: float) -> l
                     key=lambda lane: lane.index)
     if not starts:
         raise SpecError(ROUTE_FIELD, f"edge {edges[0]!r} has no lane open to passenger cars")
+    if lane_index is not None:
+        chosen = [lane for lane in starts if lane.index == lane_index]
+        route = onward(chosen[0], 0) if chosen else None
+        if route is None:
+            open_to = ", ".join(str(lane.index) for lane in starts
+                                if onward(lane, 0) is not None) or "none"
+            raise SpecError("road.route_lane", f"{lane_index}: no lane {lane_index} of edge "
+                            f"{edges[0]!r} leads through every edge (lanes that do: {open_to})")
+        return route
     for start in starts:
         route = onward(start, 0)
         if route is not None:
@@ -455,23 +467,26 @@ def _save(path: Path, array: np.ndarray) -> None:
         np.save(f, array)
 
 
-def road_network(road: RoadSpec) -> NetFile:
-    """The road's network: its file, or its configuration's; a missing, unreadable or
-    foreign file is a :class:`SpecError` naming ``road.net_file`` or
-    ``road.config_file``."""
+def road_network(road: RoadSpec, cache_dir: Path | None = None) -> NetFile:
+    """The road's network: its file, its configuration's, or its OpenDRIVE file's as
+    netconvert converts it (cached in ``cache_dir``); a missing, unreadable or foreign
+    file is a :class:`SpecError` naming the road's field (``road.network_field``)."""
     if road.kind == "sumo_config":
         bundle = load_bundle(road.config_file)
         try:
             return parse_net(bundle.files[bundle.net_name], Path(bundle.net_name))
         except SdcError as e:
             raise SpecError(CONFIG_FIELD, str(e)) from None
-    path = input_path(road.net_file)
+    if road.kind == "opendrive":
+        path = opendrive_network(road.xodr_file, cache_dir)
+    else:
+        path = input_path(road.net_file)
     if not path.exists():
-        raise SpecError("road.net_file", f"no such file: {path}")
+        raise SpecError(road.network_field, f"no such file: {path}")
     try:
         return read_net(path)
     except SdcError as e:
-        raise SpecError("road.net_file", str(e)) from None
+        raise SpecError(road.network_field, str(e)) from None
 
 
 def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRoad:
@@ -480,7 +495,7 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     Raises :class:`SpecError` naming the field when the file is bad or the network
     cannot hold the scenario (an obstacle off the drivable area).
     """
-    net = road_network(spec.road)
+    net = road_network(spec.road, cache_dir)
     if not net.normal_lanes():
         field = spec.road.network_field
         raise SpecError(field, f"{getattr(spec.road, field.removeprefix('road.'))}: its "
@@ -489,7 +504,7 @@ def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRo
     model = VEHICLE_MODELS[spec.vehicle.model]
     min_radius_m = model.min_turn_radius_m
     if spec.road.route_edges is not None:
-        route = pinned_route(net, spec.road.route_edges, min_radius_m)
+        route = pinned_route(net, spec.road.route_edges, min_radius_m, spec.road.route_lane)
         route_m = sum(lane.length_m for lane in route)
         if route_m < spec.road.length_m:
             raise SpecError("road.length_m", f"{spec.road.length_m} is longer than the pinned "

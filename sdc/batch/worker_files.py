@@ -85,7 +85,7 @@ class WorkerFiles:
             path = self.ensure(file, fetch)
             if file.cached:  # a run uses one at most: a built network, or a net's edges
                 cache_dir = path.parent
-            elif file.field in ("road.net_file", "road.config_file"):
+            elif file.field in ("road.net_file", "road.config_file", "road.xodr_file"):
                 name = file.field.removeprefix("road.")
                 spec = dataclasses.replace(spec, road=dataclasses.replace(
                     spec.road, **{name: str(path)}))

@@ -12,7 +12,7 @@ import click
 
 from scenarios.common.errors import SdcError
 from scenarios.scene.compiled_kernels import kernel_choice
-from sdc.cli import demo, estimate, replay, report, run, search, settle, sweep
+from sdc.cli import demo, estimate, export, replay, report, run, search, settle, sweep
 from sdc.cli.common import EXIT_INTERRUPTED, bad_input
 
 
@@ -53,5 +53,5 @@ def main() -> None:
 
 
 for _command in (run.run, demo.demo, settle.settle, report.report, sweep.sweep, search.search,
-                 estimate.estimate, replay.replay):
+                 estimate.estimate, replay.replay, export.export):
     main.add_command(_command)

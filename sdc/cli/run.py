@@ -124,8 +124,31 @@ def summary_lines(name: str, row: dict, draw=None) -> list[str]:
     ]
 
 
+def load_scenario(spec_file: Path, overrides: tuple[str, ...], ego: str | None) -> ScenarioSpec:
+    """The scenario in ``spec_file``: a TOML scenario, or an OpenSCENARIO ``.xosc``
+    (``scenarios/asam/xosc_spec.py``; what sdc holds differently from it is printed as
+    notes), changed by ``overrides``."""
+    if spec_file.suffix.lower() != ".xosc":
+        if ego is not None:
+            bad_input("--ego: names the ego of an OpenSCENARIO file (.xosc), not of a TOML "
+                      "scenario")
+        return load_spec(spec_file, overrides)
+    from scenarios.asam.xosc_spec import xosc_spec
+    from scenarios.spec.overrides import apply_overrides, blame
+
+    read = xosc_spec(spec_file, ego=ego)
+    for note in read.notes:
+        click.echo(f"note: {note}", err=True)
+    plain = read.spec.to_plain()
+    changes = apply_overrides(plain, overrides)
+    try:
+        return ScenarioSpec.from_plain(plain)
+    except SpecError as e:
+        raise blame(e, changes, spec_file) from None
+
+
 @click.command()
-@click.argument("spec_file", metavar="SPEC.toml", type=click.Path(path_type=Path))
+@click.argument("spec_file", metavar="SPEC.toml|X.xosc", type=click.Path(path_type=Path))
 @click.option("--seed", type=click.IntRange(0, SEED_LIMIT - 1),
               help="Override the spec's scenario.seed (SUMO's and the lidar noise's seed).")
 @click.option("--controller", metavar="NAME",
@@ -139,13 +162,22 @@ def summary_lines(name: str, row: dict, draw=None) -> list[str]:
 @click.option("--json", "as_json", is_flag=True,
               help="Print the result row as one JSON object on the last line (with "
                    "--set, one p.<path> value per field set, as a sweep's row has).")
+@click.option("--ego", metavar="NAME",
+              help="An .xosc's ego: the entity of this name (default: the one named Ego, "
+                   "ego or hero).")
 @set_option("scenario")
 def run(spec_file: Path, seed: int | None, controller: str | None, backend: str | None,
-        trace: Path | None, as_json: bool, overrides: tuple[str, ...]) -> None:
-    """Run one scenario and print its outcome."""
+        trace: Path | None, as_json: bool, ego: str | None, overrides: tuple[str, ...]) -> None:
+    """Run one scenario and print its outcome.
+
+    SPEC.toml is an sdc scenario; X.xosc an OpenSCENARIO 1.0-1.3 scenario of the
+    subset sdc runs (an OpenDRIVE road, the ego placed and at its speed, bodies
+    standing still, a stop time: docs/reference/openscenario.md), its road converted
+    by SUMO's netconvert.
+    """
     check_trace_path(trace)
     try:
-        spec = load_spec(spec_file, overrides)
+        spec = load_scenario(spec_file, overrides, ego)
         if seed is not None:
             spec = spec.with_seed(seed)
         if controller is not None:

@@ -38,7 +38,7 @@ def _plan_lines(sweep, plan) -> list[str]:
     if worlds:
         lines.append(f"the runs share {len(worlds)} worlds (sweep.egos_per_world = "
                      f"{sweep.egos_per_world}; the placement rule may seat fewer together)")
-    paths = [p.path for p in sweep.params]
+    paths = list(sweep.param_types)
     lines.append("  ".join(["run_id", "seed"] + paths))
     for run in plan:
         values = [f"{v:.6g}" if isinstance(v, float) else str(v) for v in run.params.values()]
@@ -47,8 +47,33 @@ def _plan_lines(sweep, plan) -> list[str]:
     return lines
 
 
+def load_sweep_file(sweep_file: Path, overrides: tuple[str, ...], controllers: str | None,
+                    ego: str | None):
+    """The sweep in ``sweep_file``: a TOML sweep, or an OpenSCENARIO parameter value
+    distribution (``.xosc``) under ``controllers`` (comma-separated; default: seed)."""
+    from scenarios.spec.controller_ref import resolve_file
+    from scenarios.spec.sweep_spec import load_sweep
+
+    if sweep_file.suffix.lower() != ".xosc":
+        for option, value in (("--controllers", controllers), ("--ego", ego)):
+            if value is not None:
+                bad_input(f"{option}: applies to a distribution file (.xosc); a TOML sweep "
+                          "names them in its file (sweep.controllers)")
+        return load_sweep(sweep_file, overrides)
+    if overrides:
+        bad_input("--set: changes a TOML sweep's fields; a distribution's runs are its "
+                  "scenario file's, with the distribution's values")
+    from scenarios.asam.xosc_sweep import distribution_sweep
+
+    names = tuple(resolve_file(name.strip(), Path.cwd(), "--controllers")
+                  for name in (controllers or "seed").split(",") if name.strip())
+    if not names:
+        bad_input("--controllers: names no controller")
+    return distribution_sweep(sweep_file, names, ego)
+
+
 @click.command()
-@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.argument("sweep_file", metavar="SWEEP.toml|D.xosc", type=click.Path(path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path),
               metavar="DIR", help="Sweep directory (required unless --dry-run).")
 @executor_options
@@ -61,10 +86,21 @@ def _plan_lines(sweep, plan) -> list[str]:
 @click.option("--samples", type=click.IntRange(min=1), metavar="N",
               help="Override the sweep's sample count (not for the grid sampler).")
 @click.option("--dry-run", is_flag=True, help="Print the plan (one line per run) and stop.")
+@click.option("--controllers", metavar="NAME[,NAME...]",
+              help="A distribution's controllers (default: seed), as --controller of sdc "
+                   "run names one.")
+@click.option("--ego", metavar="NAME",
+              help="A distribution's ego: the entity of this name in its scenario (default: "
+                   "the one named Ego, ego or hero).")
 @set_option("sweep")
 def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume: bool,
-          samples: int | None, dry_run: bool, overrides: tuple[str, ...], **options) -> None:
+          samples: int | None, dry_run: bool, controllers: str | None, ego: str | None,
+          overrides: tuple[str, ...], **options) -> None:
     """Run every sample of a scenario family under each of its controllers.
+
+    SWEEP.toml is an sdc sweep; D.xosc an OpenSCENARIO parameter value distribution
+    (1.1-1.3): its test runs (stochastic draws from its randomSeed, or the
+    deterministic product) over its ScenarioFile, one p.<ParameterName> column each.
 
     Results stream into DIR/parts/ as runs finish and end in DIR/results.parquet
     (one row per run, one p.<path> column per swept parameter); DIR/manifest.json
@@ -77,7 +113,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     workers, local or on any Ray node, never open the driver's paths.
     """
     from analysis.measures.run_outcome import outcomes_text
-    from scenarios.spec.sweep_spec import expand, load_sweep
+    from scenarios.spec.sweep_spec import expand
     from sdc.batch.sweep_runner import run_sweep
 
     check_executor_options(options)
@@ -85,7 +121,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
         bad_input("--batch: only applies with --executor ray (local workers take one run "
                   "at a time)")
     try:
-        spec = load_sweep(sweep_file, overrides)
+        spec = load_sweep_file(sweep_file, overrides, controllers, ego)
         if samples is not None:
             spec = spec.with_samples(samples)
         check_sweep_inputs(spec, sweep_file)
@@ -106,7 +142,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
     if outcome.interrupted or counts["missing"]:
         hint = resume_command(sweep_file, out_dir, samples=samples, overrides=overrides,
-                              traces=options["traces"],
+                              controllers=controllers, ego=ego, traces=options["traces"],
                               executor=options["executor"], workers=options["workers"],
                               ray_address=options["ray_address"],
                               run_timeout=options["run_timeout"], batch_runs=batch_runs)
@@ -117,13 +153,15 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
 def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
                    executor: str, workers: int, ray_address: str | None,
                    run_timeout: float | None, batch_runs: int | None,
-                   overrides: tuple[str, ...] = ()) -> str:
+                   overrides: tuple[str, ...] = (), controllers: str | None = None,
+                   ego: str | None = None) -> str:
     """The command that finishes an interrupted sweep: every option that shaped its plan
     (--set, --samples; another plan is refused) and how it ran, then --resume;
     shell-quoted."""
     words = [*program_words(), "sweep", str(sweep_file), "--out", str(out_dir)]
     words += [word for text in overrides for word in ("--set", text)]
-    optional = [("--samples", samples), ("--traces", None if traces == "failures" else traces),
+    optional = [("--controllers", controllers), ("--ego", ego), ("--samples", samples),
+                ("--traces", None if traces == "failures" else traces),
                 ("--executor", None if executor == "local" else executor),
                 ("--workers", workers), ("--ray-address", ray_address),
                 ("--run-timeout", run_timeout), ("--batch", batch_runs)]

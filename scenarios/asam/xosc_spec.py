@@ -1,0 +1,169 @@
+"""An OpenSCENARIO scenario (``scenarios/asam/xosc_scenario.py``) as an sdc scenario:
+an ``opendrive`` road on its ``LogicFile``, the ego's route pinned from the lane the
+file places it in, its bodies standing along that route.
+
+- **The route** starts on the SUMO lane the ego's position maps to
+  (``scenarios/asam/xodr_places.py``: lane ids by name, so OpenDRIVE's -1 is the lane
+  next to the reference line whatever SUMO's index) and goes straight on, junction
+  after junction, for as long as a lane goes straight on (or is the only way on);
+  ``road.route_edges`` and ``road.route_lane`` hold it, ``road.length_m`` is its length.
+- **The ego's and each body's centre** is its reference point (a vehicle's rear
+  axle, where OpenSCENARIO places it) moved by its bounding box's centre, along and
+  across its lane; a body's place on the route is that centre's station and offset
+  from the ego's lane's centre (``position_m``, ``lateral_offset_m``).
+- **What sdc cannot hold is refused or said, never approximated in silence**: a
+  body off the ego's route, a ``MiscObject`` bigger than a barrel (sdc has no box)
+  and a run with no ``SimulationTimeCondition`` to end it are refused, naming the
+  entity or element and the file; the bodies' and the ego's own sizes, which sdc
+  takes from its kinds (``scenarios/spec/bodies.py``) and the car's model, are the
+  :attr:`XoscSpec.notes` a command prints.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from types import MappingProxyType
+
+from scenarios.asam.xodr_places import MapPlace, XodrMap
+from scenarios.asam.xosc_scenario import (
+    LanePlace,
+    Place,
+    RoadPlace,
+    XoscScenario,
+    read_scenario,
+)
+from scenarios.common.errors import SpecError
+from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.spec.scenario_spec import ScenarioSpec, VehicleSpec
+from scenarios.sumo_net.net_xml import STRAIGHT, NetFile, NetLane
+from scenarios.sumo_net.road_source import road_source
+from scenarios.sumo_net.route_road import drivable_turns, pinned_route
+
+#: a body's size off its kind's by more than this is said in the notes [m]
+SIZE_NOTE_M = 0.25
+#: the route goes on no farther than this [m]
+ROUTE_MAX_M = 20_000.0
+#: a body's centre farther than this from the ego's lane's centre is off its route [m]
+OFF_ROUTE_M = 12.0
+
+
+@dataclasses.dataclass(frozen=True)
+class XoscSpec:
+    """The spec, the scenario it was read from, and what sdc holds differently from
+    the file (sizes), in sentences."""
+
+    spec: ScenarioSpec
+    scenario: XoscScenario
+    notes: tuple[str, ...]
+
+
+def _placed(world: XodrMap, place: Place, where: str) -> MapPlace:
+    if isinstance(place, LanePlace):
+        return world.lane_place(place.road_id, place.lane_id, place.s_m, place.offset_m, where)
+    if isinstance(place, RoadPlace):
+        return world.road_place(place.road_id, place.s_m, place.t_m, where)
+    return world.world_place(place.x_m, place.y_m, place.heading_rad, where)
+
+
+def _straight_on(net: NetFile, lane: NetLane, min_radius_m: float) -> tuple[str, ...]:
+    """The edges from ``lane``'s on: straight on at each junction (or the one way on)."""
+    edges, length_m, seen = [lane.edge], lane.length_m, {lane.edge}
+    while length_m < ROUTE_MAX_M:
+        turns = drivable_turns(net, lane, min_radius_m)
+        ahead = [t for t in turns if t.direction == STRAIGHT] or (turns if len(turns) == 1
+                                                                  else [])
+        if not ahead or net.lanes[ahead[0].to].edge in seen:
+            break
+        lane = net.lanes[ahead[0].to]
+        edges.append(lane.edge)
+        seen.add(lane.edge)
+        length_m += lane.length_m
+    return tuple(edges)
+
+
+def xosc_spec(path: str | Path, parameters: Mapping[str, object] = MappingProxyType({}),
+              ego: str | None = None, *, controller: str | None = None, seed: int = 1,
+              cache_dir: Path | None = None,
+              maps: dict[Path, XodrMap] | None = None) -> XoscSpec:
+    """The sdc scenario of the OpenSCENARIO file ``path`` (its parameters overridden by
+    ``parameters``, its ego the entity ``ego``), run by ``controller`` (default: the
+    spec's) from ``seed``; ``maps`` keeps each road's map between calls. Every refusal
+    is a :class:`SpecError` naming the file."""
+    path = Path(path)
+    try:
+        scenario = read_scenario(path, parameters, ego)
+        maps = {} if maps is None else maps
+        if scenario.xodr_file not in maps:
+            maps[scenario.xodr_file] = XodrMap(scenario.xodr_file, cache_dir)
+        return _spec(scenario, maps[scenario.xodr_file], controller, seed, cache_dir)
+    except SpecError as e:
+        raise e.in_file(path) from None
+
+
+def _spec(scenario: XoscScenario, world: XodrMap, controller: str | None, seed: int,
+          cache_dir: Path | None) -> XoscSpec:
+    if scenario.duration_s is None:
+        raise SpecError("Storyboard/StopTrigger", "no SimulationTimeCondition ends the run: "
+                        "sdc runs a scenario for a duration")
+    model = VEHICLE_MODELS[VehicleSpec().model]
+    start = _placed(world, scenario.ego_place, f"Init/Private[{scenario.ego_name}]")
+    edges = _straight_on(world.net, start.lane, model.min_turn_radius_m)
+    route = pinned_route(world.net, edges, model.min_turn_radius_m, start.lane.index)
+    start_m = start.pos_m + scenario.ego_center_m[0]
+    plain = {
+        "scenario": {"name": Path(scenario.path).stem, "duration_s": scenario.duration_s,
+                     "seed": seed},
+        "road": {"kind": "opendrive", "xodr_file": str(scenario.xodr_file),
+                 "route_edges": list(edges), "route_lane": start.lane.index,
+                 "length_m": math.floor(sum(lane.length_m for lane in route) * 10) / 10},
+        "traffic": {"vehicles": scenario.traffic_vehicles},
+        "ego": {"lane": 0, "start_m": start_m, "speed_mps": scenario.ego_speed_mps},
+    }
+    if controller is not None:
+        plain["controller"] = {"name": controller}
+    probe = ScenarioSpec.from_plain(_minimal() | {"road": plain["road"]})
+    geometry = road_source(probe.road).geometry(probe, cache_dir)
+    obstacles, notes = [], []
+    for body in scenario.bodies:
+        where = f"Entities/ScenarioObject[{body.name}]"
+        if body.kind == "box":
+            raise SpecError(where, f"a MiscObject of {body.size_m[0]:g} x {body.size_m[1]:g} m: "
+                            "sdc's standing things are barrels "
+                            f"({OBSTACLE_SIZES_M['barrel'][0]:g} m); a bigger thing is not held")
+        place = _placed(world, body.place, f"Init/Private[{body.name}]")
+        x_m, y_m = _centre(world, place, body.center_m)
+        (s_m,), (d_m,) = geometry.to_frenet([[x_m, y_m]])
+        if not 0.0 <= s_m <= geometry.length_m or abs(d_m) > OFF_ROUTE_M:
+            raise SpecError(where, f"stands {s_m:.1f} m along and {d_m:.1f} m beside the ego's "
+                            "route: sdc places bodies along the ego's route")
+        obstacles.append({"kind": body.kind, "lane": 0, "position_m": float(s_m),
+                          "lateral_offset_m": float(d_m)})
+        length_m, width_m = OBSTACLE_SIZES_M[body.kind]
+        if max(abs(body.size_m[0] - length_m), abs(body.size_m[1] - width_m)) > SIZE_NOTE_M:
+            notes.append(f"{body.name}: {body.size_m[0]:g} x {body.size_m[1]:g} m in the file, "
+                         f"sdc's {body.kind} is {length_m:g} x {width_m:g} m")
+    plain["obstacles"] = obstacles
+    if max(abs(scenario.ego_size_m[0] - model.length_m),
+           abs(scenario.ego_size_m[1] - model.width_m)) > SIZE_NOTE_M:
+        notes.append(f"{scenario.ego_name}: {scenario.ego_size_m[0]:g} x "
+                     f"{scenario.ego_size_m[1]:g} m in the file, sdc's car is "
+                     f"{model.length_m:g} x {model.width_m:g} m")
+    return XoscSpec(ScenarioSpec.from_plain(plain), scenario, tuple(notes))
+
+
+def _centre(world: XodrMap, place: MapPlace, center_m) -> tuple[float, float]:
+    """A body's centre: its reference point ``place`` moved ``center_m`` (forward, left)
+    in its lane's direction."""
+    x_m, y_m = world.lane_frame(place.lane).point(place.pos_m, place.lateral_m)
+    heading = place.heading_rad
+    return (x_m + center_m[0] * math.cos(heading) - center_m[1] * math.sin(heading),
+            y_m + center_m[0] * math.sin(heading) + center_m[1] * math.cos(heading))
+
+
+def _minimal() -> dict:
+    """The least a spec is: what :func:`_spec` asks of the defaults and the route."""
+    return {"scenario": {"name": "probe", "duration_s": 1.0},
+            "ego": {"lane": 0, "start_m": 5.0, "speed_mps": 0.0}}

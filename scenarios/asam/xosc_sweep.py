@@ -1,0 +1,60 @@
+"""An OpenSCENARIO parameter value distribution as an sdc sweep: its samples
+(``scenarios/asam/xosc_distribution.py``) taken as given, each made into its scenario
+from the distribution's ``ScenarioFile`` (``scenarios/asam/xosc_spec.py``), its values
+the result's ``p.<ParameterName>`` columns. The manifest names both files with their
+sha256; the samples' seeds are drawn from the distribution's ``randomSeed`` (0 for a
+deterministic one), as a sweep's from its ``seed``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from scenarios.asam.xodr_places import XodrMap
+from scenarios.asam.xosc_distribution import read_distribution
+from scenarios.asam.xosc_spec import xosc_spec
+from scenarios.common.errors import SpecError
+from scenarios.common.file_read import file_sha256
+from scenarios.spec.controller_ref import controller_label
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.sweep_spec import GivenSamples, SweepSpec, check_runs
+
+SAMPLER = "given"
+
+
+class _ScenarioOf:
+    """A sample's values made into its scenario (each road's map read once; a
+    pickled copy reads it again)."""
+
+    def __init__(self, scenario_file: Path, ego: str | None):
+        self.scenario_file, self.ego = scenario_file, ego
+        self._maps: dict[Path, XodrMap] = {}
+
+    def __call__(self, values: dict[str, Any]) -> ScenarioSpec:
+        return xosc_spec(self.scenario_file, values, self.ego, maps=self._maps).spec
+
+    def __getstate__(self) -> dict:
+        return {"scenario_file": self.scenario_file, "ego": self.ego, "_maps": {}}
+
+
+def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
+                       ego: str | None = None) -> SweepSpec:
+    """The sweep of the distribution file ``path`` under ``controllers`` (names as
+    resolved by the caller), its scenario's ego the entity ``ego``."""
+    path = Path(path)
+    distribution = read_distribution(path)
+    scenario_file = distribution.scenario_file.resolve()
+    scenario_of = _ScenarioOf(scenario_file, ego)
+    base = scenario_of({})  # the scenario's own declared values: what every sample changes
+    labels = [controller_label(name) for name in controllers]
+    if len(set(labels)) != len(labels):
+        raise SpecError("--controllers", "names a controller twice")
+    check_runs("--controllers", f"{len(distribution.samples)} samples",
+               len(distribution.samples), len(controllers), "fewer test runs")
+    files = {role: {"path": str(file), "sha256": file_sha256(file)}
+             for role, file in (("distribution", path.resolve()),
+                                ("scenario", scenario_file))}
+    return SweepSpec(path.stem, scenario_file, base, len(distribution.samples),
+                     SAMPLER, distribution.seed or 0, 5, tuple(controllers), (),
+                     given=GivenSamples(distribution.samples, scenario_of, files))

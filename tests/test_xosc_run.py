@@ -1,0 +1,155 @@
+"""OpenSCENARIO in: an ``.xosc`` scenario run (``sdc run X.xosc``) and a parameter
+value distribution swept (``sdc sweep D.xosc --controllers ...``), on an OpenDRIVE
+road (straight, arc, straight; two lanes each way) written by scenariogeneration.
+The times are checked against the file's own geometry, not against sdc's."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+from scenariogeneration import xosc
+
+from scenarios.asam.xodr_roads import read_xodr
+from scenarios.asam.xosc_spec import xosc_spec
+from scenarios.common.file_read import file_sha256
+from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from tests.xodr_samples import write_arc_road, write_parked_car_xosc
+
+EGO_LENGTH_M = VEHICLE_MODELS["x5-lesson"].length_m
+#: the bounding box centre of the files' vehicles, ahead of their rear axle [m]
+CENTER_X_M = 1.4
+
+
+def _along_lane_m(xodr_file, lane_id: int, from_s_m: float, to_s_m: float) -> float:
+    """How far apart two stations of a lane's centre are along it, from the file."""
+    road = read_xodr(xodr_file)["1"]
+    s_m = np.linspace(from_s_m, to_s_m, 4000)
+    xy = np.array([road.lane_point(lane_id, s)[:2] for s in s_m])
+    return float(np.hypot(*np.diff(xy, axis=0).T).sum())
+
+
+def _expected_collision_s(xodr_file, lane_id, ego_s_m, parked_s_m, speed_mps) -> float:
+    """When a car holding its lane at ``speed_mps`` meets one parked ahead of it."""
+    gap_m = _along_lane_m(xodr_file, lane_id, ego_s_m + CENTER_X_M, parked_s_m + CENTER_X_M)
+    return (gap_m - (EGO_LENGTH_M + OBSTACLE_SIZES_M["car"][0]) / 2) / speed_mps
+
+
+@pytest.mark.parametrize(("lane_id", "parked_s_m", "width_m"),
+                         [(-1, 90.0, 3.2), (-2, 160.0, 2.8), (-1, 150.0, 3.5)])
+def test_lane_keep_meets_the_parked_car_when_its_distance_and_speed_say(
+        tmp_path, lane_id, parked_s_m, width_m):
+    """On the straight and in the arc (where a lane's length is not the reference
+    line's), in either right lane: the collision comes at the time the file's own
+    lane geometry, the ego's speed and the two bodies' lengths give, within a step."""
+    from sdc.cli.run import run_one
+
+    xodr_file = write_arc_road(tmp_path / "road.xodr", width_m, 80.0)
+    path = write_parked_car_xosc(tmp_path / "parked.xosc", ego_lane=lane_id,
+                                 parked_s_m=parked_s_m, speed_mps=11.0)
+    read = xosc_spec(path, controller="lane-keep", cache_dir=tmp_path)
+    assert read.spec.road.route_lane == (1 if lane_id == -1 else 0)
+    row = run_one(read.spec)
+    assert row["collision"] and row["collision_with"] == "obstacle", row
+    expected = _expected_collision_s(xodr_file, lane_id, 10.0, parked_s_m, 11.0)
+    assert row["collision_time_s"] == pytest.approx(expected, abs=read.spec.scenario.step_s)
+
+
+def test_avoid_goes_round_the_parked_car(tmp_path):
+    from sdc.cli.run import run_one
+
+    write_arc_road(tmp_path / "road.xodr", 3.2, 80.0)
+    path = write_parked_car_xosc(tmp_path / "parked.xosc", ego_lane=-2, parked_s_m=150.0)
+    row = run_one(xosc_spec(path, controller="avoid", cache_dir=tmp_path).spec)
+    assert row["status"] == "ok" and not row["collision"] and row["maneuver_started"], row
+
+
+def _sdc(*args, cwd) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "sdc", *args], cwd=cwd, capture_output=True,
+                          text=True, check=False)
+
+
+def test_sdc_run_reads_an_xosc_and_refuses_what_it_cannot_run(tmp_path):
+    write_arc_road(tmp_path / "road.xodr")
+    write_parked_car_xosc(tmp_path / "parked.xosc", parked_s_m=60.0)
+    done = _sdc("run", "parked.xosc", "--controller", "lane-keep", "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.splitlines()[-1])["collision"]
+    assert "note: Parked: 5 x 2 m in the file, sdc's car is 4.5 x 1.8 m" in done.stderr
+    nobody = _sdc("run", "parked.xosc", "--ego", "Nobody", cwd=tmp_path)
+    assert nobody.returncode == 2 and "parked.xosc" in nobody.stderr
+    assert "Nobody" in nobody.stderr
+    off = write_parked_car_xosc(tmp_path / "off.xosc", ego_lane=-3)
+    refused = _sdc("run", off.name, cwd=tmp_path)
+    assert refused.returncode == 2 and "off.xosc" in refused.stderr
+    assert "lane -3" in refused.stderr
+
+
+def _distribution(tmp_path, runs: int = 6, seed: int = 7):
+    write_arc_road(tmp_path / "road.xodr", 3.2, 80.0)
+    write_parked_car_xosc(tmp_path / "parked.xosc", speed_mps="$EgoSpeed",
+                          parked_s_m="$ParkedS", parameters={"EgoSpeed": 12.0, "ParkedS": 90.0})
+    stochastic = xosc.Stochastic(runs, seed)
+    stochastic.add_distribution("EgoSpeed", xosc.UniformDistribution(xosc.Range(8, 16)))
+    stochastic.add_distribution("ParkedS",
+                                xosc.NormalDistribution(130, 400, xosc.Range(60, 200)))
+    xosc.ParameterValueDistribution("parked car, varied", "sdc tests", "parked.xosc",
+                                    stochastic, osc_minor_version=2).write_xml(
+        str(tmp_path / "varied.xosc"))
+    return tmp_path / "varied.xosc"
+
+
+@pytest.mark.slow
+def test_a_stochastic_distribution_swept(tmp_path):
+    """6 draws swept under lane-keep: 6 rows, p.EgoSpeed and p.ParkedS inside the
+    distribution's ranges, each collision when that row's values say; the manifest
+    names both files with their sha256; --resume finds nothing left to run."""
+    distribution = _distribution(tmp_path)
+    out = tmp_path / "out"
+    done = _sdc("sweep", "varied.xosc", "--controllers", "lane-keep", "--out", str(out),
+                "--workers", "2", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    rows = pd.read_parquet(out / "results.parquet")
+    assert len(rows) == 6 and rows["p.EgoSpeed"].between(8, 16).all()
+    assert rows["p.ParkedS"].between(60, 200).all() and rows["p.ParkedS"].nunique() == 6
+    for row in rows.to_dict("records"):
+        expected = _expected_collision_s(tmp_path / "road.xodr", -2, 10.0, row["p.ParkedS"],
+                                         row["p.EgoSpeed"])
+        assert row["collision"]
+        assert row["collision_time_s"] == pytest.approx(expected, abs=0.07)
+    given = json.loads((out / "manifest.json").read_text())["sweep"]["sweep"]["given"]
+    assert given["distribution"] == {"path": str(distribution),
+                                     "sha256": file_sha256(distribution)}
+    assert given["scenario"]["sha256"] == file_sha256(tmp_path / "parked.xosc")
+    again = _sdc("sweep", "varied.xosc", "--controllers", "lane-keep", "--out", str(out),
+                 "--resume", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert len(pd.read_parquet(out / "results.parquet")) == 6
+
+
+def test_an_ncap_style_variation_plans_its_product(tmp_path):
+    """Bare parameter names, a DistributionRange with a step and a DistributionSet:
+    the plan is their product, each sample's values in its row."""
+    _distribution(tmp_path)
+    deterministic = xosc.Deterministic()
+    deterministic.add_single_distribution(
+        "EgoSpeed", xosc.DistributionRange(2, xosc.Range(8, 14)))
+    values = xosc.DistributionSet()
+    for s_m in (70, 110, 150):
+        values.add_value(str(s_m))
+    deterministic.add_single_distribution("ParkedS", values)
+    xosc.ParameterValueDistribution("ncap style", "sdc tests", "parked.xosc", deterministic,
+                                    osc_minor_version=1).write_xml(str(tmp_path / "ncap.xosc"))
+    plan = _sdc("sweep", "ncap.xosc", "--controllers", "lane-keep,avoid", "--dry-run",
+                cwd=tmp_path)
+    assert plan.returncode == 0, plan.stderr
+    assert "12 samples x 2 controllers = 24 runs" in plan.stdout, plan.stdout
+    lines = [line.split() for line in plan.stdout.splitlines() if "-lane-keep" in line]
+    assert [(float(v), float(s)) for _, _, v, s in lines] == [
+        (v, s) for v in (8, 10, 12, 14) for s in (70, 110, 150)]
+    refused = _sdc("sweep", "ncap.xosc", "--set", "sweep.seed=3", "--dry-run", cwd=tmp_path)
+    assert refused.returncode == 2 and "--set" in refused.stderr
