@@ -8,6 +8,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from scipy.spatial import cKDTree
 from scenarios.asam.xodr_places import XodrMap
 from scenarios.asam.xodr_roads import read_xodr
 from scenarios.common.errors import SpecError
+from scenarios.scene.polyline_frame import PolylineFrame
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec
 from scenarios.sumo_net.net_xml import read_net
@@ -28,6 +30,44 @@ def _dense(polyline: np.ndarray, step_m: float = 0.01) -> np.ndarray:
     pieces = [np.linspace(a, b, max(2, int(np.hypot(*(b - a)) / step_m) + 1))
               for a, b in zip(polyline[:-1], polyline[1:], strict=True)]
     return np.vstack(pieces)
+
+
+def _sumo_off_the_file_m(world: XodrMap, lane, trim_m: float = 2.0) -> float:
+    """How far SUMO's lane strays from the centre the file's reference line and lane
+    widths give its OpenDRIVE lane: its shape every 0.1 m (``trim_m`` left out at each
+    end, where junctions shape it), to the file's lane centre line drawn through a
+    point every 0.2 m (its chords stray under 1 mm from a curve of 5 m radius) [m]."""
+    road_id, lane_id = world._original[lane.id]
+    road = world.roads[road_id]
+    s_m = [s for s in np.arange(0.0, road.length_m + 0.2, 0.2)
+           if lane_id in road.section_at(min(s, road.length_m)).lanes]
+    file_line = PolylineFrame([road.lane_point(lane_id, min(s, road.length_m))[:2]
+                               for s in s_m], min_segment_m=1e-9)
+    dense = _dense(lane.shape_xy, 0.1)
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    inner = dense[(along > trim_m) & (along < along[-1] - trim_m)]
+    return float(np.abs(file_line.project(inner)[1]).max()) if len(inner) else 0.0
+
+
+@pytest.mark.parametrize("network", ["cross/cross.net.xml", "grid6/grid6.net.xml",
+                                     "fokr_bs_demo/fokr_bs.net.xml.gz"])
+def test_maps_nobody_here_wrote_lie_where_their_files_put_them(tmp_path, network):
+    """SUMO's own shipped networks (a signalised crossing, a grid, Braunschweig's
+    centre) written as OpenDRIVE by netconvert (lines, arcs and paramPoly3 curves,
+    many roads, lane sections, junctions), then read back both ways: every driving
+    lane SUMO imports carries its OpenDRIVE name, and lies within 5 cm of where the
+    file's own geometry puts that lane."""
+    import sumo
+
+    xodr_file = tmp_path / "map.xodr"
+    subprocess.run([str(Path(sumo.SUMO_HOME) / "bin" / "netconvert"), "--sumo-net-file",
+                    str(Path(sumo.SUMO_HOME) / "tools" / "game" / network),
+                    "--opendrive-output", str(xodr_file), "--no-warnings"],
+                   capture_output=True, check=True)
+    world = XodrMap(xodr_file, tmp_path)
+    lanes = world.net.normal_lanes()
+    assert len(lanes) > 20 and all(lane.id in world._original for lane in lanes)
+    assert max(_sumo_off_the_file_m(world, lane) for lane in lanes) < 0.05
 
 
 @pytest.mark.parametrize(("width_m", "radius_m", "spiral_m"),
@@ -183,3 +223,37 @@ def test_lane_keep_hits_the_parked_car_and_avoid_passes_it(tmp_path, width_m):
     avoid = run_one(spec.with_controller("avoid"))
     assert avoid["status"] == "ok" and not avoid["collision"], avoid
     assert avoid["maneuver_started"]
+
+
+@pytest.mark.slow
+def test_a_town_sweep_on_an_opendrive_road(tmp_path):
+    """Like any network road: routes drawn from the seed, random trips, warm states
+    and shared worlds; every run ok, two egos in a world, and a shared world's run
+    replays to its trace bit for bit."""
+    import pandas as pd
+    from click.testing import CliRunner
+
+    from sdc.cli import main
+
+    write_arc_road(tmp_path / "road.xodr", 3.0, 60.0)
+    (tmp_path / "base.toml").write_text(
+        '[scenario]\nname = "od-town"\nduration_s = 12.0\nstep_s = 0.1\n'
+        '[road]\nkind = "opendrive"\nxodr_file = "road.xodr"\nlength_m = 180.0\n'
+        '[traffic]\nvehicles = 20\nwarm_up_s = 30.0\n'
+        '[ego]\nlane = 0\nstart_m = 10.0\nspeed_mps = 10.0\n')
+    (tmp_path / "sweep.toml").write_text(
+        '[sweep]\nname = "od-town"\nbase = "base.toml"\nsamples = 6\nwarm_states = 2\n'
+        'egos_per_world = 2\ncontrollers = ["avoid"]\n'
+        '[sweep.params]\n"ego.speed_mps" = { uniform = [6.0, 12.0] }\n')
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["sweep", str(tmp_path / "sweep.toml"), "--out", str(out),
+                                     "--workers", "2", "--traces", "all"])
+    assert done.exit_code == 0, done.output
+    rows = pd.read_parquet(out / "results.parquet")
+    assert (rows.status == "ok").all() and rows.warm_state.nunique() == 2
+    plan = pd.read_parquet(out / "plan.parquet")
+    shared = plan.groupby("world_id").size()
+    assert (shared == 2).any(), plan[["run_id", "world_id"]]
+    run_id = plan[plan.world_id.isin(shared[shared == 2].index)].run_id.iloc[0]
+    replay = CliRunner().invoke(main, ["replay", str(out), "--run", run_id, "--verify"])
+    assert replay.exit_code == 0 and "identical" in replay.output, replay.output

@@ -34,7 +34,7 @@ from scenarios.asam.xosc_export import (
     schema_errors,
     write_xosc,
 )
-from scenarios.asam.xosc_paths import read_scenario, read_trajectories
+from scenarios.asam.xosc_paths import read_export, read_trajectories
 from scenarios.common.errors import SdcError
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.sweep_spec import load_sweep
@@ -44,6 +44,7 @@ from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
 from sdc.cli import main
+from tests.xodr_samples import write_arc_road
 
 RUN = "00000-avoid"
 STRAIGHT = """[scenario]
@@ -98,7 +99,37 @@ SWEEPS = {
     "grid": (f'base = "{CATALOG_DIR / "avoid-roads-grid.toml"}"',
              '"scenario.duration_s" = { choice = [5.0] }\n'
              '"traffic.vehicles" = { choice = [40] }'),
+    # an OpenDRIVE road written by scenariogeneration (tests/xodr_samples.py), its
+    # random trips both ways, a car parked on the ego's lane
+    "opendrive": ('base = "opendrive.toml"', '"traffic.vehicles" = { choice = [12] }'),
 }
+OPENDRIVE = """\
+[scenario]
+name = "export-opendrive"
+duration_s = 6.0
+step_s = 0.1
+seed = 3
+
+[road]
+kind = "opendrive"
+xodr_file = "road.xodr"
+length_m = 300.0
+route_edges = ["-1"]
+route_lane = 0
+
+[ego]
+lane = 0
+start_m = 10.0
+speed_mps = 10.0
+
+[[obstacles]]
+kind = "car"
+lane = 0
+position_m = 80.0
+
+[controller]
+name = "avoid"
+"""
 
 
 @pytest.fixture(scope="module", params=sorted(SWEEPS))
@@ -107,6 +138,8 @@ def sweep_dir(request, tmp_path_factory):
     tmp = tmp_path_factory.mktemp(f"export-{request.param}")
     base, params = SWEEPS[request.param]
     (tmp / "base.toml").write_text(STRAIGHT)
+    (tmp / "opendrive.toml").write_text(OPENDRIVE)
+    write_arc_road(tmp / "road.xodr")
     (tmp / "sweep.toml").write_text(f'[sweep]\nname = "export-{request.param}"\n{base}\n'
                                     f'sampler = "grid"\ncontrollers = ["avoid"]\n\n'
                                     f"[sweep.params]\n{params}\n")
@@ -147,7 +180,7 @@ def test_an_exported_run_is_valid_and_reads_back_as_recorded(sweep_dir, tmp_path
         warnings.simplefilter("error")  # ParseOpenScenario warns on a file the schema fails
         scenario = parse_xosc(out)
     assert scenario.header.version_minor == 0
-    read = read_scenario(out)
+    read = read_export(out)
     again = read_trajectories(out)
     assert again.keys() == read.trajectories.keys()
     assert all(np.array_equal(a, b) for name in again
@@ -190,13 +223,15 @@ def test_an_exported_run_is_valid_and_reads_back_as_recorded(sweep_dir, tmp_path
         else:
             assert name not in read.deleted
     assert read.added  # bodies entered the sensing radius, and on the straight road left it
-    assert read.deleted or "export-grid" in str(sweep_dir)
+    assert read.deleted or "export-straight" not in str(sweep_dir)
     assert read.stop_s == t_s[-1]
     # the road: OpenDRIVE, in the trace's frame (the ego on its roads, the network's
     # lanes on its reference lines without a shift)
     xodr = out.with_suffix(".xodr")
     assert is_opendrive(xodr)
     spec = ScenarioSpec.from_plain(metadata["spec"])
+    if spec.road.kind == "opendrive":  # the road as it came, byte for byte
+        assert xodr.read_bytes() == Path(spec.road.xodr_file).read_bytes()
     ego_xy = np.column_stack([trace.floats["x_m"], trace.floats["y_m"]])
     assert distance_to_roads_m(xodr, ego_xy).max() < 4 * spec.road.lane_width_m
     net = road_source(spec.road).network_file()
@@ -284,7 +319,7 @@ def test_a_broken_file_fails_asams_schema(tmp_path):
 
 
 def test_a_body_that_appears_later_is_added_then_deleted(tmp_path):
-    read = read_scenario(small_scenario(tmp_path / "run.xosc"))
+    read = read_export(small_scenario(tmp_path / "run.xosc"))
     assert set(read.placed) == {"ego", "obstacle_0_barrel"}
     assert read.standing == {"obstacle_0_barrel": (20.0, 0.0, 0.0)}
     assert read.added == {"car_1": pytest.approx(0.25)}

@@ -40,10 +40,10 @@ class ScenarioRead:
 def read_trajectories(path: Path) -> dict[str, Path3]:
     """Every entity's trajectory in the ``.xosc`` at ``path``: name -> (times_s, xy,
     heading)."""
-    return read_scenario(path).trajectories
+    return read_export(path).trajectories
 
 
-def read_scenario(path: Path) -> ScenarioRead:
+def read_export(path: Path) -> ScenarioRead:
     """What the ``.xosc`` at ``path`` (as :func:`~scenarios.asam.xosc_export.write_xosc`
     writes it) says of its entities and its end."""
     from scenariogeneration import xosc
