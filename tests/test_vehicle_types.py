@@ -94,3 +94,33 @@ def test_a_trace_written_before_the_class_column_reads_as_cars(tmp_path, lesson_
     trace, _ = read_trace(path)
     assert [len(c) for c in trace.traffic_class] == [len(t) // 5 for t in trace.traffic]
     assert {c for classes in trace.traffic_class for c in classes} == {"passenger"}
+
+
+@pytest.mark.parametrize("road", [{"kind": "straight", "lanes": 2},
+                                  {"kind": "curve", "lanes": 3, "curve_radius_m": -300.0}])
+def test_an_obstacle_of_its_own_size_is_hit_at_its_own_rear(lesson_plain, road):
+    """An obstacle given its own ``length_m`` and ``width_m`` (as an OpenSCENARIO
+    body's bounding box sets them) is that long to the car, to the checks and to SUMO:
+    a 9 m car parked with its centre where a 4.5 m one stood is reached 2.25 m sooner,
+    and SUMO's type for it is 9 m long."""
+    from scenarios.sumo.routes_xml import _obstacle_types
+    from sdc.cli.run import run_one
+
+    plain = lesson_plain
+    plain["road"].update(road, length_m=400.0)
+    plain["traffic"] = {}
+    plain["ego"].update(lane=0, start_m=20.0, speed_mps=15.0)
+    plain["scenario"].update(duration_s=15.0)
+    plain["controller"] = {"name": "lane-keep"}
+    plain["obstacles"] = [{"kind": "car", "lane": 0, "position_m": 150.0}]
+    spec = ScenarioSpec.from_plain(plain)
+    default = run_one(spec)
+    plain["obstacles"][0].update(length_m=9.0, width_m=2.2)
+    long = ScenarioSpec.from_plain(plain)
+    own = run_one(long)
+    assert default["collision"] and own["collision"]
+    assert default["collision_time_s"] - own["collision_time_s"] == pytest.approx(
+        (9.0 - 4.5) / 2 / 15.0, abs=long.scenario.step_s)
+    assert '<vType id="obstacle_car.9x2.2" length="9.0" width="2.2"/>' in [
+        line.strip() for line in _obstacle_types([(long, None)])]
+    assert not any("x" in line.split('"')[1] for line in _obstacle_types([(spec, None)]))

@@ -17,10 +17,12 @@ from scenariogeneration import xosc
 from scenarios.asam.xodr_roads import read_xodr
 from scenarios.asam.xosc_spec import xosc_spec
 from scenarios.common.file_read import file_sha256
-from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
+from scenarios.spec.bodies import VEHICLE_MODELS
 from tests.xodr_samples import write_arc_road, write_parked_car_xosc
 
 EGO_LENGTH_M = VEHICLE_MODELS["x5-lesson"].length_m
+#: the parked car's length in the files (its bounding box), which sdc keeps
+PARKED_LENGTH_M = 5.0
 #: the bounding box centre of the files' vehicles, ahead of their rear axle [m]
 CENTER_X_M = 1.4
 
@@ -36,7 +38,7 @@ def _along_lane_m(xodr_file, lane_id: int, from_s_m: float, to_s_m: float) -> fl
 def _expected_collision_s(xodr_file, lane_id, ego_s_m, parked_s_m, speed_mps) -> float:
     """When a car holding its lane at ``speed_mps`` meets one parked ahead of it."""
     gap_m = _along_lane_m(xodr_file, lane_id, ego_s_m + CENTER_X_M, parked_s_m + CENTER_X_M)
-    return (gap_m - (EGO_LENGTH_M + OBSTACLE_SIZES_M["car"][0]) / 2) / speed_mps
+    return (gap_m - (EGO_LENGTH_M + PARKED_LENGTH_M) / 2) / speed_mps
 
 
 @pytest.mark.parametrize(("lane_id", "parked_s_m", "width_m"),
@@ -79,7 +81,8 @@ def test_sdc_run_reads_an_xosc_and_refuses_what_it_cannot_run(tmp_path):
     done = _sdc("run", "parked.xosc", "--controller", "lane-keep", "--json", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout.splitlines()[-1])["collision"]
-    assert "note: Parked: 5 x 2 m in the file, sdc's car is 4.5 x 1.8 m" in done.stderr
+    assert "note:" not in done.stderr  # the parked car keeps the file's size; the ego's
+    # 5 x 2 m is within 0.25 m of sdc's car
     nobody = _sdc("run", "parked.xosc", "--ego", "Nobody", cwd=tmp_path)
     assert nobody.returncode == 2 and "parked.xosc" in nobody.stderr
     assert "Nobody" in nobody.stderr
@@ -153,3 +156,63 @@ def test_an_ncap_style_variation_plans_its_product(tmp_path):
         (v, s) for v in (8, 10, 12, 14) for s in (70, 110, 150)]
     refused = _sdc("sweep", "ncap.xosc", "--set", "sweep.seed=3", "--dry-run", cwd=tmp_path)
     assert refused.returncode == 2 and "--set" in refused.stderr
+
+
+def test_bodies_of_every_kind_stand_where_the_file_puts_them(tmp_path):
+    """A crate bigger than a barrel stands as a thing of its own size; a person placed
+    by a RoadPosition in the oncoming lanes (facing along the reference line, against
+    their traffic) stands there: a standing body's lane may face either way."""
+    write_arc_road(tmp_path / "road.xodr", 3.2, 80.0)
+    crate = xosc.MiscObject("Crate", 50, xosc.MiscObjectCategory.obstacle,
+                            xosc.BoundingBox(1.5, 2.0, 1.0, 0.0, 0.0, 0.5))
+    walker = xosc.Pedestrian("Walker", 80, xosc.PedestrianCategory.pedestrian,
+                             xosc.BoundingBox(0.5, 0.6, 1.8, 0.0, 0.0, 0.9), "walker")
+    path = write_parked_car_xosc(tmp_path / "bodies.xosc", parked_s_m=200.0, others=[
+        ("Crate", crate, xosc.LanePosition(60, 0.5, -2, "1")),
+        ("Walker", walker, xosc.RoadPosition(80, 1.6, "1"))])
+    spec = xosc_spec(path, cache_dir=tmp_path).spec
+    crate_spec, walker_spec = spec.obstacles[1], spec.obstacles[2]
+    assert (crate_spec.kind, crate_spec.size_m) == ("barrel", (2.0, 1.5))
+    # its box centred on its reference point, on the straight where the route's
+    # stations are the road's
+    assert crate_spec.position_m == pytest.approx(60.0, abs=0.01)
+    assert crate_spec.lateral_offset_m == pytest.approx(0.5, abs=0.03)
+    assert walker_spec.kind == "pedestrian"
+    assert walker_spec.lateral_offset_m == pytest.approx(3.2 * 1.5 + 1.6, abs=0.03)
+
+
+def test_param_sets_a_declared_parameter(tmp_path):
+    """``sdc run X.xosc --param NAME=VALUE``: a distribution's row run alone."""
+    xodr_file = write_arc_road(tmp_path / "road.xodr")
+    write_parked_car_xosc(tmp_path / "parked.xosc", speed_mps="$EgoSpeed",
+                          parked_s_m="$ParkedS", parameters={"EgoSpeed": 12.0, "ParkedS": 90.0})
+    done = _sdc("run", "parked.xosc", "--controller", "lane-keep", "--param", "EgoSpeed=9",
+                "--param", "ParkedS=70", "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    row = json.loads(done.stdout.splitlines()[-1])
+    expected = _expected_collision_s(xodr_file, -2, 10.0, 70.0, 9.0)
+    assert row["collision_time_s"] == pytest.approx(expected, abs=0.07)
+    unknown = _sdc("run", "parked.xosc", "--param", "Nope=1", cwd=tmp_path)
+    assert unknown.returncode == 2 and "Nope" in unknown.stderr
+
+
+@pytest.mark.slow
+def test_search_and_estimate_draw_from_a_stochastic_distribution(tmp_path):
+    """A distribution of a uniform and an untruncated normal is a search's nominal
+    distribution (its rows' values inside the uniform's range); a truncated normal and
+    a deterministic distribution are refused, naming the element and the file."""
+    _distribution(tmp_path)
+    untruncated = xosc.Stochastic(6, 3)
+    untruncated.add_distribution("EgoSpeed", xosc.UniformDistribution(xosc.Range(8, 16)))
+    untruncated.add_distribution("ParkedS", xosc.NormalDistribution(130, 100))
+    xosc.ParameterValueDistribution("open", "sdc tests", "parked.xosc", untruncated,
+                                    osc_minor_version=2).write_xml(str(tmp_path / "open.xosc"))
+    done = _sdc("search", "open.xosc", "--controller", "lane-keep", "--budget", "6",
+                "--batch-size", "3", "--out", "search", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    rows = pd.read_parquet(tmp_path / "search" / "results.parquet")
+    assert len(rows) == 6 and rows["p.EgoSpeed"].between(8, 16).all()
+    refused = _sdc("estimate", "varied.xosc", "--controller", "lane-keep", "--out", "e",
+                   cwd=tmp_path)
+    assert refused.returncode == 2, refused.stderr
+    assert "varied.xosc" in refused.stderr and "StochasticDistribution[ParkedS]" in refused.stderr

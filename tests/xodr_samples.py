@@ -32,11 +32,13 @@ def write_arc_road(path: Path, lane_width_m: float = 3.2, radius_m: float = 80.0
 def write_parked_car_xosc(path: Path, xodr_name: str = "road.xodr", ego_lane: int = -2,
                           ego_s_m: str | float = 10.0, speed_mps: str | float = 12.0,
                           parked_s_m: str | float = 150.0, duration_s: float = 25.0,
-                          minor: int = 2, parameters: dict[str, float] | None = None) -> Path:
+                          minor: int = 2, parameters: dict[str, float] | None = None,
+                          others=()) -> Path:
     """An OpenSCENARIO file (written by scenariogeneration): the ego on road 1's lane
     ``ego_lane`` at ``ego_s_m``, driving ``speed_mps``, a car parked in the same lane at
-    ``parked_s_m``, a person standing on the far verge, the run ending at
-    ``duration_s``. ``parameters`` are declared (doubles) for ``$name`` values."""
+    ``parked_s_m``, the run ending at
+    ``duration_s``. ``parameters`` are declared (doubles) for ``$name`` values;
+    ``others``: more bodies, each (name, scenariogeneration entity, position)."""
     from scenariogeneration import xosc
 
     box = xosc.BoundingBox(2.0, 5.0, 1.8, 1.4, 0.0, 0.9)
@@ -54,6 +56,9 @@ def write_parked_car_xosc(path: Path, xodr_name: str = "road.xodr", ego_lane: in
     init.add_init_action("Ego", xosc.AbsoluteSpeedAction(speed_mps, step))
     init.add_init_action("Parked", xosc.TeleportAction(xosc.LanePosition(parked_s_m, 0,
                                                                          ego_lane, "1")))
+    for name, entity, position in others:
+        entities.add_scenario_object(name, entity)
+        init.add_init_action(name, xosc.TeleportAction(position))
     stop = xosc.ValueTrigger("end", 0, xosc.ConditionEdge.rising,
                              xosc.SimulationTimeCondition(duration_s, xosc.Rule.greaterThan),
                              "stop")

@@ -117,11 +117,13 @@ class XodrMap:
         x_m, y_m, _ = road.point(s_m, t_m + offset_m)
         return self._on(best.lane, x_m, y_m)
 
-    def road_place(self, road_id: str, s_m: float, t_m: float, where: str) -> MapPlace:
+    def road_place(self, road_id: str, s_m: float, t_m: float, where: str,
+                   facing: bool = True) -> MapPlace:
         """A RoadPosition: the point ``t_m`` left of the road's reference line at
-        ``s_m``, on the SUMO lane it lies in."""
+        ``s_m``, on the SUMO lane it lies in (``facing``: one whose direction is the
+        reference line's there, as the position faces)."""
         x_m, y_m, heading = self.road(road_id, where).point(s_m, t_m)
-        return self.world_place(x_m, y_m, heading, where)
+        return self.world_place(x_m, y_m, heading if facing else None, where)
 
     def world_place(self, x_m: float, y_m: float, heading_rad: float | None,
                     where: str) -> MapPlace:
@@ -140,8 +142,13 @@ class XodrMap:
                 continue
             if best is None or abs(place.lateral_m) < abs(best.lateral_m):
                 best = place
+        if best is None and heading_rad is not None:
+            against = self.world_place(x_m, y_m, None, where)  # else: on no lane at all
+            raise SpecError(where, f"({x_m:g}, {y_m:g}) lies on SUMO's lane {against.lane.id}, "
+                            f"whose traffic drives the other way from the heading the position "
+                            f"gives ({heading_rad:.3f} rad; a RoadPosition faces along its "
+                            "road's reference line): place it with a LanePosition")
         if best is None:
             raise SpecError(where, f"({x_m:g}, {y_m:g}) is on no driving lane of "
-                            f"{self.xodr_file.name}" + ("" if heading_rad is None else
-                                                        " facing its way"))
+                            f"{self.xodr_file.name}")
         return best

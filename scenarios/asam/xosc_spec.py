@@ -12,10 +12,12 @@ file places it in, its bodies standing along that route.
   across its lane; a body's place on the route is that centre's station and offset
   from the ego's lane's centre (``position_m``, ``lateral_offset_m``).
 - **What sdc cannot hold is refused or said, never approximated in silence**: a
-  body off the ego's route, a ``MiscObject`` bigger than a barrel (sdc has no box)
-  and a run with no ``SimulationTimeCondition`` to end it are refused, naming the
-  entity or element and the file; the bodies' and the ego's own sizes, which sdc
-  takes from its kinds (``scenarios/spec/bodies.py``) and the car's model, are the
+  body off the ego's route and a run with no ``SimulationTimeCondition`` to end it
+  are refused, naming the entity or element and the file. A ``MiscObject`` is a
+  standing thing (obstacle kind ``barrel``, not a road user) of its bounding box's
+  size, whatever its size. The bodies keep the file's sizes (an obstacle's
+  ``length_m`` and ``width_m``); the ego is sdc's car (its model's size), and where
+  the file's ego differs by more than :data:`SIZE_NOTE_M` that is one of the
   :attr:`XoscSpec.notes` a command prints.
 """
 
@@ -42,8 +44,11 @@ from scenarios.sumo_net.net_xml import STRAIGHT, NetFile, NetLane
 from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import drivable_turns, pinned_route
 
-#: a body's size off its kind's by more than this is said in the notes [m]
+#: the ego's size off sdc's car's by more than this is said in the notes [m]
 SIZE_NOTE_M = 0.25
+#: the obstacle kind of a thing standing on the road (not a road user), which a
+#: MiscObject bigger than a barrel is too, of its own size
+THING = "barrel"
 #: the route goes on no farther than this [m]
 ROUTE_MAX_M = 20_000.0
 #: a body's centre farther than this from the ego's lane's centre is off its route [m]
@@ -53,19 +58,22 @@ OFF_ROUTE_M = 12.0
 @dataclasses.dataclass(frozen=True)
 class XoscSpec:
     """The spec, the scenario it was read from, and what sdc holds differently from
-    the file (sizes), in sentences."""
+    the file (the ego's size), in sentences."""
 
     spec: ScenarioSpec
     scenario: XoscScenario
     notes: tuple[str, ...]
 
 
-def _placed(world: XodrMap, place: Place, where: str) -> MapPlace:
+def _placed(world: XodrMap, place: Place, where: str, facing: bool = True) -> MapPlace:
+    """Where ``place`` is on the map; ``facing``: on a lane whose traffic goes the way
+    the place faces (the ego's; a standing body's lane may face either way)."""
     if isinstance(place, LanePlace):
         return world.lane_place(place.road_id, place.lane_id, place.s_m, place.offset_m, where)
     if isinstance(place, RoadPlace):
-        return world.road_place(place.road_id, place.s_m, place.t_m, where)
-    return world.world_place(place.x_m, place.y_m, place.heading_rad, where)
+        return world.road_place(place.road_id, place.s_m, place.t_m, where, facing)
+    return world.world_place(place.x_m, place.y_m, place.heading_rad if facing else None,
+                             where)
 
 
 def _straight_on(net: NetFile, lane: NetLane, min_radius_m: float) -> tuple[str, ...]:
@@ -129,22 +137,18 @@ def _spec(scenario: XoscScenario, world: XodrMap, controller: str | None, seed: 
     obstacles, notes = [], []
     for body in scenario.bodies:
         where = f"Entities/ScenarioObject[{body.name}]"
-        if body.kind == "box":
-            raise SpecError(where, f"a MiscObject of {body.size_m[0]:g} x {body.size_m[1]:g} m: "
-                            "sdc's standing things are barrels "
-                            f"({OBSTACLE_SIZES_M['barrel'][0]:g} m); a bigger thing is not held")
-        place = _placed(world, body.place, f"Init/Private[{body.name}]")
-        x_m, y_m = _centre(world, place, body.center_m)
+        place = _placed(world, body.place, f"Init/Private[{body.name}]", facing=False)
+        x_m, y_m = _centre(world, place, body.center_m, _heading(world, body.place, place))
         (s_m,), (d_m,) = geometry.to_frenet([[x_m, y_m]])
         if not 0.0 <= s_m <= geometry.length_m or abs(d_m) > OFF_ROUTE_M:
             raise SpecError(where, f"stands {s_m:.1f} m along and {d_m:.1f} m beside the ego's "
                             "route: sdc places bodies along the ego's route")
-        obstacles.append({"kind": body.kind, "lane": 0, "position_m": float(s_m),
-                          "lateral_offset_m": float(d_m)})
-        length_m, width_m = OBSTACLE_SIZES_M[body.kind]
-        if max(abs(body.size_m[0] - length_m), abs(body.size_m[1] - width_m)) > SIZE_NOTE_M:
-            notes.append(f"{body.name}: {body.size_m[0]:g} x {body.size_m[1]:g} m in the file, "
-                         f"sdc's {body.kind} is {length_m:g} x {width_m:g} m")
+        kind = THING if body.kind == "box" else body.kind
+        obstacle = {"kind": kind, "lane": 0, "position_m": float(s_m),
+                    "lateral_offset_m": float(d_m)}
+        if tuple(body.size_m[:2]) != OBSTACLE_SIZES_M[kind]:
+            obstacle |= {"length_m": body.size_m[0], "width_m": body.size_m[1]}
+        obstacles.append(obstacle)
     plain["obstacles"] = obstacles
     if max(abs(scenario.ego_size_m[0] - model.length_m),
            abs(scenario.ego_size_m[1] - model.width_m)) > SIZE_NOTE_M:
@@ -154,11 +158,21 @@ def _spec(scenario: XoscScenario, world: XodrMap, controller: str | None, seed: 
     return XoscSpec(ScenarioSpec.from_plain(plain), scenario, tuple(notes))
 
 
-def _centre(world: XodrMap, place: MapPlace, center_m) -> tuple[float, float]:
+def _heading(world: XodrMap, place: Place, found: MapPlace) -> float:
+    """The way a body placed at ``place`` (found on the map at ``found``) faces: its
+    lane's traffic's (a LanePosition), its road's reference line's (a RoadPosition),
+    its own ``h`` (a WorldPosition)."""
+    if isinstance(place, LanePlace):
+        return found.heading_rad
+    if isinstance(place, RoadPlace):
+        return world.roads[place.road_id].point(place.s_m, place.t_m)[2]
+    return place.heading_rad
+
+
+def _centre(world: XodrMap, place: MapPlace, center_m, heading: float) -> tuple[float, float]:
     """A body's centre: its reference point ``place`` moved ``center_m`` (forward, left)
-    in its lane's direction."""
+    as it faces (``heading``)."""
     x_m, y_m = world.lane_frame(place.lane).point(place.pos_m, place.lateral_m)
-    heading = place.heading_rad
     return (x_m + center_m[0] * math.cos(heading) - center_m[1] * math.sin(heading),
             y_m + center_m[0] * math.sin(heading) + center_m[1] * math.cos(heading))
 

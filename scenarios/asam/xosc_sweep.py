@@ -4,6 +4,11 @@ from the distribution's ``ScenarioFile`` (``scenarios/asam/xosc_spec.py``), its 
 the result's ``p.<ParameterName>`` columns. The manifest names both files with their
 sha256; the samples' seeds are drawn from the distribution's ``randomSeed`` (0 for a
 deterministic one), as a sweep's from its ``seed``.
+
+Where every parameter of a stochastic distribution is one a sweep states (a uniform, a
+normal no Range truncates), those are the sweep's ``params`` too: ``sdc search`` and
+``sdc estimate`` then draw from them as from a sweep's ``[sweep.params]``
+(:func:`adaptive_params` says why not where they cannot).
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ from scenarios.common.errors import SpecError
 from scenarios.common.file_read import file_sha256
 from scenarios.spec.controller_ref import controller_label
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.sweep_spec import GivenSamples, SweepSpec, check_runs
+from scenarios.spec.sweep_spec import GivenSamples, Param, SweepSpec, check_runs
 
 SAMPLER = "given"
 
@@ -55,6 +60,24 @@ def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
     files = {role: {"path": str(file), "sha256": file_sha256(file)}
              for role, file in (("distribution", path.resolve()),
                                 ("scenario", scenario_file))}
+    params = (() if None in distribution.laws.values() else
+              tuple(Param(name, kind, args) for name, (kind, args) in distribution.laws.items()))
     return SweepSpec(path.stem, scenario_file, base, len(distribution.samples),
-                     SAMPLER, distribution.seed or 0, 5, tuple(controllers), (),
+                     SAMPLER, distribution.seed or 0, 5, tuple(controllers), params,
                      given=GivenSamples(distribution.samples, scenario_of, files))
+
+
+def adaptive_params(path: str | Path) -> None:
+    """Refuse, naming the parameter and its element, a distribution ``sdc search`` and
+    ``sdc estimate`` cannot draw from themselves."""
+    distribution = read_distribution(path)
+    if distribution.kind != "stochastic":
+        raise SpecError("ParameterValueDistribution/Deterministic", "search and estimate draw "
+                        "their own runs from a Stochastic distribution; a deterministic one is "
+                        "its runs: sweep it with `sdc sweep`", path)
+    for name, law in distribution.laws.items():
+        if law is None:
+            raise SpecError(f"ParameterValueDistribution/Stochastic/StochasticDistribution"
+                            f"[{name}]", "search and estimate draw from uniform and untruncated "
+                            "normal distributions only (a sweep's); sweep this one with "
+                            "`sdc sweep`", path)

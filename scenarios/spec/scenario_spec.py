@@ -76,7 +76,8 @@ SUMO_HOME_PREFIX = "sumo:"
 @spec_class
 class RoadSpec(Spec):
     """A one-way N-lane road starting at the origin heading +x (``straight``,
-    ``curve``), or a route through a SUMO network (``sumo_net``, ``sumo_config``).
+    ``curve``), or a route through a SUMO network (``sumo_net``, ``sumo_config``,
+    ``opendrive``).
 
     ``curve_radius_m`` (curve only) is signed: positive turns left, negative right.
     For ``sumo_net``, ``net_file`` names any SUMO ``.net.xml`` or ``.net.xml.gz``
@@ -100,11 +101,12 @@ class RoadSpec(Spec):
     net_file: str | None = None  # sumo_net only
     config_file: str | None = None  # sumo_config only
     xodr_file: str | None = None  # opendrive only
-    #: sumo_net: "straight" goes straight on at every junction where its lane can
-    #: (turning only where it must), "any" takes a random turn at each
+    #: a network road (sumo_net, sumo_config, opendrive): "straight" goes straight on
+    #: at every junction where its lane can (turning only where it must), "any" takes
+    #: a random turn at each
     route_turns: Literal["straight", "any"] = "straight"
-    #: sumo_net and sumo_config: the ego's route pinned, as SUMO edge ids in order
-    #: (default: drawn from the seed)
+    #: a network road (sumo_net, sumo_config, opendrive): the ego's route pinned, as
+    #: SUMO edge ids in order (default: drawn from the seed)
     route_edges: tuple[str, ...] | None = None
     #: with ``route_edges``: the ego's lane on the first edge, SUMO's index (0 the
     #: rightmost; default: the rightmost lane that leads through every edge)
@@ -171,7 +173,7 @@ class TrafficSpec(Spec):
     speed_mean_mps: float = num(25.0, gt=0, le=70)
     speed_dev: float = num(0.1, ge=0, le=1)
     warm_up_s: float = num(0.0, ge=0, le=3600)  # traffic runs this long before the ego enters
-    vehicles: int = num(0, ge=0, le=100_000)  # sumo_net: vehicles on random trips
+    vehicles: int = num(0, ge=0, le=100_000)  # sumo_net, opendrive: vehicles on random trips
     warm_seed: int | None = num(None, ge=0, lt=SEED_LIMIT)  # the warm-up's seed (None: scenario's)
     lane_change_s: float = num(2.0, ge=1.0, le=10.0)  # sumo: how long a lane change takes
     enter_s: float = num(0.0, ge=0, le=86_400)  # sumo_config: SUMO's time the ego enters at
@@ -183,10 +185,26 @@ class ObstacleSpec(Spec):
     lane: int = num(ge=0)
     position_m: float = num(ge=0)
     lateral_offset_m: float = 0.0
+    #: its body's length and width (default: its kind's, scenarios/spec/bodies.py)
+    length_m: float | None = num(None, gt=0, le=30)
+    width_m: float | None = num(None, gt=0, le=5)
 
     @property
     def size_m(self) -> tuple[float, float]:
-        return OBSTACLE_SIZES_M[self.kind]
+        length_m, width_m = OBSTACLE_SIZES_M[self.kind]
+        return (length_m if self.length_m is None else self.length_m,
+                width_m if self.width_m is None else self.width_m)
+
+    @property
+    def sized(self) -> bool:
+        """Is its size its own, not its kind's?"""
+        return self.size_m != OBSTACLE_SIZES_M[self.kind]
+
+    @property
+    def type_name(self) -> str:
+        """The name of its SUMO type (after ``OBSTACLE_TYPE_PREFIX``): its kind, and
+        its size where that is its own."""
+        return f"{self.kind}.{self.size_m[0]:g}x{self.size_m[1]:g}" if self.sized else self.kind
 
     @property
     def vehicle_class(self) -> str | None:

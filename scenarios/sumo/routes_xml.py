@@ -109,9 +109,13 @@ def _ego_type(spec: ScenarioSpec, names: EgoNames) -> str:
             f'emergencyDecel="{decel!r}"/>')
 
 
-def _obstacle_types() -> list[str]:
-    return [f'  <vType id="{OBSTACLE_TYPE_PREFIX}{kind}" length="{length}" width="{width}"/>'
-            for kind, (length, width) in OBSTACLE_SIZES_M.items()]
+def _obstacle_types(egos: Egos) -> list[str]:
+    """A type per obstacle kind, and one per size of its own an obstacle of ``egos``
+    has (``ObstacleSpec.type_name``)."""
+    sizes = {kind: size for kind, size in OBSTACLE_SIZES_M.items()}
+    sizes |= {o.type_name: o.size_m for spec, _ in egos for o in spec.obstacles if o.sized}
+    return [f'  <vType id="{OBSTACLE_TYPE_PREFIX}{name}" length="{length}" width="{width}"/>'
+            for name, (length, width) in sizes.items()]
 
 
 def _ego_route(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames) -> str:
@@ -173,7 +177,7 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, depart: 
             if route != names.route_id:
                 lines.append(f'  <route id="{route}" edges="{edge}"/>')
             lines += [
-                f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.kind}" '
+                f'  <vehicle id="{vid}" type="{OBSTACLE_TYPE_PREFIX}{obstacle.type_name}" '
                 f'route="{route}" depart="{depart}" departLane="{lane}" '
                 f'departPos="{front_m:.6f}" departSpeed="0"{checked}>',
                 f'    <stop lane="{edge}_{lane}" endPos="{front_m:.6f}" duration="1e9"/>',
@@ -196,7 +200,7 @@ def _egos_lines(egos: Egos, depart: str = "0", checks: str = "all") -> list[str]
     lines = []
     for slot, (spec, road) in enumerate(egos):
         names = ego_names(slot)
-        lines += [_ego_type(spec, names), *(_obstacle_types() if slot == 0 else []),
+        lines += [_ego_type(spec, names), *(_obstacle_types(egos) if slot == 0 else []),
                   _ego_route(spec, road, names),
                   *_obstacles(spec, road, names, depart=depart, checks=checks)]
     return lines

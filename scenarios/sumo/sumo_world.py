@@ -536,7 +536,7 @@ class SumoWorld:
         pos_m = round(pos_m, 6)
         self._clear_lane(net, lane, pos_m - obstacle.size_m[0], pos_m)
         self._sumo.route.add(vid, [lane.edge])
-        self._sumo.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.kind}",
+        self._sumo.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.type_name}",
                                depart="now", departLane=str(lane.index),
                                departPos=f"{pos_m:.6f}", departSpeed="0")
         self._sumo.vehicle.setStop(vid, lane.edge, pos=pos_m, laneIndex=lane.index,

@@ -24,12 +24,11 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
                      batch_size: int, target_rhw: float | None = None,
                      stop_after: int | None = None):
     """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
-    from scenarios.spec.sweep_spec import load_sweep
     from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
 
     check_executor_options(options)
     try:
-        spec = load_sweep(sweep_file, options["overrides"])
+        spec = _adaptive_sweep(sweep_file, options)
         check_sweep_inputs(spec, sweep_file)
         controller = options["controller"]
         if controller is None:
@@ -47,6 +46,27 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
                             traces=options["traces"], resume=options["resume"])
     except SdcError as e:
         bad_input(str(e))
+
+
+def _adaptive_sweep(sweep_file: Path, options: dict):
+    """The sweep a search or an estimate draws from: a TOML sweep's ``[sweep.params]``,
+    or a stochastic OpenSCENARIO distribution's (``.xosc``; its controller is
+    ``--controller``)."""
+    from scenarios.spec.sweep_spec import load_sweep
+
+    if sweep_file.suffix.lower() != ".xosc":
+        return load_sweep(sweep_file, options["overrides"])
+    from scenarios.asam.xosc_sweep import adaptive_params, distribution_sweep
+
+    if options["overrides"]:
+        raise SpecError("--set", "changes a TOML sweep's fields; a distribution's runs are "
+                        "its scenario file's")
+    if options["controller"] is None:
+        raise SpecError("--controller", "a distribution names no controller: name the one "
+                        "to judge")
+    adaptive_params(sweep_file)
+    return distribution_sweep(sweep_file, (resolve_file(options["controller"], Path.cwd(),
+                                                        "--controller"),))
 
 
 def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:

@@ -11,7 +11,7 @@ from sdc.cli.common import adaptive_options, bad_input
 
 
 @click.command()
-@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.argument("sweep_file", metavar="SWEEP.toml|D.xosc", type=click.Path(path_type=Path))
 @click.option("--target-rhw", type=float, default=0.3, show_default=True, metavar="R",
               help="Stop when the 95% interval's relative half-width is at most R.")
 @click.option("--max-runs", type=click.IntRange(min=1), default=20_000, show_default=True,
@@ -24,7 +24,9 @@ def estimate(sweep_file: Path, target_rhw: float, max_runs: int, batch_size: int
              **options) -> None:
     """Estimate P(collision) under a sweep's parameter distributions, by importance sampling.
 
-    The [sweep.params] distributions are the nominal distribution. A multilevel
+    The [sweep.params] distributions are the nominal distribution (of a D.xosc,
+    an OpenSCENARIO distribution: its uniform and untruncated normal
+    StochasticDistributions, under --controller). A multilevel
     adaptation moves a sampling distribution (a kernel mixture that keeps every
     failure region it reaches, plus a wide share and the nominal) toward the
     collisions; then runs are drawn from it and each weighted by nominal /

@@ -124,19 +124,28 @@ def summary_lines(name: str, row: dict, draw=None) -> list[str]:
     ]
 
 
-def load_scenario(spec_file: Path, overrides: tuple[str, ...], ego: str | None) -> ScenarioSpec:
+def load_scenario(spec_file: Path, overrides: tuple[str, ...], ego: str | None,
+                  parameters: tuple[str, ...] = ()) -> ScenarioSpec:
     """The scenario in ``spec_file``: a TOML scenario, or an OpenSCENARIO ``.xosc``
     (``scenarios/asam/xosc_spec.py``; what sdc holds differently from it is printed as
-    notes), changed by ``overrides``."""
+    notes) with its ``parameters`` (``NAME=VALUE``) set, changed by ``overrides``."""
     if spec_file.suffix.lower() != ".xosc":
-        if ego is not None:
-            bad_input("--ego: names the ego of an OpenSCENARIO file (.xosc), not of a TOML "
-                      "scenario")
+        for option, given in (("--ego", ego), ("--param", parameters)):
+            if given:
+                bad_input(f"{option}: applies to an OpenSCENARIO file (.xosc), not to a TOML "
+                          "scenario (its fields: --set)")
         return load_spec(spec_file, overrides)
+    from scenarios.asam.xosc_distribution import typed_value
     from scenarios.asam.xosc_spec import xosc_spec
     from scenarios.spec.overrides import apply_overrides, blame
 
-    read = xosc_spec(spec_file, ego=ego)
+    values = {}
+    for text in parameters:
+        name, equals, value = text.partition("=")
+        if not equals or not name.strip():
+            bad_input(f"--param: {text!r} is not NAME=VALUE")
+        values[name.strip()] = typed_value(value)
+    read = xosc_spec(spec_file, values, ego=ego)
     for note in read.notes:
         click.echo(f"note: {note}", err=True)
     plain = read.spec.to_plain()
@@ -165,9 +174,13 @@ def load_scenario(spec_file: Path, overrides: tuple[str, ...], ego: str | None) 
 @click.option("--ego", metavar="NAME",
               help="An .xosc's ego: the entity of this name (default: the one named Ego, "
                    "ego or hero).")
+@click.option("--param", "parameters", metavar="NAME=VALUE", multiple=True,
+              help="Set an .xosc's declared parameter (a distribution's row: its "
+                   "p.<NAME> values). Repeatable.")
 @set_option("scenario")
 def run(spec_file: Path, seed: int | None, controller: str | None, backend: str | None,
-        trace: Path | None, as_json: bool, ego: str | None, overrides: tuple[str, ...]) -> None:
+        trace: Path | None, as_json: bool, ego: str | None, parameters: tuple[str, ...],
+        overrides: tuple[str, ...]) -> None:
     """Run one scenario and print its outcome.
 
     SPEC.toml is an sdc scenario; X.xosc an OpenSCENARIO 1.0-1.3 scenario of the
@@ -177,7 +190,7 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
     """
     check_trace_path(trace)
     try:
-        spec = load_scenario(spec_file, overrides, ego)
+        spec = load_scenario(spec_file, overrides, ego, parameters)
         if seed is not None:
             spec = spec.with_seed(seed)
         if controller is not None:

@@ -14,7 +14,7 @@ SHOWN_MODES = 8  # failure modes a search prints; all are in DIR/search.json
 
 
 @click.command()
-@click.argument("sweep_file", metavar="SWEEP.toml", type=click.Path(path_type=Path))
+@click.argument("sweep_file", metavar="SWEEP.toml|D.xosc", type=click.Path(path_type=Path))
 @click.option("--budget", type=click.IntRange(min=1), required=True, metavar="N",
               help="Runs to spend.")
 @click.option("--batch-size", type=click.IntRange(min=2), default=20, show_default=True,
@@ -28,7 +28,9 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
            **options) -> None:
     """Search a sweep's parameter space for collisions with few runs.
 
-    The sweep's [sweep.params] distributions are where it starts. Each batch then
+    The sweep's [sweep.params] distributions are where it starts (of a D.xosc, an
+    OpenSCENARIO distribution: its uniform and untruncated normal
+    StochasticDistributions, under --controller). Each batch then
     descends toward the runs with the lowest score (closest approach), so near
     misses lead it to collisions; once a collision is found, its direction is
     set aside and the descent heads elsewhere, part of each batch revisits every
