@@ -149,6 +149,16 @@ def test_proposal_equal_to_nominal_is_plain_monte_carlo():
     assert result.mc_equivalent_runs == pytest.approx(failed.size - 1, rel=1e-9)
 
 
+def test_every_run_failing_is_a_probability_of_at_most_one():
+    """Where every run failed, the weights' mean may pass 1 by chance (a lane-keep
+    estimate over a parked car read P(collision) = 1.09 with its interval [0.987, 1]):
+    the estimate is 1 and its interval holds it."""
+    weights = np.array([1.4, 0.9, 1.3, 1.2, 0.8, 1.5])  # mean 1.18
+    result = estimate_from_rows(weights, np.ones(6, bool), max_weight=10.0)
+    assert result.p_collision == 1.0
+    assert result.ci_low <= result.p_collision <= result.ci_high == 1.0
+
+
 def test_estimate_from_rows_recomputes_the_samplers_estimate():
     score_fn, _ = linear_problem(2, 1e-3)
     sampler = MultilevelIS(2, np.random.default_rng(3), 100)

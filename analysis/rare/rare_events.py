@@ -112,8 +112,9 @@ def estimate_from_rows(weights: np.ndarray, failed: np.ndarray, *, runs: int | N
     ``weights`` are each row's ``nominal / proposal`` and ``failed`` its
     ``score <= 0``; ``runs`` counts every run spent (adaptation included,
     default: these rows). ``p = mean(w * failed)``, unbiased when the rows are
-    drawn from one fixed proposal; the interval is ``p +- 1.96 se`` clipped at
-    0, with ``se`` the sample standard deviation of ``w * failed`` over sqrt(n).
+    drawn from one fixed proposal, and at most 1 (where every run failed, a mean of
+    weights may pass 1 by chance); the interval is ``p +- 1.96 se`` clipped to
+    [0, 1], with ``se`` the sample standard deviation of ``w * failed`` over sqrt(n).
 
     With no failure in n rows the estimate is 0 and the interval
     ``[0, min(1, 3.0 * max_weight / n)]``, the rule of three carried over:
@@ -138,7 +139,9 @@ def estimate_from_rows(weights: np.ndarray, failed: np.ndarray, *, runs: int | N
         upper = min(1.0, RULE_OF_THREE * max_weight / count) if max_weight < math.inf else 1.0
         return Estimate(0.0, 0.0, upper, math.inf, runs, count, 0, ess, math.nan, stopped)
     terms = weights * failed
-    p = float(terms.mean())
+    # a mean of weights can pass 1 (every run failed, the weights' mean above 1 by
+    # chance): a probability is at most 1, and its interval holds it
+    p = min(1.0, float(terms.mean()))
     se = float(terms.std(ddof=1) / math.sqrt(count)) if count > 1 else math.inf
     half_width = Z_95 * se
     rhw = half_width / p if p > 0 else math.inf
