@@ -58,12 +58,17 @@ def replay_command(sweep_dir: Path, run_id: str) -> str:
     return sdc_command("replay", sweep_dir, "--run", run_id)
 
 
+def exported_name(run_id: str) -> str:
+    """The file ``sdc export`` writes run ``run_id`` to by default: ``<run_id>.xosc``,
+    any character a file name should not hold replaced."""
+    return re.sub(r"[^A-Za-z0-9._-]", "_", f"{run_id}.xosc")
+
+
 def export_command(sweep_dir: Path, run_id: str) -> str:
     """The command that writes run ``run_id`` of a sweep directory, from its kept trace,
-    as OpenSCENARIO ``<run_id>.xosc`` with its road ``<run_id>.xodr`` in the working
-    directory (``sdc export``)."""
-    xosc = re.sub(r"[^A-Za-z0-9._-]", "_", f"{run_id}.xosc")
-    return sdc_command("export", sweep_dir, "--run", run_id, "--out", xosc)
+    as OpenSCENARIO :func:`exported_name` with its road beside it (``.xodr``) in the
+    working directory (``sdc export``)."""
+    return sdc_command("export", sweep_dir, "--run", run_id)
 
 
 def kept_trace(sweep_dir: Path, run_id: str) -> bool:

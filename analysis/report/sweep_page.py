@@ -91,13 +91,12 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
                          params_text(row, params)]
                 body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
                             + f"<td>{picture}</td></tr>")
-                export = (f' · export: <code class="command">'
-                          f'{html.escape(export_command(sweep_dir, row["run_id"]))}</code>'
-                          if kept_trace(sweep_dir, row["run_id"]) else "")
-                body.append(f'<tr><td></td><td colspan="{len(head) - 1}">replay: <code '
-                            f'class="command">'
-                            f'{html.escape(replay_command(sweep_dir, row["run_id"]))}'
-                            f"</code>{export}</td></tr>")
+                commands = [("replay", replay_command(sweep_dir, row["run_id"]))]
+                if kept_trace(sweep_dir, row["run_id"]):
+                    commands.append(("export", export_command(sweep_dir, row["run_id"])))
+                body += [f'<tr><td></td><td colspan="{len(head) - 1}">{what}: <code '
+                         f'class="command">{html.escape(command)}</code></td></tr>'
+                         for what, command in commands]
             if more:
                 body.append(f'<tr class="more"><td></td><td colspan="{len(head) - 1}">'
                             f"{more} more {html.escape(str(rank_class))} in "

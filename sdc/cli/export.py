@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from analysis.measures.commands import exported_name
 from scenarios.common.errors import SdcError
 from sdc.cli.common import bad_input, exit_interrupted
 
@@ -27,9 +28,9 @@ FRAME_WARN_M = 30.0
               help="The run of sweep DIR to export; the sweep must have kept its trace "
                    "(DIR/traces/ID.parquet: sdc sweep --traces failures or all).")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.xosc",
-              required=True,
-              help="The OpenSCENARIO file to write; its road goes beside it as FILE.xodr.")
-def export(sweep_dir: Path, run_id: str, out: Path) -> None:
+              help="The OpenSCENARIO file to write; its road goes beside it as FILE.xodr "
+                   "[default: ID.xosc in the working directory].")
+def export(sweep_dir: Path, run_id: str, out: Path | None) -> None:
     """Write run ID of sweep DIR as an OpenSCENARIO 1.0 scenario (FILE.xosc) with its
     road as OpenDRIVE (FILE.xodr beside it), from the run's recorded trace.
 
@@ -42,6 +43,8 @@ def export(sweep_dir: Path, run_id: str, out: Path) -> None:
     trace's frame (a warning when the ego's path lies off its roads); both paths are
     printed.
     """
+    if out is None:
+        out = Path(exported_name(run_id))
     if out.suffix != ".xosc":
         bad_input(f"--out: {out} must end in .xosc")
     if not out.parent.is_dir():
