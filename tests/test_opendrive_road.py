@@ -23,7 +23,7 @@ from scenarios.spec.toml_io import load_spec
 from scenarios.sumo_net.net_xml import read_net
 from scenarios.sumo_net.opendrive_net import opendrive_network
 from scenarios.sumo_net.road_source import road_source
-from tests.xodr_samples import write_arc_road
+from tests.asam_samples import write_arc_road
 
 
 def _dense(polyline: np.ndarray, step_m: float = 0.01) -> np.ndarray:

@@ -22,6 +22,7 @@ from scenarios.asam.xosc_distribution import (
     read_distribution,
 )
 from scenarios.common.errors import FileError, SpecError
+from tests.asam_samples import edited
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -248,13 +249,6 @@ def changed(path: Path, old: str, new: str) -> Path:
     text = path.read_text()
     assert old in text
     path.write_text(text.replace(old, new, 1))
-    return path
-
-
-def edited(path: Path, edit) -> Path:
-    tree = ET.parse(path)
-    edit(tree.getroot())
-    tree.write(path, encoding="utf-8", xml_declaration=True)
     return path
 
 

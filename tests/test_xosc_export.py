@@ -44,7 +44,7 @@ from sdc.batch.executors import LocalExecutor
 from sdc.batch.progress import QuietReporter
 from sdc.batch.sweep_runner import run_sweep
 from sdc.cli import main
-from tests.xodr_samples import write_arc_road
+from tests.asam_samples import write_arc_road
 
 RUN = "00000-avoid"
 STRAIGHT = """[scenario]
@@ -99,7 +99,7 @@ SWEEPS = {
     "grid": (f'base = "{CATALOG_DIR / "avoid-roads-grid.toml"}"',
              '"scenario.duration_s" = { choice = [5.0] }\n'
              '"traffic.vehicles" = { choice = [40] }'),
-    # an OpenDRIVE road written by scenariogeneration (tests/xodr_samples.py), its
+    # an OpenDRIVE road written by scenariogeneration (tests/asam_samples.py), its
     # random trips both ways, a car parked on the ego's lane
     "opendrive": ('base = "opendrive.toml"', '"traffic.vehicles" = { choice = [12] }'),
 }

@@ -18,7 +18,7 @@ from scenarios.asam.xodr_roads import read_xodr
 from scenarios.asam.xosc_spec import xosc_spec
 from scenarios.common.file_read import file_sha256
 from scenarios.spec.bodies import VEHICLE_MODELS
-from tests.xodr_samples import write_arc_road, write_parked_car_xosc
+from tests.asam_samples import write_arc_road, write_parked_car_xosc
 
 EGO_LENGTH_M = VEHICLE_MODELS["x5-lesson"].length_m
 #: the parked car's length in the files (its bounding box), which sdc keeps

@@ -5,7 +5,6 @@ refusal naming its element and file. The files are written with scenariogenerati
 from __future__ import annotations
 
 import dataclasses
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
@@ -19,6 +18,7 @@ from scenarios.asam.xosc_scenario import (
     read_scenario,
 )
 from scenarios.common.errors import FileError, SpecError
+from tests.asam_samples import edited
 
 MINORS = (0, 1, 2, 3)
 STEP = xosc.TransitionDynamics(xosc.DynamicsShapes.step, xosc.DynamicsDimension.time, 0)
@@ -98,14 +98,6 @@ def write(tmp_path: Path, p: Parts, minor=None, name="scenario.xosc") -> Path:
                              osc_minor_version=p.minor if minor is None else minor)
     path = tmp_path / name
     scenario.write_xml(str(path))
-    return path
-
-
-def edit(path: Path, change) -> Path:
-    """``path`` rewritten with ``change(root)`` applied (through ElementTree)."""
-    tree = ET.parse(path)
-    change(tree.getroot())
-    tree.write(path, encoding="utf-8", xml_declaration=True)
     return path
 
 
@@ -482,10 +474,10 @@ def test_other_stop_conditions_and_categories_refused(tmp_path):
 
 def test_versions_and_file_kinds(tmp_path):
     path = write(tmp_path, parts())
-    edit(path, lambda root: root.find("FileHeader").set("revMinor", "4"))
+    edited(path, lambda root: root.find("FileHeader").set("revMinor", "4"))
     error = refused(path, "OpenSCENARIO 1.4", "1.0 to 1.3")
     assert error.field == "FileHeader"
-    edit(path, lambda root: root.find("FileHeader").set("revMajor", "2"))
+    edited(path, lambda root: root.find("FileHeader").set("revMajor", "2"))
     refused(path, "OpenSCENARIO 2.4")
     bad = tmp_path / "broken.xosc"
     bad.write_text("<OpenSCENARIO><FileHeader")

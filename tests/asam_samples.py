@@ -1,10 +1,12 @@
-"""OpenDRIVE roads written for the tests by scenariogeneration (ASAM's format from a
-library that is not ours): a straight, an arc (a spiral into it where asked) and a
-straight again, lanes each way."""
+"""ASAM files for the tests, written by scenariogeneration (ASAM's formats from a
+library that is not ours): an OpenDRIVE road (a straight, an arc, a spiral into it
+where asked, and a straight again, lanes each way), an OpenSCENARIO scenario on it,
+and a file changed through ElementTree (a fault the library would not write)."""
 
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from scenariogeneration import xodr
@@ -69,4 +71,12 @@ def write_parked_car_xosc(path: Path, xodr_name: str = "road.xodr", ego_lane: in
                              xosc.StoryBoard(init, stop), xosc.RoadNetwork(roadfile=xodr_name),
                              xosc.Catalog(), osc_minor_version=minor)
     scenario.write_xml(str(path))
+    return path
+
+
+def edited(path: Path, change) -> Path:
+    """``path`` rewritten with ``change(root)`` applied (through ElementTree)."""
+    tree = ET.parse(path)
+    change(tree.getroot())
+    tree.write(path, encoding="utf-8", xml_declaration=True)
     return path
