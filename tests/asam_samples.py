@@ -35,12 +35,13 @@ def write_parked_car_xosc(path: Path, xodr_name: str = "road.xodr", ego_lane: in
                           ego_s_m: str | float = 10.0, speed_mps: str | float = 12.0,
                           parked_s_m: str | float = 150.0, duration_s: float = 25.0,
                           minor: int = 2, parameters: dict[str, float] | None = None,
-                          others=()) -> Path:
+                          others=(), friction_scale: float | None = None) -> Path:
     """An OpenSCENARIO file (written by scenariogeneration): the ego on road 1's lane
     ``ego_lane`` at ``ego_s_m``, driving ``speed_mps``, a car parked in the same lane at
     ``parked_s_m``, the run ending at
     ``duration_s``. ``parameters`` are declared (doubles) for ``$name`` values;
-    ``others``: more bodies, each (name, scenariogeneration entity, position)."""
+    ``others``: more bodies, each (name, scenariogeneration entity, position);
+    ``friction_scale``: an EnvironmentAction with that RoadCondition."""
     from scenariogeneration import xosc
 
     box = xosc.BoundingBox(2.0, 5.0, 1.8, 1.4, 0.0, 0.9)
@@ -58,6 +59,10 @@ def write_parked_car_xosc(path: Path, xodr_name: str = "road.xodr", ego_lane: in
     init.add_init_action("Ego", xosc.AbsoluteSpeedAction(speed_mps, step))
     init.add_init_action("Parked", xosc.TeleportAction(xosc.LanePosition(parked_s_m, 0,
                                                                          ego_lane, "1")))
+    if friction_scale is not None:
+        init.add_global_action(xosc.EnvironmentAction(xosc.Environment(
+            "road", xosc.TimeOfDay(True, 2024, 6, 1, 12, 0, 0), xosc.Weather(),
+            xosc.RoadCondition(friction_scale))))
     for name, entity, position in others:
         entities.add_scenario_object(name, entity)
         init.add_init_action(name, xosc.TeleportAction(position))

@@ -6,8 +6,10 @@ The times are checked against the file's own geometry, not against sdc's."""
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pandas as pd
@@ -216,3 +218,35 @@ def test_search_and_estimate_draw_from_a_stochastic_distribution(tmp_path):
                    cwd=tmp_path)
     assert refused.returncode == 2, refused.stderr
     assert "varied.xosc" in refused.stderr and "StochasticDistribution[ParkedS]" in refused.stderr
+
+
+def test_what_sdcs_ego_holds_differently_is_said(tmp_path):
+    """sdc's ego starts on its lane's centre, along its lane: an ego the file puts
+    0.3 m off the centre, or turned 10 degrees from its lane, is run so and each is
+    said in a note; one on the centre and along its lane is not."""
+    from scenarios.asam.xodr_roads import read_xodr
+    from tests.asam_samples import edited
+
+    xodr_file = write_arc_road(tmp_path / "road.xodr")
+    plain = write_parked_car_xosc(tmp_path / "plain.xosc")
+    assert xosc_spec(plain, cache_dir=tmp_path).notes == ()
+    wet = xosc_spec(write_parked_car_xosc(tmp_path / "wet.xosc", friction_scale=0.5),
+                    cache_dir=tmp_path)
+    assert wet.spec.vehicle.friction_mu == pytest.approx(0.5 * 0.9)  # the default's half
+    assert "weather and time of day are not modelled" in wet.notes[0]
+    off = edited(write_parked_car_xosc(tmp_path / "off.xosc"), lambda root: root.find(
+        ".//Private[@entityRef='Ego']//LanePosition").set("offset", "0.3"))
+    assert xosc_spec(off, cache_dir=tmp_path).notes == (
+        "Ego: its centre +0.30 m from its lane's centre in the file (+ left); sdc's ego "
+        "starts on the lane's centre",)
+    x_m, y_m, heading = read_xodr(xodr_file)["1"].lane_point(-2, 10.0)
+
+    def turned(root):
+        position = root.find(".//Private[@entityRef='Ego']//TeleportAction/Position")
+        position.remove(position[0])
+        position.append(ET.Element("WorldPosition", x=str(x_m), y=str(y_m),
+                                   h=str(heading + math.radians(10))))
+    notes = xosc_spec(edited(write_parked_car_xosc(tmp_path / "turned.xosc"), turned),
+                      cache_dir=tmp_path).notes
+    assert notes == ("Ego: turned +10.0 degrees from its lane in the file; sdc's ego starts "
+                     "along its lane",)

@@ -430,10 +430,8 @@ def test_other_init_actions_refused(tmp_path):
     p.init.add_init_action("Ego", xosc.RelativeSpeedAction(5, "Ego", STEP))
     refused(write(tmp_path, p), "RelativeTargetSpeed", "AbsoluteTargetSpeed")
     p = parts(bodies=False)
-    p.init.add_global_action(xosc.EnvironmentAction(xosc.Environment(
-        "dry", xosc.TimeOfDay(True, 2024, 6, 1, 12, 0, 0),
-        xosc.Weather(), xosc.RoadCondition(1.0))))
-    refused(write(tmp_path, p), "Storyboard/Init/Actions/GlobalAction/EnvironmentAction",
+    p.init.add_global_action(xosc.TrafficSignalStateAction("1", "green"))
+    refused(write(tmp_path, p), "Storyboard/Init/Actions/GlobalAction/InfrastructureAction",
             "TrafficSwarmAction")
 
 
@@ -500,3 +498,16 @@ def test_a_swarm_around_another_entity_refused(tmp_path):
 def test_reading_twice_gives_equal_scenarios(tmp_path):
     path = write(tmp_path, parts())
     assert read_scenario(path) == read_scenario(path)
+
+
+def test_an_environment_scales_the_roads_grip_and_says_what_is_not_modelled(tmp_path):
+    """An Init EnvironmentAction: its RoadCondition frictionScaleFactor is read, its
+    weather and time of day are said in a note, not dropped in silence."""
+    p = parts(bodies=False)
+    p.init.add_global_action(xosc.EnvironmentAction(xosc.Environment(
+        "wet", xosc.TimeOfDay(True, 2024, 6, 1, 12, 0, 0),
+        xosc.Weather(), xosc.RoadCondition(0.6))))
+    read = read_scenario(write(tmp_path, p))
+    assert read.friction_scale == pytest.approx(0.6)
+    assert len(read.notes) == 1 and "weather and time of day are not modelled" in read.notes[0]
+    assert read_scenario(write(tmp_path, parts(bodies=False), name="dry.xosc")).notes == ()

@@ -76,7 +76,12 @@ from scenarios.asam.xosc_parameters import (
     override,
     substitute,
 )
-from scenarios.asam.xosc_storyboard import check_stories, duration, swarm_vehicles
+from scenarios.asam.xosc_storyboard import (
+    check_stories,
+    duration,
+    environment,
+    swarm_vehicles,
+)
 from scenarios.common.errors import FileError, SpecError
 from scenarios.common.file_read import check_file
 
@@ -117,6 +122,10 @@ class XoscScenario:
     duration_s: float | None
     traffic_vehicles: int
     parameters: dict[str, ParameterValue]  # the top-level parameters, resolved
+    #: an EnvironmentAction's RoadCondition frictionScaleFactor (1 without one)
+    friction_scale: float = 1.0
+    #: what the file says that sdc reads but does not model, in sentences
+    notes: tuple[str, ...] = ()
 
 
 def read_scenario(path: str | Path,
@@ -197,12 +206,14 @@ def read_scenario(path: str | Path,
         else:
             bodies.append(Body(name, kind, category, size, center, init.place))
 
+    friction_scale, notes = environment(doc, global_actions)
     return XoscScenario(
         path=path.absolute(), rev_minor=rev_minor, xodr_file=xodr_file, ego_name=ego_name,
         ego_kind=ego_kind, ego_place=ego_init.place, ego_speed_mps=ego_init.speed_mps or 0.0,
         ego_size_m=ego_size, ego_center_m=ego_center, bodies=tuple(bodies),
         duration_s=duration(doc, storyboard),
-        traffic_vehicles=swarm_vehicles(doc, global_actions, ego_name), parameters=values)
+        traffic_vehicles=swarm_vehicles(doc, global_actions, ego_name), parameters=values,
+        friction_scale=friction_scale, notes=notes)
 
 
 def _ego_name(doc: Doc, objects: dict[str, ET.Element], ego: str | None,

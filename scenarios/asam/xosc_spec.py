@@ -16,9 +16,10 @@ file places it in, its bodies standing along that route.
   are refused, naming the entity or element and the file. A ``MiscObject`` is a
   standing thing (obstacle kind ``barrel``, not a road user) of its bounding box's
   size, whatever its size. The bodies keep the file's sizes (an obstacle's
-  ``length_m`` and ``width_m``); the ego is sdc's car (its model's size), and where
-  the file's ego differs by more than :data:`SIZE_NOTE_M` that is one of the
-  :attr:`XoscSpec.notes` a command prints.
+  ``length_m`` and ``width_m``); the ego is sdc's car (its model's size), starting on
+  its lane's centre, along its lane: where the file's ego differs (by more than
+  :data:`SIZE_NOTE_M`, :data:`OFF_CENTRE_NOTE_M` or :data:`TURN_NOTE_DEG`) that is one
+  of the :attr:`XoscSpec.notes` a command prints.
 """
 
 from __future__ import annotations
@@ -46,6 +47,10 @@ from scenarios.sumo_net.route_road import drivable_turns, pinned_route
 
 #: the ego's size off sdc's car's by more than this is said in the notes [m]
 SIZE_NOTE_M = 0.25
+#: the ego's centre off its lane's centre by more than this is said in the notes [m]
+OFF_CENTRE_NOTE_M = 0.05
+#: the ego turned from its lane by more than this is said in the notes [degrees]
+TURN_NOTE_DEG = 3.0
 #: the obstacle kind of a thing standing on the road (not a road user), which a
 #: MiscObject bigger than a barrel is too, of its own size
 THING = "barrel"
@@ -58,7 +63,7 @@ OFF_ROUTE_M = 12.0
 @dataclasses.dataclass(frozen=True)
 class XoscSpec:
     """The spec, the scenario it was read from, and what sdc holds differently from
-    the file (the ego's size), in sentences."""
+    the file (the ego's size, place across its lane, heading), in sentences."""
 
     spec: ScenarioSpec
     scenario: XoscScenario
@@ -129,12 +134,13 @@ def _spec(scenario: XoscScenario, world: XodrMap, controller: str | None, seed: 
                  "length_m": math.floor(sum(lane.length_m for lane in route) * 10) / 10},
         "traffic": {"vehicles": scenario.traffic_vehicles},
         "ego": {"lane": 0, "start_m": start_m, "speed_mps": scenario.ego_speed_mps},
+        "vehicle": {"friction_mu": VehicleSpec().friction_mu * scenario.friction_scale},
     }
     if controller is not None:
         plain["controller"] = {"name": controller}
     probe = ScenarioSpec.from_plain(_minimal() | {"road": plain["road"]})
     geometry = road_source(probe.road).geometry(probe, cache_dir)
-    obstacles, notes = [], []
+    obstacles = []
     for body in scenario.bodies:
         where = f"Entities/ScenarioObject[{body.name}]"
         place = _placed(world, body.place, f"Init/Private[{body.name}]", facing=False)
@@ -150,12 +156,28 @@ def _spec(scenario: XoscScenario, world: XodrMap, controller: str | None, seed: 
             obstacle |= {"length_m": body.size_m[0], "width_m": body.size_m[1]}
         obstacles.append(obstacle)
     plain["obstacles"] = obstacles
-    if max(abs(scenario.ego_size_m[0] - model.length_m),
-           abs(scenario.ego_size_m[1] - model.width_m)) > SIZE_NOTE_M:
-        notes.append(f"{scenario.ego_name}: {scenario.ego_size_m[0]:g} x "
-                     f"{scenario.ego_size_m[1]:g} m in the file, sdc's car is "
+    return XoscSpec(ScenarioSpec.from_plain(plain), scenario,
+                    (*scenario.notes, *_ego_notes(scenario, world, start, model)))
+
+
+def _ego_notes(scenario: XoscScenario, world: XodrMap, start: MapPlace, model) -> list[str]:
+    """What sdc's ego holds differently from the file's: its size, its place across
+    its lane (it starts on the lane's centre) and its heading (along its lane)."""
+    notes, name = [], scenario.ego_name
+    length_m, width_m = scenario.ego_size_m[:2]
+    if max(abs(length_m - model.length_m), abs(width_m - model.width_m)) > SIZE_NOTE_M:
+        notes.append(f"{name}: {length_m:g} x {width_m:g} m in the file, sdc's car is "
                      f"{model.length_m:g} x {model.width_m:g} m")
-    return XoscSpec(ScenarioSpec.from_plain(plain), scenario, tuple(notes))
+    off_m = start.lateral_m + scenario.ego_center_m[1]
+    if abs(off_m) > OFF_CENTRE_NOTE_M:
+        notes.append(f"{name}: its centre {off_m:+.2f} m from its lane's centre in the file "
+                     "(+ left); sdc's ego starts on the lane's centre")
+    turned = _heading(world, scenario.ego_place, start) - start.heading_rad
+    turned = math.degrees(math.atan2(math.sin(turned), math.cos(turned)))
+    if abs(turned) > TURN_NOTE_DEG:
+        notes.append(f"{name}: turned {turned:+.1f} degrees from its lane in the file; sdc's "
+                     "ego starts along its lane")
+    return notes
 
 
 def _heading(world: XodrMap, place: Place, found: MapPlace) -> float:

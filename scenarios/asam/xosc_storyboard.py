@@ -15,6 +15,11 @@ actions (background traffic).
   kept: sdc's traffic is that many random trips over the whole network at its speed
   limits, not a swarm in an ellipse around the ego. A second swarm, one centred on
   another entity and any other global action are refused.
+- Environment: an Init ``EnvironmentAction``'s ``RoadCondition frictionScaleFactor``
+  scales the road's grip (the ego's friction coefficient); its weather and time of
+  day are not modelled (sdc's lidar and road are the same in any weather), which
+  :func:`environment` says in a note rather than in silence. A catalogued
+  environment is refused.
 """
 
 from __future__ import annotations
@@ -81,6 +86,30 @@ def _stop_time(doc: Doc, condition: ET.Element) -> float:
     if end <= 0:
         raise doc.error(kind, f"the run would stop at {end:g} s: it must last a while")
     return end
+
+
+def environment(doc: Doc, actions: list[ET.Element]) -> tuple[float, tuple[str, ...]]:
+    """The road's friction scale factor of Init's ``EnvironmentAction`` (1 without
+    one) and what sdc does not model of it, in notes; its actions are taken out of
+    ``actions`` (the global actions left for :func:`swarm_vehicles`)."""
+    found = [a for a in actions if a.find("EnvironmentAction") is not None and len(a) == 1]
+    if len(found) > 1:
+        raise doc.error(found[1][0], "a second EnvironmentAction is outside the subset sdc runs")
+    for action in found:
+        actions.remove(action)
+    if not found:
+        return 1.0, ()
+    setting = found[0][0].find("Environment")
+    if setting is None:
+        raise doc.outside(found[0][0][0], "an environment from a catalog (give its Environment)")
+    road = setting.find("RoadCondition")
+    factor = 1.0 if road is None else attr_float(doc, road, "frictionScaleFactor")
+    if not 0 < factor <= 2:
+        raise doc.error(road, f"a frictionScaleFactor of {factor:g} is outside (0, 2]",
+                        "frictionScaleFactor")
+    return factor, ("EnvironmentAction: its road's friction scale factor is read; its weather "
+                    "and time of day are not modelled (sdc's lidar and road are the same in "
+                    "any weather)",)
 
 
 def swarm_vehicles(doc: Doc, actions: Iterable[ET.Element], ego: str) -> int:
