@@ -34,13 +34,13 @@ class _ScenarioOf:
 
     def __init__(self, scenario_file: Path, ego: str | None):
         self.scenario_file, self.ego = scenario_file, ego
-        self._maps: dict[Path, XodrMap] = {}
+        self.maps: dict[Path, XodrMap] = {}
 
     def __call__(self, values: dict[str, Any]) -> ScenarioSpec:
-        return xosc_spec(self.scenario_file, values, self.ego, maps=self._maps).spec
+        return xosc_spec(self.scenario_file, values, self.ego, maps=self.maps).spec
 
     def __getstate__(self) -> dict:
-        return {"scenario_file": self.scenario_file, "ego": self.ego, "_maps": {}}
+        return {"scenario_file": self.scenario_file, "ego": self.ego, "maps": {}}
 
 
 def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
@@ -51,7 +51,8 @@ def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
     distribution = read_distribution(path)
     scenario_file = distribution.scenario_file.resolve()
     scenario_of = _ScenarioOf(scenario_file, ego)
-    base = scenario_of({})  # the scenario's own declared values: what every sample changes
+    # the scenario's own declared values: what every sample changes
+    nominal = xosc_spec(scenario_file, {}, ego, maps=scenario_of.maps)
     labels = [controller_label(name) for name in controllers]
     if len(set(labels)) != len(labels):
         raise SpecError("--controllers", "names a controller twice")
@@ -62,9 +63,10 @@ def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
                                 ("scenario", scenario_file))}
     params = (() if None in distribution.laws.values() else
               tuple(Param(name, kind, args) for name, (kind, args) in distribution.laws.items()))
-    return SweepSpec(path.stem, scenario_file, base, len(distribution.samples),
+    return SweepSpec(path.stem, scenario_file, nominal.spec, len(distribution.samples),
                      SAMPLER, distribution.seed or 0, 5, tuple(controllers), params,
-                     given=GivenSamples(distribution.samples, scenario_of, files))
+                     given=GivenSamples(distribution.samples, scenario_of, files,
+                                        nominal.notes))
 
 
 def adaptive_params(path: str | Path) -> None:

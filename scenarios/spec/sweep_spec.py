@@ -245,11 +245,13 @@ class GivenSamples:
     distribution's: ``scenarios/asam/xosc_sweep.py``), not drawn from
     ``[sweep.params]``: each a dict of named values, made into its scenario by
     ``scenario_of`` (a :class:`SpecError` there is that sample's error row). ``files``
-    is what the manifest records of where they came from (each file's path and sha256)."""
+    is what the manifest records of where they came from (each file's path and sha256);
+    ``notes`` what sdc holds differently from them, in sentences."""
 
     values: tuple[dict[str, Any], ...]
     scenario_of: Callable[[dict[str, Any]], ScenarioSpec]
     files: dict[str, dict[str, str]]
+    notes: tuple[str, ...] = ()
 
     def value_types(self) -> dict[str, type]:
         """Each named value's column type: text where any sample's value is text."""

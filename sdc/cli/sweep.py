@@ -69,7 +69,10 @@ def load_sweep_file(sweep_file: Path, overrides: tuple[str, ...], controllers: s
                   for name in (controllers or "seed").split(",") if name.strip())
     if not names:
         bad_input("--controllers: names no controller")
-    return distribution_sweep(sweep_file, names, ego)
+    sweep = distribution_sweep(sweep_file, names, ego)
+    for note in sweep.given.notes:
+        click.echo(f"note: {note}", err=True)
+    return sweep
 
 
 @click.command()
