@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 from scenarios.asam.xodr_places import XodrMap
 from scenarios.asam.xodr_roads import read_xodr
 from scenarios.common.errors import SpecError
+from scenarios.common.file_read import file_sha256
 from scenarios.scene.polyline_frame import PolylineFrame
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec
@@ -169,6 +170,21 @@ def test_conversion_is_cached_and_the_same_bytes_in_every_process(tmp_path):
     assert first == again and first.read_bytes() == other.read_bytes()
     assert b"generated on" not in first.read_bytes()
     assert read_net(first).normal_lanes()
+
+
+def test_preparing_a_sweep_converts_the_road_once_into_its_cache(tmp_path):
+    """What a sweep prepares (the network and its road edges) lands in the cache it
+    names, and what it then ships is that conversion: netconvert runs once."""
+    write_arc_road(tmp_path / "road.xodr")
+    source = road_source(_spec(tmp_path / "road.xodr", 200.0).road)
+    cache = tmp_path / "cache"
+    source.prepare(cache)
+    converted = list(cache.glob("*.xodr.net.xml"))
+    assert len(converted) == 1
+    modified_ns = converted[0].stat().st_mtime_ns
+    assert source.network_file(cache) == converted[0]
+    assert source.shipped(cache).edges_key == file_sha256(converted[0])
+    assert converted[0].stat().st_mtime_ns == modified_ns  # not converted again
 
 
 def test_bad_opendrive_input_names_the_field(tmp_path):

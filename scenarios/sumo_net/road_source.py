@@ -173,7 +173,7 @@ class _NetworkRoad(_Exported):
         from scenarios.sumo_net.route_road import network_area, road_network
 
         with contextlib.suppress(SdcError):
-            network_area(road_network(self.road), cache_dir)
+            network_area(road_network(self.road, cache_dir), cache_dir)
 
 
 class NetworkFileRoad(_NetworkRoad, _WarmsUpFromZero):
