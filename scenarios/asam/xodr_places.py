@@ -19,8 +19,6 @@ import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import numpy as np
-
 from scenarios.asam.xodr_roads import XodrRoad, read_xodr
 from scenarios.common.errors import SpecError
 from scenarios.common.file_read import read_bytes
@@ -58,6 +56,10 @@ def original_lanes(net_path: Path) -> dict[str, tuple[str, int]]:
     return found
 
 
+#: a point this far past a lane's end still lies on it [m]
+ENDS_M = 0.01
+
+
 class XodrMap:
     """An OpenDRIVE file and the SUMO network netconvert makes of it, side by side."""
 
@@ -80,13 +82,16 @@ class XodrMap:
                             f"roads: {', '.join(sorted(self.roads))})")
         return self.roads[road_id]
 
-    def _on(self, lane: NetLane, x_m: float, y_m: float) -> MapPlace:
-        s_m, d_m = self._frames[lane.id].locate(x_m, y_m)
-        s_m = min(max(s_m, 0.0), float(self._frames[lane.id].seg_len_m.sum()))
+    def _on(self, lane: NetLane, x_m: float, y_m: float) -> tuple[MapPlace, bool]:
+        """The point on ``lane`` (its station held between the lane's ends), and
+        whether it lies between them (within :data:`ENDS_M`)."""
         frame = self._frames[lane.id]
+        s_m, d_m = frame.locate(x_m, y_m)
+        length_m = float(frame.seg_start_s_m[-1] + frame.seg_len_m[-1])
         i = frame.segment(s_m)
         heading = math.atan2(frame.seg_dir[i, 1], frame.seg_dir[i, 0])
-        return MapPlace(lane, s_m, d_m, heading)
+        return (MapPlace(lane, min(max(s_m, 0.0), length_m), d_m, heading),
+                -ENDS_M <= s_m <= length_m + ENDS_M)
 
     def lane_place(self, road_id: str, lane_id: int, s_m: float, offset_m: float,
                    where: str) -> MapPlace:
@@ -108,14 +113,14 @@ class XodrMap:
             kind = road.section_at(s_m).lanes[lane_id].type
             raise SpecError(where, f"road {road_id} lane {lane_id} (a {kind!r} lane) is no lane "
                             "SUMO drives: netconvert imports driving lanes")
-        places = [self._on(lane, x_m, y_m) for lane in lanes]
+        places = [self._on(lane, x_m, y_m)[0] for lane in lanes]
         best = min(places, key=lambda p: abs(p.lateral_m))
         if abs(best.lateral_m) > width_m / 2:
             raise SpecError(where, f"SUMO's lane {best.lane.id} for road {road_id} lane "
                             f"{lane_id} lies {abs(best.lateral_m):.2f} m from where "
                             f"{self.xodr_file.name} puts s = {s_m:g} m")
         x_m, y_m, _ = road.point(s_m, t_m + offset_m)
-        return self._on(best.lane, x_m, y_m)
+        return self._on(best.lane, x_m, y_m)[0]
 
     def road_place(self, road_id: str, s_m: float, t_m: float, where: str,
                    facing: bool = True) -> MapPlace:
@@ -131,14 +136,10 @@ class XodrMap:
         whose direction is within 90 degrees of ``heading_rad``)."""
         best = None
         for lane in self.net.normal_lanes():
-            place = self._on(lane, x_m, y_m)
-            if abs(place.lateral_m) > lane.width_m / 2:
+            place, between_ends = self._on(lane, x_m, y_m)
+            if not between_ends or abs(place.lateral_m) > lane.width_m / 2:
                 continue
             if heading_rad is not None and math.cos(place.heading_rad - heading_rad) < 0:
-                continue
-            end = self._frames[lane.id]
-            along = np.hypot(*(np.array([x_m, y_m]) - end.point(place.pos_m, place.lateral_m)))
-            if along > 0.01:  # beyond the lane's ends
                 continue
             if best is None or abs(place.lateral_m) < abs(best.lateral_m):
                 best = place
