@@ -8,7 +8,7 @@ deterministic one), as a sweep's from its ``seed``.
 Where every parameter of a stochastic distribution is one a sweep states (a uniform, a
 normal no Range truncates), those are the sweep's ``params`` too: ``sdc search`` and
 ``sdc estimate`` then draw from them as from a sweep's ``[sweep.params]``
-(:func:`adaptive_params` says why not where they cannot).
+(:func:`check_adaptive` says why not where they cannot).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.asam.xodr_places import XodrMap
-from scenarios.asam.xosc_distribution import read_distribution
+from scenarios.asam.xosc_distribution import Distribution, read_distribution
 from scenarios.asam.xosc_spec import xosc_spec
 from scenarios.common.errors import SpecError
 from scenarios.common.file_read import file_sha256
@@ -44,11 +44,15 @@ class _ScenarioOf:
 
 
 def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
-                       ego: str | None = None) -> SweepSpec:
+                       ego: str | None = None, adaptive: bool = False) -> SweepSpec:
     """The sweep of the distribution file ``path`` under ``controllers`` (names as
-    resolved by the caller), its scenario's ego the entity ``ego``."""
+    resolved by the caller), its scenario's ego the entity ``ego``; ``adaptive``: for
+    ``sdc search`` or ``sdc estimate``, which refuse what they cannot draw from
+    (:func:`check_adaptive`)."""
     path = Path(path)
     distribution = read_distribution(path)
+    if adaptive:
+        check_adaptive(distribution)
     scenario_file = distribution.scenario_file.resolve()
     scenario_of = _ScenarioOf(scenario_file, ego)
     # the scenario's own declared values: what every sample changes
@@ -69,10 +73,10 @@ def distribution_sweep(path: str | Path, controllers: tuple[str, ...],
                                         nominal.notes))
 
 
-def adaptive_params(path: str | Path) -> None:
+def check_adaptive(distribution: Distribution) -> None:
     """Refuse, naming the parameter and its element, a distribution ``sdc search`` and
     ``sdc estimate`` cannot draw from themselves."""
-    distribution = read_distribution(path)
+    path = distribution.path
     if distribution.kind != "stochastic":
         raise SpecError("ParameterValueDistribution/Deterministic", "search and estimate draw "
                         "their own runs from a Stochastic distribution; a deterministic one is "

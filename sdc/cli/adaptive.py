@@ -56,7 +56,7 @@ def _adaptive_sweep(sweep_file: Path, options: dict):
 
     if sweep_file.suffix.lower() != ".xosc":
         return load_sweep(sweep_file, options["overrides"])
-    from scenarios.asam.xosc_sweep import adaptive_params, distribution_sweep
+    from scenarios.asam.xosc_sweep import distribution_sweep
 
     if options["overrides"]:
         raise SpecError("--set", "changes a TOML sweep's fields; a distribution's runs are "
@@ -64,9 +64,8 @@ def _adaptive_sweep(sweep_file: Path, options: dict):
     if options["controller"] is None:
         raise SpecError("--controller", "a distribution names no controller: name the one "
                         "to judge")
-    adaptive_params(sweep_file)
     return distribution_sweep(sweep_file, (resolve_file(options["controller"], Path.cwd(),
-                                                        "--controller"),))
+                                                        "--controller"),), adaptive=True)
 
 
 def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
