@@ -13,7 +13,7 @@ import numpy as np
 
 from scenarios.common.errors import SdcError
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import Snapshot
+from scenarios.scene.snapshot import Pose, Snapshot
 from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo.warm_state import cached_path, uses_warm_state, warm_state_key
 from scenarios.sumo_net.road_source import road_source
@@ -23,9 +23,10 @@ BACKENDS = ("sumo", "highway")
 
 class World(Protocol):
     """What a run asks of a world backend (``scenarios/sumo/sumo_world.py``,
-    ``scenarios/highway/highway_world.py``). The ego is a box ``[cx, cy, yaw, length, width]``
-    [m, rad] pushed in every step at its speed [m/s]; the world answers with what the
-    car can see (a :class:`Snapshot`)."""
+    ``scenarios/highway/highway_world.py``). Each ego of the world sits in a slot
+    (0, 1, ...; a world of one ego has slot 0 only), pushed in every step at its
+    :data:`Pose`; the world answers each with what its car can see (a
+    :class:`Snapshot`). ``sdc.run.world_loop`` is the one loop that steps it."""
 
     backend: str
     road: RoadGeometry
@@ -34,12 +35,34 @@ class World(Protocol):
     #: each light along the route: its program's cycle [s] (filled as the world starts)
     signal_cycles_s: dict[str, float]
 
-    def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...
-    def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...
+    def start_all(self, egos: dict[int, Pose]) -> dict[int, Snapshot]: ...
+    def step_all(self, egos: dict[int, Pose | None]) -> dict[int, Snapshot]: ...
+    def leave(self, slot: int) -> None: ...  # its run ended; the world goes on for the others
+    def start(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...  # slot 0 alone
+    def step(self, ego_box: np.ndarray, ego_speed_mps: float) -> Snapshot: ...  # slot 0 alone
     def vehicle_count(self) -> int: ...  # traffic vehicles in the whole network
+    def twin(self) -> WitnessWorld | None: ...  # an unstarted copy to replay; None: none
     def close(self) -> None: ...
     def __enter__(self) -> World: ...
     def __exit__(self, *exc: object) -> None: ...
+
+
+class WitnessWorld(World, Protocol):
+    """A world with a model of its own to hold ours against (SUMO): its replay names
+    the bodies it holds (``keep_ids``), lays them as it holds them
+    (``sdc.run.world_witness``), and its own driver can take an ego's place
+    (``sdc.run.sumo_driver``)."""
+
+    #: keep the ids of each snapshot's traffic rows in ``last_ids`` (slot -> ids)
+    keep_ids: bool
+    last_ids: dict[int, list[str]]
+    ego_ids: frozenset[str]  # the ids of the world's egos
+
+    def is_traffic(self, vehicle_id: str) -> bool: ...  # no ego's, nor their obstacles
+    def placed_by_sumo(self, traffic_boxes: np.ndarray, rows: list[int],
+                       obstacles: list[int], slot_index: int = 0) -> list[np.ndarray]: ...
+    def hand_ego_to_sumo(self, slot: int, max_speed_mps: float) -> None: ...
+    def sumo_ego(self, slot: int) -> tuple[float, float, float, bool]: ...
 
 
 def make_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:

@@ -42,6 +42,7 @@ from scenarios.spec.toml_io import load_spec
 from scenarios.world_backends import BACKENDS, make_road, make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import COLLISION, DURATION, Simulation
+from sdc.run.world_loop import WorldLoop
 
 ENV_ID = "sdc/ObstacleAvoidance-v0"
 MAX_STEER_RAD = 0.7  # the lesson's avoidance angle
@@ -103,8 +104,9 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         self.road = make_road(spec, self.cache_dir)  # a network route depends on the seed
         self._world = make_world(spec, self.road, self.cache_dir)
         self._sim = Simulation(spec, self._world)
-        self._sim.start()
-        self._phase = "agent"
+        self._agent = _Agent(self._sim)
+        self._loop = WorldLoop(self._world, [self._agent])
+        self._loop.start()
         return self._observation(), self._info()
 
     def step(self, action):
@@ -114,8 +116,10 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         steer, accel = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
         command = Command(float(steer) * MAX_STEER_RAD, float(accel) * MAX_ACCEL_MPS2)
         s_before = sim.lane.s_m if sim.lane else None
-        sim.record(command, self._phase)
-        sim.advance(command)
+        self._agent.command = command
+        self._loop.step()
+        if self._loop.ends:  # the agent's step raised: raised again, as raised
+            raise self._loop.ends[0].exception
         termination = sim.end_reason()
         lane = sim.lane
         reward = 0.0
@@ -140,6 +144,27 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
         if self._world is not None:
             self._world.close()
         self._world, self._sim = None, None
+
+
+class _Agent:
+    """The driver of the env's slot (:class:`sdc.run.world_loop.Driver`): the agent's
+    command, recorded and applied; the run's checks come after the world's answer, in
+    :meth:`ObstacleAvoidanceEnv.step` (gymnasium's order)."""
+
+    end = None  # the env ends an episode, not its driver
+
+    def __init__(self, sim: Simulation):
+        self.sim = sim
+        self.command: Command | None = None
+        self.place, self.begin, self.arrive = sim.place, sim.begin, sim.arrive
+
+    def wants_more(self) -> bool:
+        return True
+
+    def turn(self):
+        self.sim.record(self.command, "agent")
+        self.sim.move(self.command)
+        return self.sim.pose()
 
 
 def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:

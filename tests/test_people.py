@@ -32,6 +32,7 @@ from sdc.car.geometry import box_edges, ray_segment_ranges
 from sdc.car.geometry_kernels import Contacts
 from sdc.car.sensors import Lidar
 from sdc.run.episode import Simulation, run_episode
+from sdc.run.world_loop import WorldLoop
 from tests.test_geometry import brute_overlap
 
 PERSON = [0.215, 0.478]  # SUMO's default pedestrian: length, width [m]
@@ -100,7 +101,8 @@ def test_a_configurations_persons_are_there_when_the_ego_enters(lesson_plain, co
     for t_s in times_s:
         spec = config_spec(lesson_plain, game(config), t_s)
         with make_world(spec, make_road(spec, None), None, False, None) as world:
-            Simulation(spec, world).start()  # the ego has entered: one step after t_s
+            WorldLoop(world, [Simulation(spec, world)]).start()  # the ego has entered:
+            # one step after t_s
             ours.append(len(libsumo.person.getIDList()))
     # on the same clock: what departs at t_s is in after its step
     own = sumo_own_person_counts(config, [t_s + 0.1 for t_s in times_s], seed=1, step_s=0.1)
@@ -161,10 +163,11 @@ def run_against_the_oracle(spec: ScenarioSpec) -> tuple[dict, int | None, int]:
 
     controller = make_controller(spec.controller)
     with make_world(spec, make_road(spec, None), None, False, None) as world:
-        sim = Simulation(spec, world)
-        sim.start()
-        first, termination = None, None
-        while termination is None:
+        sim = Simulation(spec, world, controller=controller)
+        loop = WorldLoop(world, [sim])
+        loop.start()
+        first = None
+        while loop.going():
             person = libsumo.person
             near = [p for p in persons_on_foot(libsumo)  # the rest cannot touch it
                     if math.dist(person.getPosition(p), sim.box[:2]) < NEAR_M]
@@ -173,9 +176,9 @@ def run_against_the_oracle(spec: ScenarioSpec) -> tuple[dict, int | None, int]:
                                                   person.getLength(p), person.getWidth(p)))
                     for p in near):
                 first = sim.k
-            termination = sim.control(controller)
+            loop.step()
         last = sim.k
-    return sim.finish(termination).row, first, last
+    return sim.finish(loop.ends[0]).row, first, last
 
 
 def check_against_the_oracle(row: dict, first: int | None, last: int) -> None:
@@ -253,10 +256,11 @@ def test_the_lidar_sees_the_people_of_a_real_junction_as_brute_force_does(lesson
     spec = config_spec(lesson_plain, game("fokr_bs_demo.sumocfg"), 54600.0)
     controller = make_controller(spec.controller)
     with make_world(spec, make_road(spec, None), None, False, None) as world:
-        sim = Simulation(spec, world)
-        sim.start()
+        sim = Simulation(spec, world, controller=controller)
+        loop = WorldLoop(world, [sim])
+        loop.start()
         while (sim.snapshot.traffic_classes == PEDESTRIAN).sum() < 10 and sim.k < 250:
-            sim.control(controller)  # on toward the junction
+            loop.step()  # on toward the junction
         snapshot = sim.snapshot
     people = snapshot.traffic_classes == PEDESTRIAN
     assert people.sum() >= 10  # a crowd around the ego

@@ -137,6 +137,7 @@ def test_stop_possible_uses_the_road_s_grip_and_braking_agrees(lesson_plain, fri
     not possible, and a real run braking fully from the first step hits the barrel."""
     from scenarios.world_backends import make_road, make_world
     from sdc.run.episode import Simulation
+    from sdc.run.world_loop import run_alone
 
     lesson_plain["vehicle"] = {"friction_mu": friction_mu}
     spec = _spec(lesson_plain, [{"position_m": 10 + 2.425 + 45 + 0.3}], speed_mps=15.0)
@@ -145,11 +146,7 @@ def test_stop_possible_uses_the_road_s_grip_and_braking_agrees(lesson_plain, fri
     assert stop_possible(15.0, decel, 45.0) is (friction_mu == 0.9)
     road = make_road(spec)
     with make_world(spec, road) as world:
-        sim = Simulation(spec, world)
-        sim.start()
-        end = None
-        while end is None:
-            end = sim.control(FullBrake())
-        row = sim.finish(end).row
+        sim = Simulation(spec, world, controller=FullBrake())
+        row = sim.finish(run_alone(world, sim)).row
     assert row["stop_possible"] is (friction_mu == 0.9)
     assert row["collision"] is (friction_mu == 0.1)

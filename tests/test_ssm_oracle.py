@@ -32,6 +32,7 @@ from scenarios.world_backends import make_road
 from sdc.car.controllers import LaneKeepController
 from sdc.car.vehicle import Command
 from sdc.run.episode import Simulation
+from sdc.run.world_loop import WorldLoop
 
 ROUNDING = 0.0005  # SSM writes 3 decimals
 PLACEMENT_M = 0.25  # the pushed ego's placement in SUMO on a curve (module docstring)
@@ -86,8 +87,9 @@ def run_with_ssm(spec: ScenarioSpec, accel_mps2: float, tmp_path, leader=None):
                "--device.ssm.trajectories", "true", "--device.ssm.range", "200")
     controller = LaneKeepAt(accel_mps2)
     with SumoWorld(spec, make_road(spec), None, False, options) as world:
-        sim = Simulation(spec, world)
-        sim.start()
+        sim = Simulation(spec, world, controller=controller)
+        loop = WorldLoop(world, [sim])
+        loop.start()
         if leader is not None:
             import libsumo
 
@@ -96,10 +98,9 @@ def run_with_ssm(spec: ScenarioSpec, accel_mps2: float, tmp_path, leader=None):
                                 departPos=str(position_m), departSpeed=str(speed_mps))
             libsumo.vehicle.setSpeedMode("lead", 0)
             libsumo.vehicle.setSpeed("lead", speed_mps)
-        end = None
-        while end is None:
-            end = sim.control(controller)
-        episode = sim.finish(end)
+        while loop.going():
+            loop.step()
+        episode = sim.finish(loop.ends[0])
     return episode.trace.floats, ssm_log(log)
 
 

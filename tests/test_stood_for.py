@@ -34,6 +34,7 @@ from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import Command
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
+from sdc.run.world_loop import run_alone
 
 FRONT_M, BAND = 100.0, (-0.95, 0.95)  # a car's front bumper, its body across the road
 RED_AHEAD = Line(104.0, True, False, 90.0)
@@ -129,11 +130,21 @@ class HoldsAtTheFirstStop:
 
 def run_with_sumo_view(spec: ScenarioSpec, controller) -> tuple[dict, tuple | None]:
     """The run's row and SUMO's own next light of the ego as the run ended
-    ``(tl, link, distance_m, state)``, read before the world closed."""
+    ``(tl, link, distance_m, state)``, read at its last step (as its controller
+    decides: the ego leaves SUMO as its run ends)."""
+    seen = []
+
+    class Watched:
+        phase = property(lambda self: controller.phase)
+
+        def step(self, obs):
+            seen[:] = [libsumo.vehicle.getNextTLS(EGO_ID)]
+            return controller.step(obs)
+
     with make_world(spec, make_road(spec)) as world:
-        sim = Simulation(spec, world)
-        termination = sim.run(controller)
-        next_lights = libsumo.vehicle.getNextTLS(EGO_ID)
+        sim = Simulation(spec, world, controller=Watched())
+        termination = run_alone(world, sim)
+    next_lights = seen[0]
     return sim.finish(termination).row, next_lights[0] if next_lights else None
 
 

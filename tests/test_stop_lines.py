@@ -18,6 +18,7 @@ from sdc.car.controller_api import GREEN, NO_SIGNAL, RED, YELLOW
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation, run_episode
 from sdc.run.stop_lines import StopLineWatch, stop_line
+from sdc.run.world_loop import WorldLoop
 
 LIGHT = RouteStop(100.0, "J1", 2, False)
 
@@ -63,10 +64,10 @@ def test_the_next_light_and_the_red_crossings_agree_with_sumo(seed):
     controller = make_controller(spec.controller)
     compared, sumo_reds, previous = 0, 0, None
     with make_world(spec, road) as world:
-        sim = Simulation(spec, world)
-        sim.start()
-        termination = None
-        while termination is None:
+        sim = Simulation(spec, world, controller=controller)
+        loop = WorldLoop(world, [sim])
+        loop.start()
+        while loop.going():
             ours, theirs = sim.stop_line, libsumo.vehicle.getNextTLS(EGO_ID)
             if previous is not None and (not theirs or theirs[0][:2] != previous[:2]):
                 sumo_reds += previous[3] in "ru"  # SUMO's state as the ego crossed
@@ -81,7 +82,7 @@ def test_the_next_light_and_the_red_crossings_agree_with_sumo(seed):
                 if stop == sim.stop_lines.stops[sim.stop_lines._next]:
                     assert ours.signal == LINK_SIGNALS[state][0]
                 compared += 1
-            termination = sim.control(controller)
+            loop.step()
     assert compared > 100
     assert sim.stop_lines.red_light_violations == sumo_reds
 

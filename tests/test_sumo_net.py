@@ -15,6 +15,7 @@ from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
 from scenarios.sumo_net.route_road import network_road
 from scenarios.world_backends import make_world
 from sdc.run.episode import Simulation, run_episode
+from sdc.run.world_loop import WorldLoop
 
 SPEED_MPS = 3.74  # the lesson's
 
@@ -90,7 +91,7 @@ def test_every_car_that_arrives_starts_a_new_trip(seed):
     spec = town(seed, vehicles=400)
     with make_world(spec, network_road(spec)) as world:
         sim = Simulation(spec, world, 5.0)
-        sim.start()
+        WorldLoop(world, [sim]).start()
         counts = []
         for _ in range(1200):  # 2 minutes, the ego standing
             world.step(sim.box, 0.0)

@@ -14,6 +14,7 @@ from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.world_backends import make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import Simulation, run_episode
+from sdc.run.world_loop import WorldLoop
 
 pytestmark = pytest.mark.slow
 
@@ -66,7 +67,7 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
     road = RoadGeometry.from_spec(spec.road)
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, 5.0)
-        sim.start()
+        WorldLoop(world, [sim]).start()
         first = sim.snapshot.traffic_boxes
         assert len(first) >= 4  # traffic on every side from the first step
         ego_lane = np.abs(first[:, 1] - road.lane_center_d_m(1)) < 1.75
@@ -93,7 +94,8 @@ def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroun
                 assert snapshot.traffic_boxes[first][read].tobytes() == boxes[read].tobytes()
                 assert snapshot.traffic_speeds_mps[first].tobytes() == speeds.tobytes()
                 assert list(snapshot.traffic_classes[first]) == list(world._types.names(kinds))
-            sim.advance(Command(0.0))
+            sim.move(Command(0.0))
+            sim.arrive(world.step(*sim.pose()))
         assert world.vehicle_count() > 2 * len(sim.snapshot.traffic_boxes)  # the rest unread
 
 

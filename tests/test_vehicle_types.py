@@ -12,6 +12,7 @@ from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.world_backends import make_road
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
+from sdc.run.world_loop import run_alone
 
 TRUCK_LENGTH_M, TRUCK_WIDTH_M = 16.5, 2.55
 
@@ -46,11 +47,8 @@ def run_into(spec: ScenarioSpec, options: tuple[str, ...]):
     road = make_road(spec)
     controller = make_controller(spec.controller)
     with SumoWorld(spec, road, sumo_options=options) as world:
-        sim = Simulation(spec, world)
-        sim.start()
-        termination = None
-        while termination is None:
-            termination = sim.control(controller)
+        sim = Simulation(spec, world, controller=controller)
+        termination = run_alone(world, sim)
     return sim.finish(termination, None), road
 
 

@@ -16,10 +16,12 @@ import math
 
 import numpy as np
 
+from scenarios.common.errors import SdcError
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import (
     NO_BOXES,
     NO_CLASSES,
+    Pose,
     Snapshot,
     in_start_zone,
     obstacle_boxes,
@@ -179,6 +181,23 @@ class HighwayWorld:
                         np.array([v.speed for v in others])[keep],
                         passenger_classes(int(keep.sum())))
 
+    def start_all(self, egos: dict[int, Pose]) -> dict[int, Snapshot]:
+        """:meth:`start` for a world of one ego (slot 0): highway-env holds one."""
+        (box, speed_mps), = _only_slot(egos).values()
+        return {0: self.start(box, speed_mps)}
+
+    def step_all(self, egos: dict[int, Pose]) -> dict[int, Snapshot]:
+        """:meth:`step` for a world of one ego (slot 0)."""
+        (box, speed_mps), = _only_slot(egos).values()
+        return {0: self.step(box, speed_mps)}
+
+    def leave(self, slot: int) -> None:
+        """The ego's run has ended: nothing steps this world again."""
+
+    def twin(self) -> None:
+        """None: highway-env's traffic has no model of its own to judge ours against."""
+        return None
+
     def vehicle_count(self) -> int:
         """Traffic vehicles on the whole road (not only within the sensing radius)."""
         return sum(1 for v in self._hw.vehicles if v is not self._ego)
@@ -205,3 +224,9 @@ class HighwayWorld:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _only_slot(egos: dict[int, Pose]) -> dict[int, Pose]:
+    if set(egos) != {0} or egos[0] is None:
+        raise SdcError("the highway backend holds one ego, in slot 0, pushed every step")
+    return egos

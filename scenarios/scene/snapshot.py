@@ -24,6 +24,9 @@ SENSING_MARGIN_M = 25.0
 #: and at least this far, for the time to collision with traffic closing in from beyond
 #: the lidar's range: 15 s at a closing speed of 10 m/s [m]
 CONFLICT_REACH_M = 150.0
+#: where an ego is pushed at a step: its body box and its speed [m/s]; None where a
+#: world's own driver moves it (``scenarios.world_backends.WitnessWorld``)
+Pose = tuple[np.ndarray, float]
 
 
 def sensing_radius_m(spec: ScenarioSpec) -> float:

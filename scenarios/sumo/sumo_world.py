@@ -30,6 +30,7 @@ from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import (
     OBSTACLE_ZONE_BEHIND_M,
     TRAFFIC,
+    Pose,
     Snapshot,
     in_start_zone,
     near_obstacles,
@@ -39,7 +40,6 @@ from scenarios.spec.shared_worlds import world_fields
 from scenarios.sumo.ego_slot import EgoSlot, others_seen
 from scenarios.sumo.lane_laying import lanes_behind, lay
 from scenarios.sumo.routes_xml import (
-    EGO_ID,
     EGO_TYPE,
     OBSTACLE_TYPE_PREFIX,
     TRAFFIC_PREFIX,
@@ -262,7 +262,7 @@ class SumoWorld:
         (a world of one ego: :meth:`start_all`)."""
         return self.start_all({0: (ego_box, ego_speed_mps)})[0]
 
-    def start_all(self, egos: dict[int, tuple[np.ndarray, float]]) -> dict[int, Snapshot]:
+    def start_all(self, egos: dict[int, Pose]) -> dict[int, Snapshot]:
         """Start SUMO, insert each ego (slot -> its box and speed; every slot) and
         return each one's first snapshot.
 
@@ -547,9 +547,9 @@ class SumoWorld:
         (a world of one ego: :meth:`step_all`)."""
         return self.step_all({0: (ego_box, ego_speed_mps)})[0]
 
-    def step_all(self, egos: dict[int, tuple[np.ndarray, float]]) -> dict[int, Snapshot]:
-        """Place each ego still in the world (slot -> its box and speed), advance SUMO
-        one step, return each one's new state."""
+    def step_all(self, egos: dict[int, Pose | None]) -> dict[int, Snapshot]:
+        """Place each ego still in the world (slot -> its box and speed; None: SUMO's
+        driver moves it), advance SUMO one step, return each one's new state."""
         self._push(egos)
         return self._snapshots()
 
@@ -569,10 +569,14 @@ class SumoWorld:
             if slot.is_mine(vid):
                 vehicle.remove(vid)
 
-    def _push(self, egos: dict[int, tuple[np.ndarray, float]]) -> None:
-        """Place each ego (slot -> its box and speed) and advance SUMO one step."""
+    def _push(self, egos: dict[int, Pose | None]) -> None:
+        """Place each ego (slot -> its box and speed; None: SUMO's driver moves it) and
+        advance SUMO one step."""
         vehicle = self._sumo.vehicle
-        for index, (box, speed_mps) in egos.items():
+        for index, pose in egos.items():
+            if pose is None:
+                continue
+            box, speed_mps = pose
             slot = self._slots[index]
             (x, y, angle_deg), stand_ins = self._ego_pose(slot, box)
             vehicle.moveToXY(slot.names.ego_id, "", -1, x, y, angle_deg, keepRoute=2)
@@ -753,24 +757,25 @@ class SumoWorld:
                                     float(slot.box[1]), slot.radius_m, PIECE_TOLERANCE_M,
                                     STRETCH_MIN_M, boxes, speeds, kinds, laid)
 
-    def hand_ego_to_sumo(self, max_speed_mps: float) -> None:
-        """From now on SUMO's own driver models drive the ego (its safe speeds and
-        lane changes, up to ``max_speed_mps``): the world's driver in the ego's place,
-        a reference for what the world leaves a controller (:mod:`sdc.run.sumo_driver`)."""
-        vehicle = self._sumo.vehicle
-        vehicle.setSpeedMode(EGO_ID, 31)
-        vehicle.setLaneChangeMode(EGO_ID, 1621)
-        vehicle.setMaxSpeed(EGO_ID, max_speed_mps)
-        vehicle.setSpeed(EGO_ID, -1)
+    def hand_ego_to_sumo(self, slot: int, max_speed_mps: float) -> None:
+        """From now on SUMO's own driver models drive the ego in ``slot`` (its safe
+        speeds and lane changes, up to ``max_speed_mps``; push it None in
+        :meth:`step_all`): the world's driver in the ego's place, a reference for what
+        the world leaves a controller (:mod:`sdc.run.sumo_driver`)."""
+        vehicle, ego_id = self._sumo.vehicle, self._slots[slot].names.ego_id
+        vehicle.setSpeedMode(ego_id, 31)
+        vehicle.setLaneChangeMode(ego_id, 1621)
+        vehicle.setMaxSpeed(ego_id, max_speed_mps)
+        vehicle.setSpeed(ego_id, -1)
 
-    def step_sumo_ego(self) -> tuple[float, float, float, bool]:
-        """One step with SUMO driving the ego (:meth:`hand_ego_to_sumo`): its front
-        bumper's x and y [m], its speed [m/s], and whether SUMO saw it collide."""
-        self._advance()
-        vehicle = self._sumo.vehicle
-        x_m, y_m = vehicle.getPosition(EGO_ID)
-        collided = EGO_ID in self._sumo.simulation.getCollidingVehiclesIDList()
-        return x_m, y_m, vehicle.getSpeed(EGO_ID), collided
+    def sumo_ego(self, slot: int) -> tuple[float, float, float, bool]:
+        """Where SUMO's driver has the ego of ``slot`` (:meth:`hand_ego_to_sumo`): its
+        front bumper's x and y [m], its speed [m/s], and whether SUMO saw it collide
+        in the last step."""
+        vehicle, ego_id = self._sumo.vehicle, self._slots[slot].names.ego_id
+        x_m, y_m = vehicle.getPosition(ego_id)
+        collided = ego_id in self._sumo.simulation.getCollidingVehiclesIDList()
+        return x_m, y_m, vehicle.getSpeed(ego_id), collided
 
     def vehicle_count(self) -> int:
         """Traffic vehicles in the whole network (not only within the sensing radius)."""

@@ -3,7 +3,8 @@
 Each step senses the world at time t (lidar, lane offset), decides, records the
 row, checks for the end (collision, duration, route end), then moves the car and
 pushes it into the world, which advances to t + step. :class:`Simulation` holds
-those steps; :func:`run_episode` drives it with the spec's controller.
+those steps: it drives its world's slot in the one loop that steps every world
+(:mod:`sdc.run.world_loop`); :func:`run_episode` runs it alone in its world.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from analysis.measures.stood_for import Standing, standing_at_end
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlap_steps
 from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.scene.snapshot import Snapshot
+from scenarios.scene.snapshot import Pose, Snapshot
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.warm_state import warm_state_id
@@ -43,6 +44,7 @@ from sdc.run.lanes_beside import LanesBesideMap
 from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
+from sdc.run.world_loop import run_alone
 from sdc.run.world_witness import Judged, Verdict, judge_world, unjudged
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
@@ -77,20 +79,23 @@ def initial_state(spec: ScenarioSpec, road: RoadGeometry, vehicle: Vehicle) -> V
 
 
 class Simulation:
-    """One run advanced a step at a time; the caller decides each step's command.
+    """One run advanced a step at a time: the driver of its slot of a world
+    (:class:`sdc.run.world_loop.Driver`), under ``controller``.
 
-    After :meth:`start` and each :meth:`advance`, ``ranges`` (the lidar's range
+    After :meth:`begin` and each :meth:`arrive`, ``ranges`` (the lidar's range
     image) and ``lane`` (the lane sensor's reading, None off the road's ends)
-    describe the current step. :meth:`record` adds the step's trace row,
-    :meth:`end_reason` says whether the run ends at this step, :meth:`finish`
-    gives the :class:`Episode`.
+    describe the current step. :meth:`turn` decides, records the step's trace row
+    (:meth:`record`), asks whether the run ends at this step (:meth:`end_reason`,
+    into ``end``) and else moves the car; :meth:`finish` gives the :class:`Episode`.
     """
 
     def __init__(self, spec: ScenarioSpec, world: World, look_ahead_m: float | None = None,
-                 road: RoadGeometry | None = None):
+                 road: RoadGeometry | None = None, controller=None):
         """``road``: the run's road, when it is not the world's (an ego of a shared
-        world other than the first)."""
-        self.spec, self.world = spec, world
+        world other than the first). ``controller``: what decides each :meth:`turn`
+        (the protocol of ``sdc.car.controller_api``; None: the caller records and
+        moves the car itself, as the gym does)."""
+        self.spec, self.world, self.controller = spec, world, controller
         self.look_ahead_m = (spec.controller.look_ahead_m if look_ahead_m is None
                              else look_ahead_m)
         self.road = world.road if road is None else road
@@ -111,6 +116,7 @@ class Simulation:
         self.step_s = spec.scenario.step_s
         self.n_steps = round(spec.scenario.duration_s / self.step_s)
         self.hit: str | None = None
+        self.end: str | None = None  # why the run ended (None: it goes on)
         self.collision: Collision | None = None
         #: the egos of its world (1: it ran alone; sdc.run.shared_world)
         self.world_egos = 1
@@ -129,15 +135,16 @@ class Simulation:
         self.contacts: Contacts | None = None
         self.conflicts: Conflicts | None = None
 
-    def start(self) -> None:
-        self.place()
-        self.begin(self.world.start(self.box, self.state.speed_mps))
-
-    def place(self) -> None:
+    def place(self) -> Pose:
         """The car where it starts (its body box in ``box``), before the world starts."""
         self.k = 0
         self.state = initial_state(self.spec, self.road, self.vehicle)
         self.box = self.vehicle.body_box(self.state)
+        return self.pose()
+
+    def pose(self) -> Pose:
+        """Where the car is pushed into the world: its body box and speed."""
+        return self.box, self.state.speed_mps
 
     def begin(self, snapshot: Snapshot) -> None:
         """Sense the world's first ``snapshot``."""
@@ -202,11 +209,6 @@ class Simulation:
             return DURATION
         return None
 
-    def advance(self, command: Command) -> None:
-        """Move the car under ``command``, push it into the world, step the world."""
-        self.move(command)
-        self.arrive(self.world.step(self.box, self.state.speed_mps))
-
     def move(self, command: Command) -> None:
         """Move the car under ``command`` (its new body box in ``box``)."""
         self.state = self.vehicle.step(self.state, command, self.step_s)
@@ -232,23 +234,19 @@ class Simulation:
                 "not a Command(steer_rad, accel_mps2) of finite floats")
         return command, str(getattr(controller, "phase", ""))
 
-    def control(self, controller) -> str | None:
-        """One step under ``controller``: it decides, the step is recorded, and the
-        run either ends here (the reason is returned) or the car moves on (None)."""
-        command, phase = self.decide(controller)
-        self.record(command, phase)
-        termination = self.end_reason()
-        if termination is None:
-            self.advance(command)
-        return termination
+    def wants_more(self) -> bool:
+        return True  # until it ends
 
-    def run(self, controller) -> str:
-        """Start, then step under ``controller`` until the run ends; why it ended."""
-        self.start()
-        termination = None
-        while termination is None:
-            termination = self.control(controller)
-        return termination
+    def turn(self) -> Pose | None:
+        """One step under its controller: it decides, the step is recorded, and the
+        run either ends here (why, in ``end``) or the car moves on (its new pose)."""
+        command, phase = self.decide(self.controller)
+        self.record(command, phase)
+        self.end = self.end_reason()
+        if self.end is not None:
+            return None
+        self.move(command)
+        return self.pose()
 
     def trace(self) -> Trace:
         """The run's trace, once it has ended."""
@@ -270,9 +268,10 @@ class Simulation:
         own, and the first of each (:mod:`sdc.run.world_witness`, on the sumo backend;
         elsewhere all ours)."""
         judged = self.judged()
-        if self.world.backend != "sumo" or not len(judged.steps):
+        twin = self.world.twin() if len(judged.steps) else None
+        if twin is None:  # nothing to judge, or a backend with no model to judge by
             return unjudged(judged)
-        return judge_world(self.world.twin(), [judged])[0]
+        return judge_world(twin, [judged])[0]
 
     def _standing(self) -> Standing | None:
         """What the car stood for at the last step (None: it was moving)."""
@@ -375,8 +374,8 @@ def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
     controller = make_controller(spec.controller)
     road = make_road(spec, cache_dir)
     with make_world(spec, road, cache_dir, gui, warm_state) as world:
-        sim = Simulation(spec, world)
-        termination = sim.run(controller)
+        sim = Simulation(spec, world, controller=controller)
+        termination = run_alone(world, sim)
     return sim.finish(termination, run_id)
 
 
@@ -424,8 +423,8 @@ def run_as_far_as_it_goes(spec: ScenarioSpec, *, run_id: str | None = None, gui:
         with _wall_limit(wall_limit_s):
             controller = make_controller(spec.controller)
             with make_world(spec, make_road(spec), gui=gui) as world:
-                sim = Simulation(spec, world)
-                termination = sim.run(controller)
+                sim = Simulation(spec, world, controller=controller)
+                termination = run_alone(world, sim)
             return sim.finish(termination, run_id)
     except _PastWallLimit:
         return _stopped(sim, f"ran past the run timeout of {wall_limit_s:.3g} s", None, run_id)

@@ -17,14 +17,12 @@ reach another run. Runs that do not fit go to a further world on the same traffi
 (the same warm state and seed): fewer share it, and ``world_egos`` says how many did.
 
 Each step, every ego still in the world senses, decides and is checked in slot order,
-then all move and SUMO advances once: a world of the same runs gives the same traces,
-bit for bit.
+then all move and SUMO advances once (:mod:`sdc.run.world_loop`, the loop of every
+world): a world of the same runs gives the same traces, bit for bit.
 """
 
 from __future__ import annotations
 
-import traceback
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,15 +35,8 @@ from scenarios.world_backends import make_road, make_shared_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import Episode, Simulation, initial_state
+from sdc.run.world_loop import Failed, WorldLoop
 from sdc.run.world_witness import Verdict, judge_world, unjudged
-
-
-@dataclass(frozen=True)
-class Failed:
-    """A run of a shared world that raised (its controller, or the world itself)."""
-
-    error: str  # "ZeroDivisionError: ..."
-    traceback: str
 
 
 def start_points(spec: ScenarioSpec, road: RoadGeometry) -> tuple[np.ndarray, np.ndarray]:
@@ -92,19 +83,22 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         try:
             controllers.append(make_controller(spec.controller))
         except Exception as e:  # noqa: BLE001 - that run's failure, not the world's
-            controllers.append(_failed(e))
+            controllers.append(Failed.of(e))
     ends: dict[int, str | Failed] = {i: c for i, c in enumerate(controllers)
                                      if isinstance(c, Failed)}
     sims: list[Simulation] = []
     try:
         world = make_shared_world(egos, cache_dir, warm_state)
-        sims = [Simulation(spec, world, road=road) for spec, road in egos]
+        sims = [Simulation(spec, world, road=road, controller=controller)
+                for (spec, road), controller in zip(egos, controllers, strict=True)]
         for sim in sims:
             sim.world_egos = len(egos)
         with world:
-            _step_together(world, sims, controllers, ends)
+            loop = WorldLoop(world, sims, ends)
+            ends = loop.ends  # filled as runs end: kept when the world then fails
+            loop.run()
     except Exception as e:  # noqa: BLE001 - the world failed: so did every run in it
-        failed = _failed(e)
+        failed = Failed.of(e)
         for i in range(len(egos)):
             ends.setdefault(i, failed)
     overlaps = _judged_together(world, sims, ends) if sims else {}
@@ -117,7 +111,7 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         try:
             out.append(sim.finish(end, run_ids[i], overlaps.get(i)))
         except Exception as e:  # noqa: BLE001 - its summing up failed: its row says so
-            out.append(_failed(e))
+            out.append(Failed.of(e))
     return out
 
 
@@ -136,44 +130,6 @@ def _judged_together(world, sims: list[Simulation], ends: dict) -> dict[int, Ver
         return all_ours
 
 
-def _step_together(world, sims: list[Simulation], controllers: list, ends: dict) -> None:
-    """Start the world with every ego and step it until each run has ended
-    (``ends``: slot -> why it ended, filled in)."""
-    for sim in sims:
-        sim.place()
-    snapshots = world.start_all({i: (sim.box, sim.state.speed_mps)
-                                 for i, sim in enumerate(sims)})
-    for i, sim in enumerate(sims):
-        sim.begin(snapshots[i])
-    for i in list(ends):
-        world.leave(i)
-    while len(ends) < len(sims):
-        moves = {}
-        for i, sim in enumerate(sims):
-            if i in ends:
-                continue
-            try:
-                command, phase = sim.decide(controllers[i])
-                sim.record(command, phase)
-                end = sim.end_reason()
-            except Exception as e:  # noqa: BLE001 - its controller's failure: it alone ends
-                end = _failed(e)
-            if end is None:
-                sim.move(command)
-                moves[i] = (sim.box, sim.state.speed_mps)
-            else:
-                ends[i] = end
-                world.leave(i)
-        if moves:
-            snapshots = world.step_all(moves)
-            for i in moves:
-                sims[i].arrive(snapshots[i])
-
-
-def _failed(e: Exception) -> Failed:
-    return Failed(f"{type(e).__name__}: {e}", traceback.format_exc())
-
-
 def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
               cache_dir: Path | None = None, warm_state: Path | None = None
               ) -> list[Episode | Failed]:
@@ -186,7 +142,7 @@ def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
         try:
             egos.append((spec, make_road(spec, cache_dir)))
         except Exception as e:  # noqa: BLE001 - a road it cannot have: its row says why
-            out[i] = _failed(e)
+            out[i] = Failed.of(e)
             egos.append(None)
     placeable = [i for i, ego in enumerate(egos) if ego is not None]
     for world in placed_apart([egos[i] for i in placeable]):

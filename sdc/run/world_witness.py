@@ -33,6 +33,7 @@ from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
 from scenarios.sumo.routes_xml import ego_names
 from sdc.car.vehicle import Vehicle, VehicleState
+from sdc.run.world_loop import Failed, WorldLoop
 
 
 class Witnessed(NamedTuple):
@@ -83,6 +84,49 @@ def _pose(run: Judged, k: int) -> tuple[np.ndarray, float]:
     return run.vehicle.body_box(state), state.speed_mps
 
 
+class _Replayed:
+    """The driver of one slot of the replay (:class:`sdc.run.world_loop.Driver`): its
+    ego pushed along its trace, leaving after its last step; at each of its
+    overlapping steps reached as its trace has it, the overlapping pairs judged."""
+
+    end: str | None = None
+
+    def __init__(self, world, run: Judged, slot: int):
+        self.world, self.run, self.slot = world, run, slot
+        self.wanted = set(run.steps.tolist())
+        self.last_wanted = max(self.wanted, default=-1)
+        self.reached = bool(self.wanted)  # every step so far as its trace has it
+        self.witnessed: list[Witnessed] = []
+        self.k = 0
+        self.snapshot = None
+
+    def place(self) -> tuple[np.ndarray, float]:
+        return _pose(self.run, 0)
+
+    def begin(self, snapshot) -> None:
+        self.snapshot = snapshot
+
+    def wants_more(self) -> bool:
+        return self.reached and self.last_wanted >= self.k
+
+    def turn(self) -> tuple[np.ndarray, float] | None:
+        k, run = self.k, self.run
+        if self.reached:
+            replayed = np.asarray(self.snapshot.traffic_boxes, np.float32).ravel()
+            self.reached = bool(np.array_equal(replayed, run.trace.traffic[k]))
+            if self.reached and k in self.wanted:
+                self.witnessed += _judged(self.world, self.snapshot, k, run.obstacle_classes,
+                                          self.slot)
+        if k == len(run.trace) - 1:
+            self.end = "trace_end"
+            return None
+        return _pose(run, k + 1)
+
+    def arrive(self, snapshot) -> None:
+        self.snapshot = snapshot
+        self.k += 1
+
+
 def witness_world(twin, runs: list[Judged]) -> list[list[Witnessed]]:
     """Each run's overlapping pairs at its overlapping steps, judged by SUMO's own
     placement; ``runs``: every run of the world, in slot order (one, or a shared
@@ -90,32 +134,14 @@ def witness_world(twin, runs: list[Judged]) -> list[list[Witnessed]]:
     :mod:`sdc.run.shared_world` stepped them). A run's judging stops at the first step
     the replay did not reach as its trace has it. ``twin``: an unstarted world of the
     same egos."""
-    witnessed: list[list[Witnessed]] = [[] for _ in runs]
-    wanted = [set(run.steps.tolist()) for run in runs]
-    last_step = [len(run.trace) - 1 for run in runs]
-    reached = [bool(w) for w in wanted]
     with twin as world:
         world.keep_ids = True
-        alive = list(range(len(runs)))
-        snapshots = world.start_all({i: _pose(runs[i], 0) for i in alive})
-        k = 0
-        while any(reached[i] and max(wanted[i]) >= k for i in range(len(runs))):
-            for i in alive:
-                if not reached[i]:
-                    continue
-                replayed = np.asarray(snapshots[i].traffic_boxes, np.float32).ravel()
-                reached[i] = bool(np.array_equal(replayed, runs[i].trace.traffic[k]))
-                if reached[i] and k in wanted[i]:
-                    witnessed[i] += _judged(world, snapshots[i], k,
-                                            runs[i].obstacle_classes, i)
-            for i in [i for i in alive if last_step[i] == k]:
-                world.leave(i)
-                alive.remove(i)
-            if not alive:
-                break
-            k += 1
-            snapshots = world.step_all({i: _pose(runs[i], k) for i in alive})
-    return witnessed
+        drivers = [_Replayed(world, run, slot) for slot, run in enumerate(runs)]
+        ends = WorldLoop(world, drivers).run()
+    for end in ends.values():
+        if isinstance(end, Failed):  # a judging that raised: raised again, as raised
+            raise end.exception
+    return [driver.witnessed for driver in drivers]
 
 
 def witness_overlaps(twin, trace: Trace, vehicle: Vehicle, steps: np.ndarray,
