@@ -45,9 +45,9 @@ from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import check_inputs
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.run.sumo_driver import COLLIDED, NOT_PAST, PASSED, sumo_drives
 
 SWEEPS = CATALOG_DIR / "sweeps"

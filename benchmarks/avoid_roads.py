@@ -36,9 +36,9 @@ from analysis.stats.rates import wilson_interval
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
 from scenarios.world_backends import check_inputs
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 
 FAMILIES = {name: CATALOG_DIR / "sweeps" / f"avoid-roads-{name}.toml"
             for name in ("curves", "grid", "traffic", "traffic-front")}

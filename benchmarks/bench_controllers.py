@@ -14,6 +14,8 @@ Prints ``name value`` lines, medians over REPETITIONS rounds of per-call times
   loaded as a file plug-in (``sdc/car/controllers.py:LaneKeepController``) minus
   the same with the built-in ``lane-keep``: a plug-in's call goes through the
   same code, so this is noise around zero.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one round of 100 calls.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from smoke import size
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS
@@ -31,9 +34,10 @@ from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_api import Command
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
+from sdc.run.world_loop import Failed, WorldLoop
 
-REPETITIONS = 5
-CALLS = 2000
+REPETITIONS = size(5, 1)
+CALLS = size(2000, 100)
 CONTROLLERS_PY = Path(__file__).resolve().parent.parent / "sdc" / "car" / "controllers.py"
 
 
@@ -49,15 +53,17 @@ class Constant:
 def recorded_observations(name: str) -> list:
     """The observations a run of highway-obstacle under ``name`` saw, step by step."""
     spec = load_spec(CATALOG_DIR / "highway-obstacle.toml").with_controller(name)
-    controller = make_controller(spec.controller)
     seen = []
     with make_world(spec, make_road(spec)) as world:
-        sim = Simulation(spec, world)
-        sim.start()
-        while True:
+        sim = Simulation(spec, world, controller=make_controller(spec.controller))
+        loop = WorldLoop(world, [sim])
+        loop.start()
+        while not loop.ends:
             seen.append(sim.observation())
-            if sim.control(controller) is not None:
-                return seen
+            loop.step()
+    if isinstance(loop.ends[0], Failed):
+        raise loop.ends[0].exception
+    return seen
 
 
 def step_us(name: str, observations: list) -> float:
@@ -105,7 +111,7 @@ def main() -> None:
     builtin = make_controller(spec.controller)
     with make_world(spec, make_road(spec)) as world:
         sim = Simulation(spec, world)
-        sim.start()
+        WorldLoop(world, [sim]).start()
         protocol = np.median([decide_us(sim, Constant()) - bare_us(sim, Constant())
                               for _ in range(3)])
         difference = np.median([decide_us(sim, plugin) - decide_us(sim, builtin)

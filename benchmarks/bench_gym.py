@@ -6,6 +6,9 @@ Prints ``name value`` lines. ``gym_speedup_vs_highway_v0`` is the steps/s of
 ``ContinuousAction``, one simulation step per env step, with as many vehicles
 as our scene held on average while timed. ``gym_highway_backend_vs_highway_v0``
 is the same for our env on the highway-env backend.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 20 warm-up and 20 timed
+steps of each.
 """
 
 from __future__ import annotations
@@ -16,13 +19,14 @@ import warnings
 
 import gymnasium
 import numpy as np
+from smoke import size
 
 import sdc.gym  # noqa: F401  (registers the environment)
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import read_toml
 
-WARM_UP_STEPS, TIMED_STEPS, HIGHWAY_V0_STEPS = 700, 400, 150
+WARM_UP_STEPS, TIMED_STEPS, HIGHWAY_V0_STEPS = size(700, 20), size(400, 20), size(150, 20)
 
 
 def scene_spec(backend: str) -> ScenarioSpec:

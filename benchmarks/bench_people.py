@@ -14,6 +14,9 @@ and without (the person context subscription left out, the world before people):
   timed steps, and ``raw.*`` the medians in milliseconds.
 
     python benchmarks/bench_people.py
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one pair, bench_perf's
+smoke size of timed steps.
 """
 
 from __future__ import annotations
@@ -23,12 +26,13 @@ import statistics
 import bench_perf
 import libsumo
 import traci.constants as tc
+from smoke import size
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec
 
-PAIRS = 3
+PAIRS = size(3, 1)
 
 
 def junction_spec() -> ScenarioSpec:
@@ -57,16 +61,14 @@ def persons_in_view(spec: ScenarioSpec) -> float:
     """The persons the world reports around the ego, on average over the loop's steps."""
     from scenarios.world_backends import make_road, make_world
     from sdc.car.controller_plugins import make_controller
-    from sdc.run.episode import Simulation
 
     counts = []
     controller = make_controller(spec.controller)
     with make_world(spec, make_road(spec)) as world:
-        sim = Simulation(spec, world)
-        sim.start()
+        sim, loop = bench_perf.alone(spec, world, controller)
         for _ in range(bench_perf.TIMED_STEPS):
             counts.append(int((sim.snapshot.traffic_classes == "pedestrian").sum()))
-            if sim.control(controller) is not None:
+            if bench_perf.ended(loop):
                 break
     return statistics.mean(counts)
 

@@ -49,6 +49,9 @@ The raw timings add:
 - ``town_2000``: the catalog's ``grid-town`` (a SUMO network of 10 x 10
   junctions, 2000 cars) under lane keeping, where the road edges come from the
   network's drivable area.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one measurement of each,
+20 timed steps, warm-ups of at most 10 s and a town of 100 cars (:func:`town_spec`).
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ import warnings
 
 import numpy as np
 import traci.constants as tc
+from smoke import SMOKE, size
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import LidarSpec, ScenarioSpec
@@ -70,12 +74,15 @@ from scenarios.world_backends import make_road, make_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.sensors import Lidar
 from sdc.run.episode import Simulation
+from sdc.run.world_loop import Failed, WorldLoop
 
-REPETITIONS = 3
-SHORT_PAIRS = 9
+REPETITIONS = size(3, 1)
+SHORT_PAIRS = size(9, 1)
 #: memory read after each SUMO step of the cold-cache control: more than the CPU caches
 CACHE_WALK_BYTES = 64 << 20
-TIMED_STEPS = 400
+TIMED_STEPS = size(400, 20)
+#: the smoke size's longest warm-up [s]
+SMOKE_WARM_UP_S = 10.0
 
 
 def traffic_spec(lanes: int, length_m: float, flow_vph: float, warm_up_s: float,
@@ -86,12 +93,33 @@ def traffic_spec(lanes: int, length_m: float, flow_vph: float, warm_up_s: float,
     plain["road"].update(lanes=lanes, length_m=length_m)
     plain["obstacles"] = []
     plain["traffic"] = {"flow_vph_per_lane": flow_vph, "speed_mean_mps": 25.0,
-                        "warm_up_s": warm_up_s}
+                        "warm_up_s": size(warm_up_s, min(warm_up_s, SMOKE_WARM_UP_S))}
     plain["ego"].update(lane=1, speed_mps=18.0,
                         start_m=length_m / 2 if start_m is None else start_m)
     plain["scenario"].update(duration_s=TIMED_STEPS * plain["scenario"]["step_s"] + 1.0)
     plain["controller"] = {"name": "lane-keep"}
     return ScenarioSpec.from_plain(plain)
+
+
+def alone(spec: ScenarioSpec, world, controller=None,
+          look_ahead_m: float | None = None) -> tuple[Simulation, WorldLoop]:
+    """A run of ``spec`` under ``controller`` alone in ``world``, started (the world's
+    first answer sensed): the run, and the loop that steps every run's world
+    (``sdc.run.world_loop``)."""
+    sim = Simulation(spec, world, look_ahead_m, controller=controller)
+    loop = WorldLoop(world, [sim])
+    loop.start()
+    return sim, loop
+
+
+def ended(loop: WorldLoop) -> bool:
+    """One closed-loop step of the run alone in ``loop`` (it senses, decides, is
+    recorded and checked, moves; the world steps): whether the run ended at it (a run
+    that raised raises again)."""
+    loop.step()
+    if loop.ends and isinstance(loop.ends[0], Failed):
+        raise loop.ends[0].exception
+    return bool(loop.ends)
 
 
 def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dict:
@@ -115,15 +143,14 @@ def closed_loop(spec: ScenarioSpec, cache_walk: np.ndarray | None = None) -> dic
 
     steps_s = []
     with make_world(spec, road) as world:
-        sim = Simulation(spec, world)
-        sim.start()
+        _, loop = alone(spec, world, controller)
         vehicles = world.vehicle_count()
         libsumo.simulationStep = timed_step  # the world calls it through the module
         try:
             sumo_s.clear()
             for _ in range(TIMED_STEPS):
                 start = time.perf_counter()
-                if sim.control(controller) is not None:
+                if ended(loop):
                     break
                 steps_s.append(time.perf_counter() - start)
         finally:
@@ -143,7 +170,7 @@ def bare_sumo_ms(spec: ScenarioSpec, ego: bool = True) -> float:
 
     road = make_road(spec)
     with make_world(spec, road) as world:
-        Simulation(spec, world, 0.0).start()
+        alone(spec, world, look_ahead_m=0.0)
         slot = world._slots[0]  # the ego's context subscription
         libsumo.vehicle.unsubscribeContext(EGO_ID, tc.CMD_GET_VEHICLE_VARIABLE,
                                            slot.subscribed_m)
@@ -174,8 +201,7 @@ def world_loop_ms(spec: ScenarioSpec, sense: bool = False) -> float:
     however much of the loop were compiled, a step costs at least this."""
     road = make_road(spec)
     with make_world(spec, road) as world:
-        sim = Simulation(spec, world, 0.0)
-        sim.start()
+        sim, _ = alone(spec, world, look_ahead_m=0.0)
         box, step_m = sim.box.copy(), spec.ego.speed_mps * spec.scenario.step_s
         look_ahead_m, lidar_ahead_m = 5.0, spec.lidar.mount_ahead_m
         steps_s = []
@@ -201,6 +227,8 @@ def town_spec() -> ScenarioSpec:
     plain = load_spec(CATALOG_DIR / "grid-town.toml").to_plain()
     plain.pop("obstacles")
     plain["controller"] = {"name": "lane-keep"}
+    if SMOKE:  # 100 cars, briefly warmed up: the full town's warm-up takes minutes
+        plain["traffic"].update(vehicles=100, warm_up_s=SMOKE_WARM_UP_S)
     return ScenarioSpec.from_plain(plain)
 
 
@@ -208,7 +236,7 @@ def median_of(runs: list[dict], key: str) -> float:
     return statistics.median(run[key] for run in runs)
 
 
-def highway_v0_steps_per_s(vehicles: int, step_s: float, steps: int = 150) -> float:
+def highway_v0_steps_per_s(vehicles: int, step_s: float, steps: int = size(150, 20)) -> float:
     import gymnasium
     import highway_env  # noqa: F401  (registers highway-v0)
 
@@ -239,7 +267,7 @@ def lidar_scene(n: int = 50) -> np.ndarray:
     return np.column_stack([x, y, rng.normal(0, 0.05, n), np.full(n, 5.0), np.full(n, 2.0)])
 
 
-def lidar_ratio(repeats: int = 200) -> tuple[float, float]:
+def lidar_ratio(repeats: int = size(200, 10)) -> tuple[float, float]:
     """(our scan [ms], highway-env's trace [ms]) on the same 50 boxes."""
     from highway_env.envs.common.observation import LidarObservation
     from highway_env.road.lane import StraightLane

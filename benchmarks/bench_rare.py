@@ -13,6 +13,9 @@ Prints ``name value`` lines:
   collision, the median over ``SEARCHES`` sweep seeds; ``uniform_first_failure_runs``:
   what uniform random sampling needs on average, 1 / truth; ``search_vs_uniform`` their
   ratio (target >= 10).
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): estimates of at most 20
+runs (batches of 10), one search of at most 20, on 1 worker.
 """
 
 from __future__ import annotations
@@ -26,16 +29,21 @@ import tempfile
 import time
 from pathlib import Path
 
+from smoke import size
+
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.adaptive_runner import AdaptiveSettings, run_adaptive
+from sdc.batch.sweeps.progress import QuietReporter
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-rare.toml"
 TRUTH = CATALOG_DIR / "sweeps" / "seed-rare.truth.json"
-SEARCHES = 11
-WORKERS = 2
+SEARCHES = size(11, 1)
+WORKERS = size(2, 1)
+#: the estimate's and the search's budgets [runs] and batches
+ESTIMATE_RUNS, ESTIMATE_BATCH = size(20_000, 20), size(200, 10)
+SEARCH_RUNS, SEARCH_BATCH = size(2000, 20), size(20, 10)
 
 
 def main() -> None:
@@ -47,8 +55,9 @@ def main() -> None:
         for name in ("cold", "warm"):
             start = time.perf_counter()
             outcome = run_adaptive(sweep, Path(tmp) / f"estimate-{name}", LocalExecutor(WORKERS),
-                                   QuietReporter(), AdaptiveSettings("estimate", "seed", 20_000,
-                                                                     200, target_rhw=0.3))
+                                   QuietReporter(),
+                                   AdaptiveSettings("estimate", "seed", ESTIMATE_RUNS,
+                                                    ESTIMATE_BATCH, target_rhw=0.3))
             walls_s.append(time.perf_counter() - start)
         e = outcome.summary
         print(f"estimate_p_collision {e['p_collision']:.4g}")
@@ -64,7 +73,7 @@ def main() -> None:
         print(f"estimate_wall_s_warm_cache {walls_s[1]:.1f}")
 
         firsts = []
-        settings = AdaptiveSettings("search", "seed", 2000, 20, stop_after=1)
+        settings = AdaptiveSettings("search", "seed", SEARCH_RUNS, SEARCH_BATCH, stop_after=1)
         for seed in range(1, SEARCHES + 1):
             seeded = dataclasses.replace(sweep, seed=seed)
             found = run_adaptive(seeded, Path(tmp) / f"search-{seed}", LocalExecutor(WORKERS),

@@ -13,6 +13,9 @@ Prints a table, then ``name value`` lines:
 ``bank_<problem>_coverage``, ``..._mean_over_truth``, ``..._error_ratio``
 (reported over measured error: 1 is honest), ``..._median_runs``, and the
 same with ``nais_`` for the reference.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 seeds a problem (and
+2 for the reference).
 """
 
 from __future__ import annotations
@@ -27,12 +30,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from smoke import size  # noqa: E402
+
 from analysis.rare.rare_bank import BANK, BankResult, problem, run_bank  # noqa: E402
 
-SEEDS = 200
-REFERENCE_SEEDS = 100
+SEEDS = size(200, 2)
+REFERENCE_SEEDS = size(100, 2)
 WORKERS = 2
-CHUNK = 25
+CHUNK = size(25, 1)
 
 
 def _ours(args: tuple[str, int]) -> BankResult:

@@ -36,6 +36,10 @@ measures those K only (and 1), those families' sweeps, or the step alone.
 A rate is runs over the sweep's wall time, which includes the sweep's own start (a
 few seconds): the sweeps of one family run the same samples (:data:`SAMPLES`), so that
 start weighs alike in each.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 samples of 5 s runs on
+1 worker, K of 1 and 2, a town of 100 cars warmed up 10 s and Ingolstadt entered at
+30 s (:data:`SMOKE_PARAMS`), bench_perf's smoke size of timed steps.
 """
 
 from __future__ import annotations
@@ -50,22 +54,27 @@ from pathlib import Path
 import bench_perf
 import numpy as np
 import pandas as pd
+from smoke import SMOKE, size
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
 from scenarios.world_backends import make_road, make_shared_world
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
 from sdc.run.shared_world import placed_apart
 
 #: the samples of every sweep
-SAMPLES = 16
+SAMPLES = size(16, 2)
 #: the egos per world measured
-EGOS_PER_WORLD = (1, 4, 8, 16)
-WORKERS = 2
+EGOS_PER_WORLD = size((1, 4, 8, 16), (1, 2))
+WORKERS = size(2, 1)
+#: the smoke size's runs: shorter, their warm-ups too (the town 100 cars for 10 s)
+SMOKE_PARAMS = {"town": ['"traffic.vehicles" = { choice = [100] }',
+                         '"traffic.warm_up_s" = { choice = [10.0] }'],
+                "real": ['"traffic.enter_s" = { choice = [30.0] }']}
 
 
 #: each family's base, controller and swept parameters
@@ -83,6 +92,8 @@ def write_sweep(tmp: Path, family: str, samples: int, egos_per_world: int) -> Pa
     lines = ['[sweep]', 'name = "shared-worlds-bench"', f'base = "{CATALOG_DIR / base}"',
              f"samples = {samples}", "seed = 11", f'controllers = ["{controller}"]',
              f"egos_per_world = {egos_per_world}", "[sweep.params]", *params]
+    if SMOKE:
+        lines += ['"scenario.duration_s" = { choice = [5.0] }', *SMOKE_PARAMS[family]]
     path = tmp / f"{family}-{egos_per_world}.toml"
     path.write_text("\n".join(lines) + "\n")
     return path

@@ -2,9 +2,9 @@
 
 Prints ``name value`` lines:
 
-- ``sweep_parallel_efficiency``: runs/s of a 400-run seed-envelope sweep at 2
-  local workers over 2 x runs/s at 1 worker (whole sweeps, start-up included;
-  the median of three pairs run back to back).
+- ``sweep_parallel_efficiency``: runs/s of a 600-run seed-envelope sweep (200
+  samples under its 3 controllers) at 2 local workers over 2 x runs/s at 1 worker
+  (whole sweeps, start-up included; the median of three pairs run back to back).
 - ``ray_vs_local_throughput``: steady runs/s under a local Ray with 2 CPUs over
   the local executor's with 2 workers, same sweep, from the first finished run
   to the last (the clusters' start-up excluded); ``ray_vs_local_wall`` is the
@@ -17,6 +17,9 @@ Prints ``name value`` lines:
   simulated highway-obstacle runs that last the full minute.
 - ``driver_peak_rss_ratio_2000_vs_200``: the sweep driver's peak memory for
   2000 one-step runs over 200 (results stream to disk, so about 1).
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one triple of sweeps of
+4 samples, 2 and 4 runs for the fixed cost, 10 and 20 for the driver's memory.
 """
 
 from __future__ import annotations
@@ -29,13 +32,20 @@ import tempfile
 import time
 from pathlib import Path
 
+from smoke import size
+
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 
-PAIRS, SAMPLES = 3, 200  # seed-envelope samples: 400 runs a sweep
+# seed-envelope samples: 600 runs a sweep (3 controllers)
+PAIRS, SAMPLES = size(3, 1), size(200, 4)
+#: runs of the fixed-cost sweeps (60 s runs, one-step runs), and of the driver's two
+FULL_RUNS, STEP_RUNS = size(6, 2), size(60, 4)
+RSS_SMALL, RSS_LARGE = size(200, 10), size(2000, 20)
 
 
 class Clock(QuietReporter):
@@ -84,9 +94,9 @@ def driver_peak_rss_kib(sweep_file: Path, out_dir: Path) -> int:
     code = (
         "import resource, sys\n"
         "from scenarios.spec.sweep_spec import load_sweep\n"
-        "from sdc.batch.executors import LocalExecutor\n"
-        "from sdc.batch.progress import QuietReporter\n"
-        "from sdc.batch.sweep_runner import run_sweep\n"
+        "from sdc.batch.executors.local_executor import LocalExecutor\n"
+        "from sdc.batch.sweeps.progress import QuietReporter\n"
+        "from sdc.batch.sweeps.sweep_runner import run_sweep\n"
         f"run_sweep(load_sweep({str(sweep_file)!r}), {str(out_dir)!r}, LocalExecutor(2),\n"
         "          QuietReporter(), traces='none')\n"
         "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
@@ -124,8 +134,8 @@ def main() -> None:
 
         # highway-obstacle, ego beside the stopped car at 15 m/s: 900 m in the full 60 s
         full = {"ego.lane": 1, "ego.speed_mps": 15.0, "scenario.duration_s": 60.0}
-        full_file = write_sweep(tmp, "full", "highway-obstacle.toml", 6, full)
-        step_file = write_sweep(tmp, "step", "highway-obstacle.toml", 60,
+        full_file = write_sweep(tmp, "full", "highway-obstacle.toml", FULL_RUNS, full)
+        step_file = write_sweep(tmp, "step", "highway-obstacle.toml", STEP_RUNS,
                                 {**full, "scenario.duration_s": 0.064})
         full_clock = timed_sweep(full_file, tmp / "full", LocalExecutor(1))
         step_clock = timed_sweep(step_file, tmp / "step", LocalExecutor(1))
@@ -135,14 +145,14 @@ def main() -> None:
                                                / step_clock.steady_runs_per_s)
 
         tiny = {"scenario.duration_s": 0.064}
-        small = driver_peak_rss_kib(write_sweep(tmp, "r200", "seed-lesson.toml", 200, tiny),
-                                    tmp / "r200")
-        large = driver_peak_rss_kib(write_sweep(tmp, "r2000", "seed-lesson.toml", 2000, tiny),
-                                    tmp / "r2000")
+        small = driver_peak_rss_kib(
+            write_sweep(tmp, "r-small", "seed-lesson.toml", RSS_SMALL, tiny), tmp / "r-small")
+        large = driver_peak_rss_kib(
+            write_sweep(tmp, "r-large", "seed-lesson.toml", RSS_LARGE, tiny), tmp / "r-large")
         raw.update(driver_peak_rss_mib_200=small / 1024, driver_peak_rss_mib_2000=large / 1024)
         figures["driver_peak_rss_ratio_2000_vs_200"] = large / small
-        manifest = json.loads((tmp / "r2000" / "manifest.json").read_text())
-        assert manifest["counts"]["ok"] == 2000, manifest["counts"]
+        manifest = json.loads((tmp / "r-large" / "manifest.json").read_text())
+        assert manifest["counts"]["ok"] == RSS_LARGE, manifest["counts"]
 
     for name, value in figures.items():
         print(f"{name} {value:.3f}")

@@ -16,6 +16,10 @@ Prints ``name value`` lines:
 
 The own-warm-up sweep runs :data:`OWN_SAMPLES` samples, the shared one
 :data:`SHARED_SAMPLES`; a rate is runs over the sweep's wall time.
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 warm states, 4 shared
+and 2 own samples of 5 s runs on 1 worker, in a town of 100 cars warmed up 10 s
+(:data:`SMOKE_TOWN`).
 """
 
 from __future__ import annotations
@@ -25,14 +29,22 @@ import tempfile
 import time
 from pathlib import Path
 
+from smoke import SMOKE, size
+
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
 from scenarios.spec.toml_io import load_spec
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 
-WARM_STATES, SHARED_SAMPLES, OWN_SAMPLES, WORKERS = 8, 40, 4, 2
+WARM_STATES, SHARED_SAMPLES, OWN_SAMPLES = size(8, 2), size(40, 4), size(4, 2)
+WORKERS = size(2, 1)
+#: the smoke size's town: the grid with fewer cars, warmed up briefly, shorter runs
+SMOKE_TOWN = ['"traffic.vehicles" = { choice = [100] }',
+              '"traffic.warm_up_s" = { choice = [10.0] }',
+              '"scenario.duration_s" = { choice = [5.0] }']
 
 
 def write_sweep(tmp: Path, samples: int, warm_states: int | None) -> Path:
@@ -40,7 +52,8 @@ def write_sweep(tmp: Path, samples: int, warm_states: int | None) -> Path:
              f"samples = {samples}", "seed = 11", 'controllers = ["seed"]']
     if warm_states is not None:
         lines.append(f"warm_states = {warm_states}")
-    lines += ["[sweep.params]", '"obstacles[0].position_m" = { uniform = [40.0, 120.0] }']
+    lines += ["[sweep.params]", '"obstacles[0].position_m" = { uniform = [40.0, 120.0] }',
+              *(SMOKE_TOWN if SMOKE else [])]
     path = tmp / f"town-{samples}-{warm_states}.toml"
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -57,8 +70,8 @@ def runs_per_hour(sweep_file: Path, out_dir: Path, executor) -> float:
 
 def main() -> None:
     figures, raw = {}, {}
-    warm_up_s = load_spec(CATALOG_DIR / "grid-town.toml").traffic.warm_up_s
-    raw["grid_town_warm_up_s"] = warm_up_s
+    raw["grid_town_warm_up_s"] = size(load_spec(CATALOG_DIR / "grid-town.toml").traffic.warm_up_s,
+                                      10.0)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         own = write_sweep(tmp, OWN_SAMPLES, None)

@@ -12,7 +12,7 @@ bare SUMO step of the same scenario with the same options (bench_perf.bare_sumo_
   model's options (``..._without``: both without);
 - ``world.audit_ms_per_step``: the world audit (analysis.measures.world_audit) over a trace of
   the 100-vehicle highway, per step;
-- ``world.ego_pose_us``: telling SUMO where the ego is (``SumoWorld._ego_pose``: its
+- ``world.ego_pose_us``: telling SUMO where the ego is (``scenarios.sumo.ego_pose``: its
   lateral position by the model's rule), per step, with the options or without.
 
 Scenarios: ``highway_100`` (3 lanes, about 100 vehicles, bench_perf's), ``highway_20``
@@ -20,6 +20,9 @@ Scenarios: ``highway_100`` (3 lanes, about 100 vehicles, bench_perf's), ``highwa
 computed once per option set and cached).
 
     python benchmarks/bench_world.py
+
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one pair a scenario, at
+bench_perf's smoke size (its timed steps, warm-ups and town).
 """
 
 from __future__ import annotations
@@ -29,14 +32,17 @@ import time
 
 import bench_perf
 import numpy as np
+from smoke import size
 
 from analysis.measures.world_audit import world_overlaps
 from scenarios.scene import traffic_model
-from scenarios.sumo.sumo_world import SumoWorld
+from scenarios.sumo.ego_pose import ego_pose
+from scenarios.sumo.ego_slot import EgoSlot
+from scenarios.sumo.routes_xml import TRAFFIC_WIDTH_M
 from scenarios.world_backends import make_road
 from sdc.run.episode import run_episode
 
-PAIRS = 3
+PAIRS = size(3, 1)
 
 
 def measured(spec, options, bare: bool = True) -> dict:
@@ -78,15 +84,13 @@ def main() -> None:
     world_overlaps(episode.trace.traffic, np.zeros((0, 5)))
     audit_s = time.perf_counter() - start
     print(f"world.audit_ms_per_step {1e3 * audit_s / len(episode.trace):.4f}")
-    road = make_road(episode_spec)
-    with SumoWorld(episode_spec, road) as world:
-        ego = world._slots[0]
-        boxes = episode.trace.body_boxes(ego.model.center_ahead_of_rear_axle_m,
-                                         ego.model.length_m, ego.model.width_m)
-        start = time.perf_counter()
-        for box in boxes:
-            world._ego_pose(ego, box)
-        pose_s = time.perf_counter() - start
+    ego = EgoSlot(0, episode_spec, make_road(episode_spec))
+    boxes = episode.trace.body_boxes(ego.model.center_ahead_of_rear_axle_m,
+                                     ego.model.length_m, ego.model.width_m)
+    start = time.perf_counter()
+    for box in boxes:
+        ego_pose(ego, box, TRAFFIC_WIDTH_M)  # before SUMO loads a type: the built-in's
+    pose_s = time.perf_counter() - start
     print(f"world.ego_pose_us {1e6 * pose_s / len(boxes):.2f}")
     print(f"raw.audit_traffic_per_step "
           f"{statistics.mean(len(r) // 5 for r in episode.trace.traffic):.1f}")

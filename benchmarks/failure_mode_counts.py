@@ -67,9 +67,9 @@ def _regions_found(rows: pd.DataFrame, truth: dict) -> set[str]:
 
 def sumo_part(seeds: int, search_runs: int) -> dict[str, float]:
     from scenarios.spec.sweep_spec import load_sweep
-    from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
-    from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import QuietReporter
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.sweeps.adaptive_runner import AdaptiveSettings, run_adaptive
+    from sdc.batch.sweeps.progress import QuietReporter
 
     truth = json.loads(TRUTH.read_text())
     sweep = load_sweep(FAMILY)

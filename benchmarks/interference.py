@@ -36,9 +36,9 @@ from analysis.measures.run_outcome import OUTCOMES
 from analysis.stats.rates import flag_interval
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 
 WARM_STATES, WORKERS = 8, 2
 

@@ -14,11 +14,12 @@ import numpy as np
 from scenarios.common.errors import SdcError
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import Pose, Snapshot
+from scenarios.spec.backends import BACKENDS as ALL_BACKENDS
 from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
 from scenarios.sumo.warm_state import cached_path, uses_warm_state, warm_state_key
 from scenarios.sumo_net.road_source import road_source
 
-BACKENDS = ("sumo", "highway")
+BACKENDS = tuple(ALL_BACKENDS)  # their names
 
 
 class World(Protocol):
@@ -127,12 +128,16 @@ def make_world(spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = 
                gui: bool = False, warm_state: Path | None = None) -> World:
     """``warm_state``: the file of the spec's warm state, when the caller has it (the
     sumo backend; without it a run finds or computes its own)."""
+    if gui and not spec.scenario.world_backend.has_gui:
+        raise SdcError("--gui: only the sumo backend has a GUI")
     if spec.scenario.backend == "highway":
-        if gui:
-            raise SdcError("--gui: only the sumo backend has a GUI")
         from scenarios.highway.highway_world import HighwayWorld
 
         return HighwayWorld(spec, road)
+    if spec.scenario.backend == "scripted":
+        from scenarios.scripted.scripted_world import ScriptedWorld
+
+        return ScriptedWorld(spec, road)
     from scenarios.sumo.sumo_world import SumoWorld
 
     return SumoWorld(spec, road, cache_dir, gui, warm_state=warm_state)
@@ -144,7 +149,7 @@ def make_shared_world(egos: list[tuple[ScenarioSpec, RoadGeometry]],
     the world's: :class:`scenarios.sumo.sumo_world.SumoWorld`); the highway backend
     holds one ego only."""
     (spec, road), others = egos[0], tuple(egos[1:])
-    if spec.scenario.backend != "sumo" and others:
+    if others and not spec.scenario.world_backend.holds_several_egos:
         raise SdcError("[sweep] egos_per_world: only the sumo backend holds several egos")
     if not others:
         return make_world(spec, road, cache_dir, warm_state=warm_state)

@@ -56,17 +56,47 @@ def temporary_cache(tmp_path_factory):
         os.environ["SDC_CACHE_DIR"] = before
 
 
+@pytest.fixture(scope="session")
+def ray_pid_dir(tmp_path_factory) -> Path:
+    """This process's folder where tests' task functions leave their workers' process
+    ids (``$SDC_TEST_PID_DIR`` in the workers of :func:`ray_session`)."""
+    return tmp_path_factory.mktemp("ray-pids")
+
+
 @pytest.fixture
-def ray_session(temporary_cache):
-    """A local Ray session (2 CPUs) this process holds, shared by its tests that compare
-    Ray with local processes: a RayExecutor uses a session its process holds and leaves
-    it running, so those tests start Ray once, not once each (Ray stops it at exit)."""
+def ray_session(temporary_cache, ray_pid_dir):
+    """A local Ray session (2 CPUs) this process holds, shared by its tests that run on
+    Ray: a RayExecutor uses a session its process holds and leaves it running, so those
+    tests start Ray once, not once each (Ray stops it at exit). Its workers start with
+    this folder on ``PYTHONPATH`` (they import a test module to unpickle its task
+    functions) and ``SDC_TEST_PID_DIR`` set to :func:`ray_pid_dir`."""
     import ray
 
-    from sdc.batch.ray_executor import start_session
+    from sdc.batch.executors.ray_executor import start_session
 
     if not ray.is_initialized():
-        start_session(workers=2)
+        before = {name: os.environ.get(name) for name in ("PYTHONPATH", "SDC_TEST_PID_DIR")}
+        os.environ["PYTHONPATH"] = os.pathsep.join(
+            [str(Path(__file__).parent), *filter(None, [before["PYTHONPATH"]])])
+        os.environ["SDC_TEST_PID_DIR"] = str(ray_pid_dir)
+        try:  # Ray's processes take the environment as the session starts
+            start_session(workers=2)
+        finally:
+            for name, value in before.items():
+                if value is None:
+                    os.environ.pop(name, None)
+                else:
+                    os.environ[name] = value
+
+
+@pytest.fixture
+def ray_pids(ray_session, ray_pid_dir, monkeypatch) -> Path:
+    """:func:`ray_session`, its pid folder emptied, and ``SDC_TEST_PID_DIR`` naming it
+    here too (for local workers): where a test's task functions note their workers."""
+    for old in ray_pid_dir.iterdir():
+        old.unlink()
+    monkeypatch.setenv("SDC_TEST_PID_DIR", str(ray_pid_dir))
+    return ray_pid_dir
 
 
 @pytest.fixture

@@ -22,9 +22,9 @@ from hypothesis import strategies as st
 from analysis.measures.trace_file import Trace
 from scenarios import CATALOG_DIR
 from scenarios.common.errors import SdcError
-from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.spec.scenario_spec import MAX_STEPS, ScenarioSpec
 from scenarios.spec.toml_io import dumps_plain, load_spec
+from scenarios.world_backends import make_road
 from sdc.cli import main
 
 LESSON = CATALOG_DIR / "seed-lesson.toml"
@@ -207,7 +207,7 @@ def _trace_file(path: Path) -> None:
                "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s",
                "drac_mps2", "headway_s")}
     spec = load_spec(LESSON)
-    metadata = {"spec": spec.to_plain(), "road": RoadGeometry.from_spec(spec.road).to_plain(),
+    metadata = {"spec": spec.to_plain(), "road": make_road(spec).to_plain(),
                 "vehicle": {"length_m": 4.9, "width_m": 1.9,
                             "center_ahead_of_rear_axle_m": 1.4}}
     Trace(floats, ["lane_keep"] * n, [np.full(4, 10.0, np.float32)] * n,

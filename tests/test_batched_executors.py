@@ -12,18 +12,22 @@ import pytest
 
 from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import load_spec
-from sdc.batch.batch_size import MAX_RUNS, BatchSizer
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.run_task import RunTask, execute
+from sdc.batch.executors.batch_size import MAX_RUNS, BatchSizer
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.tasks.run_task import RunTask
+from sdc.batch.tasks.task import execute
 from sdc.run.result_row import RUN_COLUMNS
 
 KILLER, SLEEPER = "run-05", "run-01"
+SCRIPTED_LESSON = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 RUN_TIMEOUT_S = 10.0
 
 
 def lesson_tasks(count: int = 12) -> list[RunTask]:
-    """Short lesson runs under seed and lane-keep, each of another seed and speed."""
-    base = load_spec(CATALOG_DIR / "seed-lesson.toml")
+    """Short lesson runs under seed and lane-keep, each of another seed and speed (on the
+    scripted backend: a world without a simulator)."""
+    base = load_spec(SCRIPTED_LESSON)
     tasks = []
     for i in range(count):
         spec = base.with_seed(i).with_controller("seed" if i % 2 else "lane-keep")
@@ -54,7 +58,8 @@ def _sleeps(task: RunTask) -> dict:
 
 @pytest.fixture
 def ray_finds_this_module(tmp_path, monkeypatch, fresh_ray):
-    """Ray's workers unpickle this module's task functions by importing it."""
+    """Ray's workers unpickle this module's task functions by importing it: a session of
+    each executor's own, whose workers are the executor's alone."""
     monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
         [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]))
@@ -111,7 +116,7 @@ def test_many_maps_in_one_with_block_reuse_the_workers_and_agree(tmp_path,
 
 
 @pytest.mark.slow
-def test_a_run_that_kills_its_ray_worker_costs_only_its_own_row(ray_finds_this_module):
+def test_a_run_that_kills_its_ray_worker_costs_only_its_own_row(ray_pids):
     tasks = lesson_tasks(12)
     with RayExecutor(2, task_fn=_kills_its_worker, batch_runs=3) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
@@ -123,13 +128,12 @@ def test_a_run_that_kills_its_ray_worker_costs_only_its_own_row(ray_finds_this_m
 
 
 @pytest.mark.slow
-def test_a_hung_run_in_the_middle_of_a_ray_batch_times_out_alone(tmp_path,
-                                                                ray_finds_this_module):
+def test_a_hung_run_in_the_middle_of_a_ray_batch_times_out_alone(ray_pids):
     tasks = lesson_tasks(12)  # batches of 3: the sleeper is the second of the first
     with RayExecutor(2, run_timeout_s=RUN_TIMEOUT_S, task_fn=_sleeps,
                      batch_runs=3) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
-        sleeper_pid = int((tmp_path / "sleeper.pid").read_text())
+        sleeper_pid = int((ray_pids / "sleeper.pid").read_text())
         deadline = time.monotonic() + 60
         while not _gone(sleeper_pid):  # Ray's force cancel ends its worker
             assert time.monotonic() < deadline, "the hung run's worker lives on"
@@ -150,13 +154,13 @@ def _gone(pid: int) -> bool:
 
 
 def test_batch_is_refused_without_ray(tmp_path):
-    import subprocess
-    import sys
+    from click.testing import CliRunner
+
+    from sdc.cli import main
 
     sweep = CATALOG_DIR / "sweeps" / "seed-envelope.toml"
-    result = subprocess.run([sys.executable, "-m", "sdc", "sweep", str(sweep), "--out",
-                             str(tmp_path / "out"), "--batch", "4"], capture_output=True,
-                            text=True, timeout=120)
-    assert result.returncode == 2 and "--batch: only applies with --executor ray" in \
+    result = CliRunner().invoke(main, ["sweep", str(sweep), "--out", str(tmp_path / "out"),
+                                       "--batch", "4"])
+    assert result.exit_code == 2 and "--batch: only applies with --executor ray" in \
         result.stderr
     assert not (tmp_path / "out").exists()

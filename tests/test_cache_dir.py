@@ -8,7 +8,7 @@ import pytest
 
 from scenarios.common.cache_dir import network_cache_dir, sdc_cache_dir
 from scenarios.spec.scenario_spec import RoadSpec
-from scenarios.sumo_net.build import build_network
+from scenarios.sumo_net.road_source import road_source
 
 
 @pytest.fixture
@@ -45,9 +45,9 @@ def test_sdc_cache_dir_overrides_both(home, tmp_path, monkeypatch):
 def test_networks_are_built_where_the_environment_says_at_the_time(home, tmp_path, monkeypatch):
     road = RoadSpec(length_m=120.0, lanes=2)
     monkeypatch.setenv("SDC_CACHE_DIR", str(tmp_path / "first"))
-    first = build_network(road)
+    first = road_source(road).network_file()
     monkeypatch.setenv("SDC_CACHE_DIR", str(tmp_path / "second"))
-    second = build_network(road)
+    second = road_source(road).network_file()
     assert first.parent == tmp_path / "first" / "networks" and first.is_file()
     assert second.parent == tmp_path / "second" / "networks" and second.is_file()
     assert first.name == second.name  # the same network, named by its content

@@ -5,15 +5,19 @@ its few runs cannot show, with its reason."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from click.testing import CliRunner
 
-from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.cli import main
+
+#: the lesson on the scripted backend: no traffic, so the same runs as on SUMO, faster
+SCRIPTED_LESSON = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 
 BRAKE_ONLY = """
 from sdc.car.controller_api import Command
@@ -34,7 +38,7 @@ def brake_sweep(tmp_path_factory):
     (root / "brake.py").write_text(BRAKE_ONLY)
     (root / "sweep.toml").write_text(f"""[sweep]
 name = "gate"
-base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+base = "{SCRIPTED_LESSON}"
 samples = 4
 seed = 3
 controllers = ["{root / 'brake.py'}:BrakeOnly", "avoid"]

@@ -56,7 +56,7 @@ def test_highway_traffic_reacts_to_a_stopped_ego(lesson_plain):
 
 @pytest.mark.parametrize("radius_m", [200.0, -200.0])
 def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
-    from scenarios.scene.road_geometry import RoadGeometry
+    from scenarios.world_backends import make_road
 
     plain = copy.deepcopy(lesson_plain)
     plain["road"].update(kind="curve", curve_radius_m=radius_m, length_m=300.0,
@@ -69,7 +69,7 @@ def test_curved_roads_keep_traffic_in_the_spec_lanes(lesson_plain, radius_m):
     spec = ScenarioSpec.from_plain(plain)
     episode = run_episode(spec)
     assert not episode.row["collision"] and episode.row["max_abs_lane_offset_m"] < 0.6
-    road = RoadGeometry.from_spec(spec.road)
+    road = make_road(spec)
     centres = np.array([road.lane_center_d_m(i) for i in range(3)])
     boxes = np.vstack([np.asarray(t).reshape(-1, 5) for t in episode.trace.traffic])
     assert len(boxes) > 100
@@ -82,9 +82,9 @@ def test_a_sweep_over_both_backends_reports_them_side_by_side(tmp_path):
     from analysis.report.sweep_report import write_report
     from analysis.report.sweep_words import COLLISION_TITLE
     from scenarios.spec.sweep_spec import load_sweep
-    from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import QuietReporter
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.sweeps.progress import QuietReporter
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     sweep_file = tmp_path / "both.toml"
     sweep_file.write_text(f"""[sweep]

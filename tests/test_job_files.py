@@ -14,12 +14,14 @@ import pytest
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec
-from scenarios.sumo_net.build import build_network
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.job_files import FileCatalog
-from sdc.batch.run_task import RunTask, execute
-from sdc.batch.worker_files import FileLost, WorkerFiles
-from sdc.batch.worker_run import deliver, run_in_worker
+from scenarios.sumo_net.road_source import road_source
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.executors.worker_files import FileLost, WorkerFiles
+from sdc.batch.executors.worker_run import deliver, run_in_worker
+from sdc.batch.tasks.job_files import FileCatalog
+from sdc.batch.tasks.run_task import RunTask
+from sdc.batch.tasks.task import execute
 
 PLUGIN = Path(__file__).resolve().parent.parent / "examples" / "cautious.py"
 # a controller of the same name that drives differently: what a stale copy would run
@@ -47,7 +49,7 @@ def test_the_catalog_names_what_a_run_reads_besides_its_spec():
     catalog = FileCatalog()
     files = {f.field: f for f in catalog.files(lesson())}
     assert set(files) == {"network", "controller.name"}
-    built = build_network(lesson().road)
+    built = road_source(lesson().road).network_file()
     assert files["network"].sha256 == sha256(built) and files["network"].name == built.name
     assert files["controller.name"].driver_path == str(PLUGIN)
     assert files["controller.name"].sha256 == sha256(PLUGIN)
@@ -79,7 +81,7 @@ def test_a_worker_runs_on_its_own_copies_and_records_the_driver_paths(tmp_path):
     plugin_copy = tmp_path / "worker" / sha256(PLUGIN) / "cautious.py"
     assert local.spec.controller.name == f"{plugin_copy}:Cautious"
     assert plugin_copy.read_bytes() == PLUGIN.read_bytes()
-    assert local.cache_dir == tmp_path / "worker" / sha256(build_network(spec.road))
+    assert local.cache_dir == tmp_path / "worker" / sha256(road_source(spec.road).network_file())
     assert local.recorded_spec == spec
 
     row = deliver(task, run_in_worker(task, execute, worker, lambda f: None))
@@ -160,8 +162,8 @@ def test_the_manifest_records_the_network_file_and_resume_refuses_a_changed_one(
 
     from scenarios.common.errors import SdcError
     from scenarios.spec.sweep_spec import load_sweep
-    from sdc.batch.progress import QuietReporter
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.sweeps.progress import QuietReporter
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     net = tmp_path / "town.net.xml"
     shutil.copy(CATALOG_DIR / "networks" / "grid-10x10.net.xml", net)

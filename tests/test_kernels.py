@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
 from test_road import polyline_st
 
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.scene.road_kernels import place_numpy
 from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car import geometry_kernels as kernels
@@ -196,9 +196,10 @@ def test_the_numpy_step_equals_the_compiled_one(radius_m):
     touching or bumper to bumper (where the world frame's first contact stands in):
     the fused compiled step and its numpy composition agree bit for bit, and equal
     the contacts, placement and conflicts they are made of."""
-    spec = (RoadSpec(kind="straight", length_m=400.0, lanes=3) if radius_m is None else
-            RoadSpec(kind="curve", curve_radius_m=radius_m, length_m=400.0, lanes=3))
-    road = RoadGeometry.from_spec(spec)
+    road = (StraightRoad.from_spec(RoadSpec(kind="straight", length_m=400.0, lanes=3))
+            if radius_m is None else
+            CurveRoad.from_spec(RoadSpec(kind="curve", curve_radius_m=radius_m, length_m=400.0,
+                                         lanes=3)))
     rng = np.random.default_rng(7)
     met = {"touching": 0, "world": 0, "finite": 0, "leader": 0}
     for _ in range(300):

@@ -8,15 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import CurveRoad, RoadGeometry
 from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car.lane_path import LanePath
 from sdc.car.sensors import PATH_TOLERANCE_M, LaneReading, LaneSensor, simplified_polyline
 
 
 def curve(radius_m: float, length_m: float = 400.0) -> RoadGeometry:
-    return RoadGeometry.from_spec(RoadSpec(kind="curve", length_m=length_m, lanes=2,
-                                           curve_radius_m=radius_m))
+    return CurveRoad.from_spec(RoadSpec(kind="curve", length_m=length_m, lanes=2,
+                                        curve_radius_m=radius_m))
 
 
 def reading_at(road: RoadGeometry, s_m: float, offset_m: float = 0.0, turn_rad: float = 0.0,

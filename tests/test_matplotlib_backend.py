@@ -10,7 +10,9 @@ import sys
 import pytest
 
 # imports sdc's faces and drawing modules, draws a gym frame, a report figure and a
-# GIF, and tells what became of the backend; run in a fresh interpreter
+# GIF, and tells what became of the backend; run in a fresh interpreter. The runs are
+# the lesson's on the scripted backend (a world without a simulator; sdc draws them as
+# it draws SUMO's)
 DRAWS = """
 import json, sys
 from pathlib import Path
@@ -29,7 +31,7 @@ from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import load_spec
 from sdc.run.episode import run_episode
 
-env = gymnasium.make(sdc.gym.ENV_ID, render_mode="rgb_array")
+env = gymnasium.make(sdc.gym.ENV_ID, render_mode="rgb_array", backend="scripted")
 env.reset(seed=0)
 frame = env.render()
 env.close()
@@ -37,7 +39,8 @@ results = pd.DataFrame({"controller": ["seed", "seed"], "status": ["ok", "error"
                         "collision_with": ["obstacle", None]})
 png = plots.collision_breakdown(results)
 trace_path = Path(sys.argv[1]) / "run.parquet"
-run_episode(load_spec(CATALOG_DIR / "seed-lesson.toml")).write_trace(trace_path)
+run_episode(load_spec(CATALOG_DIR / "seed-lesson.toml").with_backend("scripted")).write_trace(
+    trace_path)
 scene = analysis.report.render.scene_from_trace(*read_trace(trace_path))
 frames = analysis.report.render.animate(scene, Path(sys.argv[1]) / "run.gif", every=30)
 print(json.dumps({
@@ -49,7 +52,7 @@ print(json.dumps({
 """
 
 
-@pytest.mark.slow  # a SUMO episode and a GIF, in a fresh interpreter each
+@pytest.mark.slow  # an episode and a GIF, in a fresh interpreter each
 @pytest.mark.parametrize("mplbackend", [None, "template"])
 def test_drawing_never_selects_a_backend_nor_imports_pyplot(tmp_path, mplbackend):
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}

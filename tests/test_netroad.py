@@ -11,18 +11,18 @@ import pytest
 
 from scenarios import CATALOG_DIR, RoadSpec, ScenarioSpec, SpecError
 from scenarios.scene.boxes import box_corners
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import StraightRoad
 from scenarios.spec.toml_io import load_spec
-from scenarios.sumo_net.build import build_network
 from scenarios.sumo_net.drivable_area import DrivableArea
 from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, read_net
+from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import (
     ROUTE,
     draw_route,
     network_area,
-    network_road,
     scenario_stream,
 )
+from scenarios.world_backends import make_road
 from sdc.car.collision import ROAD_EDGE, collision_with
 from sdc.car.geometry_kernels import Contacts
 
@@ -47,8 +47,8 @@ def test_the_catalog_grid_has_ten_by_ten_junctions_with_two_lanes_each_way(town)
 
 def test_our_own_straight_network_has_exactly_the_built_in_roads_edges(tmp_path):
     road_spec = RoadSpec(length_m=200.0, lanes=3, lane_width_m=3.5)
-    area = network_area(read_net(build_network(road_spec, tmp_path)), tmp_path)
-    road = RoadGeometry.from_spec(road_spec)
+    area = network_area(read_net(road_source(road_spec).network_file(tmp_path)), tmp_path)
+    road = StraightRoad.from_spec(road_spec)
     points = np.random.default_rng(0).uniform([20.0, -10.0], [180.0, 10.0], size=(2000, 2))
     np.testing.assert_allclose(area.edge_gaps_m(points), road.edge_gaps_m(points), atol=1e-6)
     np.testing.assert_array_equal(area.contains(points), ~road.off_road(points))
@@ -80,7 +80,7 @@ def test_the_line_between_the_two_directions_is_not_a_road_edge(town):
 def test_collision_finds_a_kerb_but_not_the_opposite_lanes_or_a_junction(town):
     _, _, area = town
     spec = load_spec(GRID_TOWN)
-    road = network_road(spec)
+    road = make_road(spec)
 
     def hit(cx, cy, yaw):
         return collision_with(np.array([cx, cy, yaw, 4.85, 1.93]),
@@ -139,7 +139,7 @@ def test_straight_routes_turn_only_where_they_must(town):
 
 def test_an_obstacle_on_a_junction_moves_onto_the_next_lane(town):
     spec = load_spec(GRID_TOWN)
-    road = network_road(spec)
+    road = make_road(spec)
     junction = next(p for p in road.pieces if p.lane.internal)
     inside = junction.start_s_m + junction.length_m / 2
     placed = road.place_s_m(inside, 4.5)
@@ -158,7 +158,7 @@ def test_a_body_stands_whole_on_a_lane_off_the_junctions_at_both_its_ends(town, 
     through ours)."""
     from scenarios.sumo_net.route_road import JUNCTION_CLEARANCE_M
 
-    road = network_road(load_spec(GRID_TOWN))
+    road = make_road(load_spec(GRID_TOWN))
     for asked_m in np.arange(length_m, road.length_m - length_m, 0.25):
         s_m = road.place_s_m(float(asked_m), length_m)
         piece = road.piece_at(s_m)
@@ -176,7 +176,7 @@ def test_a_relative_net_file_is_read_from_the_scenario_folder(tmp_path):
     moved = tmp_path / "town.toml"
     moved.write_text(GRID_TOWN.read_text())
     with pytest.raises(SpecError, match=r"road\.net_file: no such file"):
-        network_road(load_spec(moved))
+        make_road(load_spec(moved))
 
 
 @pytest.mark.parametrize("change, field", [
@@ -278,10 +278,10 @@ def test_a_lane_off_a_network_route_says_its_lane_is_0():
 def dead_end_road(tmp_path) -> tuple[dict, object]:
     """A sumo_net road on a network of one straight 200 m two-lane edge: its route
     ends where the network does (SUMO's vehicles leave it there)."""
-    net = build_network(RoadSpec(length_m=200.0, lanes=2, lane_width_m=3.5), tmp_path)
+    net = road_source(RoadSpec(length_m=200.0, lanes=2, lane_width_m=3.5)).network_file(tmp_path)
     plain = load_spec(GRID_TOWN).to_plain()
     plain["road"].update(net_file=str(net), length_m=150.0)
-    return plain, network_road(ScenarioSpec.from_plain(plain))
+    return plain, make_road(ScenarioSpec.from_plain(plain))
 
 
 def test_past_the_end_of_a_route_that_leaves_the_network_is_no_kerb(tmp_path):
@@ -317,7 +317,7 @@ def test_a_route_that_leaves_the_network_ends_the_run_without_a_made_up_kerb(tmp
 
 def test_the_lanes_beside_are_the_edges_next_lanes_open_to_cars(town):
     spec, net, _ = town
-    road = network_road(spec)
+    road = make_road(spec)
     left, right = road.lanes_beside(0)
     places = {(lane.edge, lane.index): lane for lane in net.lanes.values()}
     for piece in road.pieces:  # brute force: each piece's middle against the network
@@ -331,7 +331,7 @@ def test_the_lanes_beside_are_the_edges_next_lanes_open_to_cars(town):
 
 
 def test_a_built_in_roads_lanes_beside_run_its_whole_length():
-    road = RoadGeometry.from_spec(RoadSpec(length_m=200.0, lanes=3, lane_width_m=3.5))
+    road = StraightRoad.from_spec(RoadSpec(length_m=200.0, lanes=3, lane_width_m=3.5))
     left, right = road.lanes_beside(0)
     assert left.tolist() == [[0.0, 200.0]] and right.size == 0
     left, right = road.lanes_beside(2)

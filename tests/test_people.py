@@ -408,9 +408,9 @@ def test_traffic_sees_a_standing_person_or_bicycle_and_does_not_drive_through(le
 def person_sweep(tmp_path_factory):
     from scenarios import CATALOG_DIR
     from scenarios.spec.sweep_spec import load_sweep
-    from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import QuietReporter
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.sweeps.progress import QuietReporter
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     root = tmp_path_factory.mktemp("people")
     (root / "sweep.toml").write_text(f"""[sweep]

@@ -1,13 +1,17 @@
 """Controller plug-ins for real: the four ways to name one, in a run, a sweep on
 local workers and on Ray, and every way a plug-in can be bad.
 
-The plug-ins live in a temporary folder put on ``PYTHONPATH`` (so the processes
-a test starts, Ray's workers included, import them) with a ``.dist-info`` that
-registers entry points, as an installed package would.
+The plug-ins live in a temporary folder put on ``sys.path`` and ``PYTHONPATH`` (so
+this process and the processes a test starts, Ray's workers included, import them)
+with a ``.dist-info`` that registers entry points, as an installed package would. The
+commands run in this process (:func:`sdc_here`) but for the Ray sweep, whose workers
+must start with the plug-ins on their path; the runs are the lesson's on the scripted
+backend (a world without a simulator: no traffic, the runs SUMO gives).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -17,13 +21,14 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from click.testing import CliRunner
 
-from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import dumps_plain, read_toml
+from sdc.cli import main
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "cautious.py"
-LESSON = CATALOG_DIR / "seed-lesson.toml"
+LESSON = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 SDC = [sys.executable, "-m", "sdc"]
 
 ENTRY_POINTS = """[sdc.controllers]
@@ -118,8 +123,18 @@ def sdc(*args, cwd: Path | None = None) -> subprocess.CompletedProcess:
                           timeout=600, cwd=cwd)
 
 
+def sdc_here(*args, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    """:func:`sdc` in this process (``cwd``: its working directory meanwhile): the same
+    command, exit code, output and errors, without starting a Python."""
+    with contextlib.chdir(cwd or Path.cwd()):
+        result = CliRunner().invoke(main, [str(a) for a in args])
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return subprocess.CompletedProcess(args, result.exit_code, result.stdout, result.stderr)
+
+
 def run_json(*args, cwd: Path | None = None) -> dict:
-    done = sdc("run", *args, "--json", cwd=cwd)
+    done = sdc_here("run", *args, "--json", cwd=cwd)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout.splitlines()[-1])
 
@@ -191,9 +206,9 @@ def comparable(out_dir: Path) -> pd.DataFrame:
 def test_plugins_in_local_and_ray_sweeps_give_identical_results(on_path):
     sweep = on_path / "plugins.toml"
     sweep.write_text(SWEEP.format(base=LESSON))
-    for executor in ("local", "ray"):
-        done = sdc("sweep", sweep, "--out", on_path / executor, "--workers", 2, "--executor",
-                   executor, "--quiet", "--traces", "all")
+    for executor, command in (("local", sdc_here), ("ray", sdc)):
+        done = command("sweep", sweep, "--out", on_path / executor, "--workers", 2,
+                       "--executor", executor, "--quiet", "--traces", "all")
         assert done.returncode == 0, done.stderr
     local = comparable(on_path / "local")
     pd.testing.assert_frame_equal(comparable(on_path / "ray"), local)
@@ -209,17 +224,17 @@ def test_plugins_in_local_and_ray_sweeps_give_identical_results(on_path):
     assert sources["lane-keep"] == {"name": "lane-keep", "kind": "builtin"}
 
     run_id = local.run_id[local.controller == "Cautious"].iloc[0]
-    replay = sdc("replay", on_path / "ray", "--run", run_id, "--verify")
+    replay = sdc_here("replay", on_path / "ray", "--run", run_id, "--verify")
     assert replay.returncode == 0 and "identical" in replay.stdout
     assert "warning" not in replay.stderr
     plugin = on_path / "plugpkg" / "cautious.py"
     original = plugin.read_text()
     try:
         plugin.write_text(original.replace("margin_m\": 3.0", "margin_m\": 6.0"))
-        replay = sdc("replay", on_path / "ray", "--run", run_id, "--verify")
+        replay = sdc_here("replay", on_path / "ray", "--run", run_id, "--verify")
         assert "warning: the controller Cautious changed since the sweep ran" in replay.stderr
         assert replay.returncode == 1 and "DIVERGED" in replay.stdout
-        resumed = sdc("sweep", sweep, "--out", on_path / "local", "--resume", "--quiet")
+        resumed = sdc_here("sweep", sweep, "--out", on_path / "local", "--resume", "--quiet")
         assert resumed.returncode == 2
         assert "the controller Cautious changed" in resumed.stderr
     finally:
@@ -242,12 +257,12 @@ def test_plugins_in_local_and_ray_sweeps_give_identical_results(on_path):
 def test_a_plugin_that_cannot_be_built_is_exit_2_naming_the_field(on_path, tmp_path, name,
                                                                   reason):
     reason = reason.format(site=on_path)
-    on_command_line = sdc("run", LESSON, "--controller", name, cwd=on_path)
+    on_command_line = sdc_here("run", LESSON, "--controller", name, cwd=on_path)
     assert on_command_line.returncode == 2
     assert on_command_line.stderr.startswith("error: --controller: ")
     assert reason in on_command_line.stderr and "Traceback" not in on_command_line.stderr
     spec = scenario_with(on_path, {"name": name}, f"spec-{abs(hash(name))}.toml")
-    in_file = sdc("run", spec)
+    in_file = sdc_here("run", spec)
     assert in_file.returncode == 2
     assert in_file.stderr.startswith(f"error: {spec}: controller.name: ")
     assert reason in in_file.stderr
@@ -256,7 +271,7 @@ def test_a_plugin_that_cannot_be_built_is_exit_2_naming_the_field(on_path, tmp_p
                      f'controllers = ["seed", "{on_path}/{name}"]\n' if "/" in name else
                      f'[sweep]\nname = "bad"\nbase = "{LESSON}"\nsamples = 2\n'
                      f'controllers = ["seed", "{name}"]\n')
-    in_sweep = sdc("sweep", sweep, "--out", tmp_path / "out")
+    in_sweep = sdc_here("sweep", sweep, "--out", tmp_path / "out")
     assert in_sweep.returncode == 2
     assert in_sweep.stderr.startswith(f"error: {sweep}: sweep.controllers[1]: ")
     assert reason in in_sweep.stderr
@@ -265,7 +280,7 @@ def test_a_plugin_that_cannot_be_built_is_exit_2_naming_the_field(on_path, tmp_p
 
 def test_a_plugin_rejecting_its_parameters_names_them(on_path):
     spec = scenario_with(on_path, {"name": "plugpkg:Careful", "margin": 2.0}, "typo.toml")
-    done = sdc("run", spec)
+    done = sdc_here("run", spec)
     assert done.returncode == 2
     assert "controller.name: Careful could not be built: ValueError: unknown parameters " \
            "['margin']" in done.stderr
@@ -280,7 +295,7 @@ def test_a_plugin_failing_during_a_run_is_an_error_row_and_the_sweep_goes_on(on_
     sweep.write_text(f'[sweep]\nname = "failing"\nbase = "{LESSON}"\nsamples = 2\n'
                      f'controllers = [{refs}, "lane-keep"]\n[sweep.params]\n'
                      '"scenario.duration_s" = { choice = [5.0] }\n')
-    done = sdc("sweep", sweep, "--out", tmp_path / "out", "--workers", 2, "--quiet")
+    done = sdc_here("sweep", sweep, "--out", tmp_path / "out", "--workers", 2, "--quiet")
     assert done.returncode == 1, done.stderr  # runs errored; the sweep finished
     rows = pd.read_parquet(tmp_path / "out" / "results.parquet").set_index("run_id")
     assert (rows.loc[rows.controller == "lane-keep", "status"] == "ok").all()

@@ -1,4 +1,4 @@
-"""A sweep's progress as the commands show it (sdc/batch/progress.py): off a terminal (a
+"""A sweep's progress as the commands show it (sdc/batch/sweeps/progress.py): off a terminal (a
 log, `make demo > log`) whole lines, one every few seconds and one at the end, nothing
 cut short; on a terminal the live bar."""
 
@@ -11,8 +11,8 @@ from collections import Counter
 
 import pytest
 
-from sdc.batch import progress
-from sdc.batch.progress import RichReporter
+from sdc.batch.sweeps import progress
+from sdc.batch.sweeps.progress import RichReporter
 from sdc.cli.common import make_reporter
 
 

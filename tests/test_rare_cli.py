@@ -1,5 +1,6 @@
-"""sdc search and sdc estimate for real: SUMO runs on the executors, rows, resume, replay,
-report, wrong use."""
+"""sdc search and sdc estimate for real: runs on the executors (on the scripted backend, a
+world without a simulator: no traffic here, so SUMO's runs), rows, resume, replay, report,
+wrong use."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from click.testing import CliRunner
 
 from analysis.measures.commands import replay_command
 from analysis.measures.run_score import run_score
@@ -24,12 +26,15 @@ from analysis.rare.rare_events import estimate_from_rows
 from analysis.report.rare_report import estimate_lines
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.progress import QuietReporter
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.sweeps.adaptive_runner import AdaptiveSettings, run_adaptive
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.cli import main
 
 SDC = [sys.executable, "-m", "sdc"]
-BASE = CATALOG_DIR / "seed-lesson.toml"
+#: the lesson on the scripted backend (no traffic: the runs SUMO gives, without SUMO)
+BASE = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 # the lesson around its design point (speeds a bounded range: a search reaches the tails,
 # and a normal speed there goes negative); the seed maneuver fails often here,
 # so a few hundred runs show everything; short runs
@@ -53,9 +58,13 @@ def write(tmp_path: Path, name: str, text: str) -> Path:
     return path
 
 
-def sdc(*args, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run([*SDC, *map(str, args)], capture_output=True, text=True, cwd=cwd,
-                          timeout=600)
+def sdc(*args) -> subprocess.CompletedProcess:
+    """``sdc ARGS`` in this process: its exit code, output and errors as a process's
+    (the kill test starts one of its own)."""
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return subprocess.CompletedProcess(args, result.exit_code, result.stdout, result.stderr)
 
 
 # ---------------------------------------------------------------- units, no simulator
@@ -101,7 +110,7 @@ def test_the_estimate_says_its_bound_or_its_interval_and_never_rounds_a_loss_to_
         "(target 0.15; budget spent before the target RHW)")
 
 
-# ---------------------------------------------------------------- SUMO on the executors
+# ---------------------------------------------------------------- runs on the executors
 
 @pytest.mark.slow
 def test_search_finds_collisions_and_every_run_is_a_replayable_row(tmp_path):
@@ -361,8 +370,10 @@ def test_search_finds_a_collision_on_the_seed_rare_emulator_10x_sooner_than_unif
 
 @pytest.mark.slow
 def test_a_real_search_on_seed_rare_stops_at_its_first_road_edge_collision(tmp_path):
-    """The wiring on real SUMO runs, one seed (the statistics: the emulator, above)."""
-    sweep = dataclasses.replace(load_sweep(RARE), seed=1)
+    """The wiring on real runs, one seed (the statistics: the emulator, above). The family
+    has no traffic: on the scripted backend (a world without a simulator) its runs are
+    SUMO's, bit for bit, without building a network for each lane width."""
+    sweep = dataclasses.replace(load_sweep(RARE, ['scenario.backend="scripted"']), seed=1)
     settings = AdaptiveSettings("search", "seed", 600, 20, stop_after=1)
     summary = run_adaptive(sweep, tmp_path, LocalExecutor(2), QuietReporter(),
                            settings).summary

@@ -298,12 +298,13 @@ def test_routes_drawn_on_the_motorway_start_where_the_car_can_take_the_bends():
     pace any route will do."""
     from scenarios import ScenarioSpec
     from scenarios.spec.toml_io import read_toml
-    from scenarios.sumo_net.route_road import network_road, takes_its_start
+    from scenarios.sumo_net.route_road import takes_its_start
+    from scenarios.world_backends import make_road
 
     plain = read_toml(Path(__file__).parents[1] / "scenarios/catalog/real-scenarios.toml")
     plain["obstacles"] = []
     for seed in range(12):
         plain["scenario"]["seed"] = seed
         plain["ego"]["speed_mps"] = 25.0
-        road = network_road(ScenarioSpec.from_plain(plain))
+        road = make_road(ScenarioSpec.from_plain(plain))
         assert takes_its_start([p.lane for p in road.pieces], 10.0, 25.0, 0.9 * 9.81, 8.0)

@@ -9,6 +9,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,16 +21,19 @@ from analysis.measures.trace_file import Trace, read_trace
 from analysis.report.render import frame_steps, scene_from_trace, script_json, write_html
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.manifest import package_versions
-from sdc.batch.progress import QuietReporter
-from sdc.batch.replay_check import first_divergence, version_warnings
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.manifest import package_versions
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.replay_check import first_divergence, version_warnings
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.cli import main
 
+#: the lesson on the scripted backend (a world without a simulator): the base of the sweeps
+#: here, but the one the GUI (SUMO's) replays
+SCRIPTED_LESSON = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 SWEEP = f"""[sweep]
 name = "replays"
-base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+base = "{SCRIPTED_LESSON}"
 sampler = "grid"
 controllers = ["seed", "lane-keep"]
 
@@ -195,11 +199,18 @@ def test_a_hostile_scenario_name_runs_no_script_in_the_replay_page(sweep_dir, tm
 
 
 @pytest.mark.slow
-def test_gui_replay_on_a_virtual_display_is_identical(sweep_dir):
+def test_gui_replay_on_a_virtual_display_is_identical(tmp_path):
     xvfb_run = shutil.which("xvfb-run")
     assert xvfb_run, "Debian's xvfb is needed (make test installs it)"
+    # the sweep's 00002-seed (9 m/s, no traffic) on SUMO, whose GUI it is
+    (tmp_path / "sumo.toml").write_text(SWEEP.replace(str(SCRIPTED_LESSON), str(
+        CATALOG_DIR / "seed-lesson.toml")).replace("[3.74, 9.0]", "[9.0]").replace(
+        "[0, 1200]", "[0]").replace('["seed", "lane-keep"]', '["seed"]'))
+    sumo_dir = tmp_path / "sweep"
+    run_sweep(load_sweep(tmp_path / "sumo.toml"), sumo_dir, LocalExecutor(1), QuietReporter(),
+              traces="all")
     done = subprocess.run([xvfb_run, "-a", sys.executable, "-m", "sdc", "replay",
-                           str(sweep_dir), "--run", "00002-seed", "--gui", "--verify"],
+                           str(sumo_dir), "--run", "00000-seed", "--gui", "--verify"],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stdout + done.stderr
     assert "identical: trace sha256" in done.stdout
@@ -327,9 +338,15 @@ def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_pat
         return subprocess.run([sys.executable, "-m", "sdc", *map(str, args)],
                               capture_output=True, text=True, timeout=300)
 
-    done = sdc("sweep", sweep, "--out", out, "--workers", "2", "--run-timeout", "2", "--quiet")
-    assert done.returncode in (0, 1), done.stderr
-    assert sdc("report", out).returncode in (0, 1)
+    def sdc_here(*args):  # the same command in this process
+        result = CliRunner().invoke(main, [str(a) for a in args])
+        assert result.exception is None or isinstance(result.exception, SystemExit)
+        return result
+
+    done = sdc_here("sweep", sweep, "--out", out, "--workers", "2", "--run-timeout", "2",
+                    "--quiet")
+    assert done.exit_code in (0, 1), done.stderr
+    assert sdc_here("report", out).exit_code in (0, 1)
     # each command as printed: the interpreter that ran the report, -m sdc, replay ...
     commands = sorted(set(re.findall(r"`([^`]*-m sdc replay \S+ --run [\w-]+)`",
                                      (out / "report.md").read_text())))
@@ -346,10 +363,10 @@ def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_pat
                 continue
             first = replay.stdout.splitlines()[0]
             assert first.startswith(f"{run_id}: ") and "ego.speed_mps=9" in first
-    raises = sdc("replay", out, "--run", "00000-RaisesAtStep3", "--out", tmp_path / "r.png")
+    raises = sdc_here("replay", out, "--run", "00000-RaisesAtStep3", "--out", tmp_path / "r.png")
     assert "ValueError: step three" in raises.stdout and f"{plugin}:" in raises.stdout
-    assert raises.returncode == 0 and (tmp_path / "r.png").stat().st_size > 0  # 2 steps
-    first = sdc("replay", out, "--run", "00000-RaisesFirst", "--out", tmp_path / "f.png")
-    assert first.returncode == 1 and "before its first step" in first.stdout
+    assert raises.exit_code == 0 and (tmp_path / "r.png").stat().st_size > 0  # 2 steps
+    first = sdc_here("replay", out, "--run", "00000-RaisesFirst", "--out", tmp_path / "f.png")
+    assert first.exit_code == 1 and "before its first step" in first.stdout
     sleepy = sdc("replay", out, "--run", "00000-Sleepy")
     assert sleepy.returncode == 1 and "ran past the run timeout of 2" in sleepy.stdout

@@ -27,24 +27,25 @@ from analysis.report.sweep_words import COLLISION_TITLE, NOT_RECORDED, VERDICT_T
 from analysis.report.sweep_world import world_lines, world_summary
 from analysis.stats.rates import wilson_interval
 from analysis.stats.verdicts import completed_runs, outcomes_by
-from scenarios import CATALOG_DIR
 from scenarios.scene import traffic_model
 from scenarios.spec.sweep_spec import load_sweep
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.cli import main
 
 pytestmark = pytest.mark.slow
 
 ARTIFACTS = Path(__file__).resolve().parent.parent / ".artifacts"
+#: the lesson on the scripted backend: no traffic, so the same runs as on SUMO, faster
+SCRIPTED_LESSON = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 # 4 speeds x 2 offsets x 2 controllers; the -3 m offset puts the barrel off the road,
 # so those 8 runs are error rows. The barrel is 27.275 m ahead of the front bumper:
 # braking at 8 m/s^2 stops in time up to 20.89 m/s (20.8 m/s: 27.04 m), not at 21 m/s
 # (27.56 m)
 SMALL = f"""[sweep]
 name = "small"
-base = "{CATALOG_DIR / 'seed-lesson.toml'}"
+base = "{SCRIPTED_LESSON}"
 sampler = "grid"
 controllers = ["seed", "lane-keep"]
 
@@ -65,14 +66,28 @@ def small_sweep(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="module")
+def rendered(small_sweep, tmp_path_factory):
+    """The report of the small sweep with its defaults, rendered once for the tests that
+    read it (each did the same): of a copy of the sweep, so the tests that report with
+    other options on the sweep itself change nothing here; the page and the JUnit file
+    written apart (``--out``), in ``page``. Read only."""
+    root = tmp_path_factory.mktemp("rendered")
+    sweep = root / "sweep"
+    shutil.copytree(small_sweep, sweep)
+    (root / "page").mkdir()
+    report = write_report(sweep, html_path=root / "page" / "r.html",
+                          junit_path=root / "page" / "runs.xml")
+    return report, sweep, root / "page"
+
+
 def first_of_each_class(results: pd.DataFrame) -> pd.DataFrame:
     """The runs the report shows: of each controller's class the first three."""
     return ranked_runs(results).groupby(["controller", "rank_class"], sort=False).head(3)
 
 
-def test_report_files_count_errors_apart(small_sweep, tmp_path):
-    report = write_report(small_sweep, html_path=tmp_path / "r.html",
-                          junit_path=tmp_path / "runs.xml")
+def test_report_files_count_errors_apart(rendered):
+    report, small_sweep, tmp_path = rendered  # the page and runs.xml in tmp_path
     results = pd.read_parquet(small_sweep / "results.parquet")
     summary = json.loads((small_sweep / "summary.json").read_text())
     for controller in ("seed", "lane-keep"):
@@ -115,14 +130,14 @@ def test_report_files_count_errors_apart(small_sweep, tmp_path):
     assert int(suite.get("failures")) == int(results.collision.fillna(False).sum())
 
 
-def test_report_rates_where_a_stop_was_possible(small_sweep, tmp_path):
+def test_report_rates_where_a_stop_was_possible(rendered):
+    report, small_sweep, _ = rendered
     results = pd.read_parquet(small_sweep / "results.parquet")
     ok = results[results.status == "ok"]
     assert ok.stop_gap_m.tolist() == pytest.approx([27.275] * 8)
     assert ok.stop_possible.tolist() == list(ok["p.ego.speed_mps"] < 21.0)
     assert results[results.status == "error"].stop_possible.isna().all()
 
-    report = write_report(small_sweep, html_path=tmp_path / "r.html")
     stop = json.loads((small_sweep / "summary.json").read_text())["stop_possible"]
     assert stop["recorded"] is True
     assert (stop["samples"], stop["samples_stop_possible"]) == (4, 3)
@@ -170,10 +185,10 @@ def test_results_from_before_the_stop_columns_still_report(small_sweep, tmp_path
 
 
 def test_report_page_in_headless_chromium_shows_verdicts_map_and_thumbnails(
-        small_sweep, tmp_path, chromium_page):
+        rendered, chromium_page):
     """The page as a user sees it: the verdict table, the failure map and the thumbnails
     of the runs to look at are rendered (images decoded), and nothing raised."""
-    report = write_report(small_sweep, html_path=tmp_path / "report.html")
+    report, small_sweep, _ = rendered
     results = pd.read_parquet(small_sweep / "results.parquet")
     kept = {p.stem for p in (small_sweep / "traces").glob("*.parquet")}
     assert kept == set(results.run_id[(results.status == "ok")
@@ -309,8 +324,8 @@ def _copy_with(sweep_dir: Path, dest: Path, edit) -> Path:
     return dest
 
 
-def test_the_report_leads_with_how_the_runs_ended(small_sweep, tmp_path):
-    report = write_report(small_sweep, html_path=tmp_path / "r.html")
+def test_the_report_leads_with_how_the_runs_ended(rendered):
+    report, small_sweep, _ = rendered
     results = pd.read_parquet(small_sweep / "results.parquet")
     verdicts = report.summary["verdicts"]
     assert verdicts["recorded"] is True
@@ -437,8 +452,8 @@ def test_min_completed_gates_on_the_lower_bound_of_completed_runs(small_sweep):
     assert none_asked.output.splitlines()[-1] == "gate passed (--min-completed 0)"
 
 
-def test_the_report_states_the_traffic_model_the_audit_and_who_hit_whom(small_sweep, tmp_path):
-    report = write_report(small_sweep, html_path=tmp_path / "r.html")
+def test_the_report_states_the_traffic_model_the_audit_and_who_hit_whom(rendered):
+    report, small_sweep, _ = rendered
     page, markdown = report.html_path.read_text(), (small_sweep / "report.md").read_text()
     model = f"Traffic model: {traffic_model.description()}."
     audit = "World audit: no two bodies other than the ego overlapped in any run"

@@ -14,7 +14,7 @@ import analysis.measures.metrics
 from analysis.measures.metrics import trace_metrics
 from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import load_spec
-from sdc.batch.result_store import ResultStore
+from sdc.batch.sweeps.result_store import ResultStore
 from sdc.run import result_row
 from sdc.run.episode import run_episode
 from sdc.run.result_row import (

@@ -9,8 +9,9 @@ from hypothesis import strategies as st
 
 from scenarios import RoadSpec
 from scenarios.scene import road_kernels
-from scenarios.scene.road_geometry import RoadGeometry
-from scenarios.sumo_net.build import EDGE_ID, build_network
+from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
+from scenarios.sumo_net.build import EDGE_ID
+from scenarios.sumo_net.road_source import road_source
 
 try:
     from scenarios.scene import _road_kernels as compiled
@@ -26,7 +27,7 @@ def curve(radius_m: float, lanes: int = 3) -> RoadSpec:
 
 @pytest.mark.parametrize("radius_m", [60.0, -60.0])
 def test_curve_frenet_round_trip(radius_m):
-    road = RoadGeometry.from_spec(curve(radius_m))
+    road = CurveRoad.from_spec(curve(radius_m))
     assert road.length_m == pytest.approx(200.0, abs=0.01)
     s = np.array([0.0, 33.3, 100.0, 199.0])
     d = np.array([-4.0, 0.0, 1.75, 5.0])
@@ -102,8 +103,8 @@ def test_the_numpy_frenet_projection_equals_the_compiled_one(line, points):
 
 @needs_compiled
 def test_the_numpy_frenet_projection_on_a_long_curve():
-    road = RoadGeometry.from_spec(RoadSpec(kind="curve", length_m=1000.0, lanes=3,
-                                           curve_radius_m=150.0))
+    road = CurveRoad.from_spec(RoadSpec(kind="curve", length_m=1000.0, lanes=3,
+                                        curve_radius_m=150.0))
     points = np.random.default_rng(4).uniform(-200, 1000, (2000, 2))
     twin = frenet_by(road_kernels.frenet_numpy, road, points)
     assert len(road.center_xy) > 500
@@ -169,7 +170,7 @@ def test_the_projection_takes_the_nearest_segment():
 
 
 def test_straight_road_edges_and_lanes():
-    road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=3))
+    road = StraightRoad.from_spec(RoadSpec(length_m=100.0, lanes=3))
     assert [road.lane_center_d_m(i) for i in range(3)] == [-3.5, 0.0, 3.5]
     np.testing.assert_allclose(road.edge_segments(), [[0, -5.25, 100, -5.25], [0, 5.25, 100, 5.25]])
     s, d = road.to_frenet(np.array([[-3.0, 1.0], [110.0, -2.0]]))
@@ -183,9 +184,10 @@ def test_sumo_lanes_match_our_geometry(tmp_path, spec):
     """SUMO's lane road_i is our lane i: its shape lies on our lane centre line."""
     import libsumo
 
-    road = RoadGeometry.from_spec(spec)
-    net = build_network(spec, tmp_path)
-    assert build_network(spec, tmp_path) == net  # cached by content
+    source = road_source(spec)  # its shape's class: StraightRoad or CurveRoad
+    road = source.shape.from_spec(spec)
+    net = source.network_file(tmp_path)
+    assert source.network_file(tmp_path) == net  # cached by content
     libsumo.start(["sumo", "--net-file", str(net), "--no-step-log", "true"])
     try:
         for lane in range(spec.lanes):
@@ -203,7 +205,7 @@ def test_sumo_lanes_match_our_geometry(tmp_path, spec):
 
 @needs_compiled
 def test_the_compiled_projection_refuses_wrong_arrays_by_name():
-    road = RoadGeometry.from_spec(RoadSpec(length_m=100.0, lanes=2))
+    road = StraightRoad.from_spec(RoadSpec(length_m=100.0, lanes=2))
     line = road.polyline[:4]
     points, out = np.zeros((3, 2)), np.empty(3)
     with pytest.raises(TypeError, match="xy"):

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.scene.snapshot import NO_BOXES, Snapshot, passenger_classes
 from scenarios.spec.scenario_spec import RoadSpec
 from sdc.car.geometry_kernels import contacts_numpy
@@ -19,8 +19,8 @@ EGO = (4.85, 1.93)
 
 
 def curve(radius_m: float, lanes: int = 2) -> RoadGeometry:
-    return RoadGeometry.from_spec(RoadSpec(kind="curve", curve_radius_m=radius_m,
-                                           length_m=400.0, lanes=lanes, lane_width_m=3.5))
+    return CurveRoad.from_spec(RoadSpec(kind="curve", curve_radius_m=radius_m,
+                                        length_m=400.0, lanes=lanes, lane_width_m=3.5))
 
 
 def body(road: RoadGeometry, s_m: float, d_m: float, size=CAR, yaw_offset_rad=0.0):
@@ -90,7 +90,7 @@ def test_zero_exactly_when_the_bodies_touch(radius_m):
 
 
 def test_traffic_from_behind_closing_in_counts():
-    road = RoadGeometry.from_spec(RoadSpec(kind="straight", length_m=400.0, lanes=2))
+    road = StraightRoad.from_spec(RoadSpec(kind="straight", length_m=400.0, lanes=2))
     d_m = road.lane_center_d_m(0)
     ego = body(road, 100.0, d_m, EGO)
     behind = body(road, 70.0, d_m)  # 30 - 4.675 m behind, closing at 5 m/s

@@ -1,6 +1,6 @@
 """One road source per kind (scenarios/sumo_net/road_source.py): every kind answers the same
 questions, the warm-state identity is the same whoever asks, and no module outside
-the road's own asks a road its kind."""
+the road's own asks a road its kind: a built road's shape is its geometry's class."""
 
 from __future__ import annotations
 
@@ -10,12 +10,16 @@ from pathlib import Path
 
 import pytest
 
+from scenarios.common.errors import SpecError
 from scenarios.common.file_read import file_sha256, sha256_hex
+from scenarios.scene.road_geometry import CurveRoad, StraightRoad
 from scenarios.spec.toml_io import load_spec
 from scenarios.sumo.warm_state import uses_warm_state, warm_key, warm_state_key
+from scenarios.sumo_net.build import build_network, input_path
+from scenarios.sumo_net.net_xml import parse_net
 from scenarios.sumo_net.road_source import BuiltRoad, ConfigRoad, NetworkFileRoad, road_source
 from scenarios.sumo_net.sumo_config import load_bundle
-from sdc.batch.job_files import FileCatalog
+from sdc.batch.tasks.job_files import FileCatalog
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "scenarios" / "catalog"
@@ -94,18 +98,48 @@ def test_has_traffic_is_each_kinds_own_demand():
         built.traffic.flow_vph_per_lane > 0)
 
 
-#: where a road's kind may be named: the spec that defines the kinds, the one dispatch,
-#: and the built roads' own geometry (straight or curve)
-KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/sumo_net/road_source.py",
-              "scenarios/scene/road_geometry.py", "scenarios/highway/highway_world.py",
-              "scenarios/spec/toml_io.py", "scenarios/sumo_net/route_road.py",
-              "analysis/measures/safety.py"}
+#: where a road's kind may be named: the spec that defines the kinds (and its file
+#: reader: a configuration's step length), and the one dispatch
+KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/spec/toml_io.py",
+              "scenarios/sumo_net/road_source.py"}
 
 
 def test_no_module_outside_the_roads_own_asks_a_road_its_kind():
-    asking = re.compile(r"road\.kind\b|isinstance\([^)]*NetworkRoad")
+    """Nor compares a kind's name, nor asks a geometry its class: a built road's shape
+    is its geometry's own (a curve's curvature), a network road's network its source's."""
+    asking = re.compile(r"\b(road|r)\.kind\b"
+                        r"|kind\s*(==|!=|in)\s*\(?[\"'](straight|curve|sumo_net|sumo_config|opendrive)"
+                        r"|isinstance\([^)]*(NetworkRoad|StraightRoad|CurveRoad)")
     found = [f"{p.relative_to(ROOT)}:{n}" for folder in ("sdc", "analysis", "scenarios")
              for p in sorted((ROOT / folder).rglob("*.py"))
              if str(p.relative_to(ROOT)) not in KIND_HOMES
              for n, line in enumerate(p.read_text().splitlines(), 1) if asking.search(line)]
     assert not found, found
+
+
+@pytest.mark.parametrize(("kind", "shape"), [("straight", StraightRoad), ("curve", CurveRoad)])
+def test_a_built_roads_geometry_is_of_its_shapes_class(kind, shape, tmp_path):
+    """The kind picks the shape once (road_source); the geometry says the rest: a
+    straight road does not turn, a curve turns at 1 / its radius."""
+    base = spec_of("straight")
+    road = dataclasses.replace(base.road, kind=kind,
+                               curve_radius_m=None if kind == "straight" else -400.0)
+    spec = dataclasses.replace(base, road=road)
+    source = road_source(road)
+    assert type(source) is BuiltRoad and source.shape is shape
+    geometry = source.geometry(spec)
+    assert type(geometry) is shape
+    assert geometry.curvature_1pm == (0.0 if kind == "straight" else 1 / -400.0)
+    assert source.network_file(tmp_path) == build_network(road, geometry, tmp_path)
+
+
+def test_a_network_roads_network_is_its_sources_and_a_bad_file_names_its_field(tmp_path):
+    net, config = spec_of("sumo_net"), spec_of("sumo_config")
+    assert road_source(net.road).network().path == input_path(GRID)
+    bundle = load_bundle(SQUARE)
+    assert road_source(config.road).network().lanes.keys() == parse_net(
+        bundle.files[bundle.net_name], Path(bundle.net_name)).lanes.keys()
+    missing = dataclasses.replace(net.road, net_file=str(tmp_path / "none.net.xml"))
+    with pytest.raises(SpecError, match="no such file") as raised:
+        road_source(missing).network()
+    assert raised.value.field == "road.net_file"

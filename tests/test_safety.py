@@ -13,6 +13,7 @@ from scenarios.common.errors import SpecError
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.world_backends import make_road
 
 
 def box(cx, cy, yaw=0.0, length=4.0, width=2.0):
@@ -39,7 +40,7 @@ def _spec(plain: dict, obstacles: list[dict], **ego) -> ScenarioSpec:
 
 
 def _gap(spec: ScenarioSpec, road: RoadGeometry | None = None) -> float | None:
-    return stop_gap_m(spec, road or RoadGeometry.from_spec(spec.road), X5)
+    return stop_gap_m(spec, road or make_road(spec), X5)
 
 
 def test_the_lesson_can_stop_before_its_barrel(lesson_plain):
@@ -101,7 +102,7 @@ def test_on_a_curve_the_gap_runs_along_the_ego_lane(lesson_plain):
     inner = _spec(lesson_plain, [{"lane": 2, "position_m": 40.0}], lane=2)
     outer = _spec(lesson_plain, [{"position_m": 40.0}], lane=0)
     for spec in (inner, outer):
-        road = RoadGeometry.from_spec(spec.road)
+        road = make_road(spec)
         lane_d = road.lane_center_d_m(spec.ego.lane)
         ego_xy, obstacle_xy = road.xy_at([10.0, 40.0], lane_d)
         radius = 60.0 - lane_d  # the ego lane's own radius
@@ -117,7 +118,7 @@ def test_the_gap_follows_where_the_road_places_an_obstacle(lesson_plain):
             return s_m + 5.0
 
     spec = ScenarioSpec.from_plain(lesson_plain)
-    road = MovesAhead(RoadGeometry.from_spec(spec.road).center_xy, 3, 3.5)
+    road = MovesAhead(make_road(spec).center_xy, 3, 3.5)
     assert _gap(spec, road) == pytest.approx(_gap(spec) + 5.0)
 
 

@@ -18,6 +18,8 @@ FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"
 TRUTH = json.loads((CATALOG_DIR / "sweeps" / "seed-modes.truth.json").read_text())
 SPEED, OFFSET = "ego.speed_mps", "obstacles[0].lateral_offset_m"
 INF = float("inf")
+#: the family on the scripted backend: without traffic, the same runs without SUMO
+SCRIPTED = 'scenario.backend="scripted"'
 
 
 def normals() -> list[tuple[float, float]]:
@@ -159,20 +161,21 @@ def test_the_estimate_on_the_emulator_gives_each_region_its_share():
 
 @pytest.mark.slow
 def test_a_real_search_finds_every_mode_and_lists_each_with_its_replay(tmp_path):
-    """The wiring on real SUMO runs, one seed (the statistics: the emulator, above): the
+    """The wiring on real runs, one seed (the statistics: the emulator, above): the
     three regions within 300 runs (this seed meets the last at run 104; 5 seeds met all
     three by run 284), one listed mode per region, every failure in a mode, each mode's
-    replay command."""
+    replay command. The family has no traffic: on the scripted backend (a world without a
+    simulator) its runs are SUMO's, bit for bit (tests/test_scripted_world.py)."""
     import dataclasses
 
     import pandas as pd
 
     from analysis.rare.failure_modes import OTHER
-    from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
-    from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import QuietReporter
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.sweeps.adaptive_runner import AdaptiveSettings, run_adaptive
+    from sdc.batch.sweeps.progress import QuietReporter
 
-    sweep = dataclasses.replace(load_sweep(FAMILY), seed=1)
+    sweep = dataclasses.replace(load_sweep(FAMILY, [SCRIPTED]), seed=1)
     summary = run_adaptive(sweep, tmp_path, LocalExecutor(2), QuietReporter(),
                            AdaptiveSettings("search", "seed", 300, 20), traces="none").summary
     rows = pd.read_parquet(tmp_path / "results.parquet")

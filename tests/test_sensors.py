@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from scenarios import LidarSpec, RoadSpec
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import CurveRoad, StraightRoad
 from sdc.car.sensors import LaneSensor, Lidar, beam_angles_rad
 
 NO_EDGES = np.zeros((0, 4))
@@ -45,7 +45,7 @@ def test_sensor_pose_rotates_the_scan():
 
 
 def test_road_edges_are_seen_and_can_be_hidden():
-    road = RoadGeometry.from_spec(RoadSpec(length_m=200.0, lanes=3))
+    road = StraightRoad.from_spec(RoadSpec(length_m=200.0, lanes=3))
     origin = np.array([50.0, road.lane_center_d_m(0)])
     with_edges = lidar(edges=road.edge_segments()).scan(origin, 0.0, np.zeros((0, 5)))
     assert with_edges[0] == pytest.approx(5.25 + 3.5)  # left edge, straight to the left
@@ -87,7 +87,7 @@ def test_point_cloud_is_in_the_sensor_frame():
 def test_lane_offset_sign_heading_error_and_look_ahead(radius_m):
     spec = RoadSpec(length_m=150.0, lanes=3, kind="curve" if radius_m else "straight",
                     curve_radius_m=radius_m)
-    road = RoadGeometry.from_spec(spec)
+    road = (CurveRoad if radius_m else StraightRoad).from_spec(spec)
     sensor = LaneSensor(road, lane=0)
     s = 60.0
     heading = float(road.heading_at(s))

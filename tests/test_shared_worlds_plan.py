@@ -190,8 +190,8 @@ def test_runs_swept_onto_the_highway_backend_are_refused_or_run():
     """A sumo base whose sweep draws scenario.backend = "highway" for some samples: with
     egos_per_world = 2 the sweep is either refused (naming sweep.egos_per_world) or its
     highway runs run (alone: the highway backend holds one ego)."""
-    from sdc.batch.run_task import execute, rows_of
-    from sdc.batch.sweep_runner import plan_tasks
+    from sdc.batch.sweeps.sweep_runner import plan_tasks
+    from sdc.batch.tasks.task import execute, rows_of
 
     plain = {"sweep": {"name": "hw", "base": str(CATALOG_DIR / "seed-lesson.toml"),
                        "samples": 4, "sampler": "random", "seed": 3,
@@ -373,9 +373,9 @@ def test_a_resumed_sweep_of_shared_worlds_is_the_uninterrupted_one(swept, tmp_pa
 
 @pytest.mark.slow
 def test_ray_runs_the_shared_worlds_as_local_processes_do(swept, tmp_path, ray_session):
-    from sdc.batch.executors import RayExecutor
-    from sdc.batch.progress import QuietReporter
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.executors.ray_executor import RayExecutor
+    from sdc.batch.sweeps.progress import QuietReporter
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     path, reference = swept
     outcome = run_sweep(load_sweep(path), tmp_path / "ray", RayExecutor(2), QuietReporter())

@@ -12,8 +12,7 @@ import pandas as pd
 import pytest
 
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
-from scenarios.sumo_net.route_road import network_road
-from scenarios.world_backends import make_world
+from scenarios.world_backends import make_road, make_world
 from sdc.run.episode import Simulation, run_episode
 from sdc.run.world_loop import WorldLoop
 
@@ -32,7 +31,7 @@ def straight_seed() -> int:
     """A seed whose route runs straight from the start to 70 m past the obstacle."""
     for seed in range(1, 50):
         spec = town(seed)
-        road = network_road(spec)
+        road = make_road(spec)
         s_m = np.linspace(0.0, spec.obstacles[0].position_m + 70.0, 200)
         if np.ptp(road.heading_at(s_m)) < 1e-6:
             return seed
@@ -89,14 +88,14 @@ def test_every_car_that_arrives_starts_a_new_trip(seed):
     """The network keeps its traffic.vehicles cars: without new trips, the grid
     loses more than 5% of 400 in two minutes."""
     spec = town(seed, vehicles=400)
-    with make_world(spec, network_road(spec)) as world:
+    with make_world(spec, make_road(spec)) as world:
         sim = Simulation(spec, world, 5.0)
         WorldLoop(world, [sim]).start()
         counts = []
         for _ in range(1200):  # 2 minutes, the ego standing
             world.step(sim.box, 0.0)
             counts.append(world.vehicle_count())
-        arrived = world._trips_made - 400
+        arrived = world._demand.made - 400
     assert arrived > 20  # cars did arrive, and
     assert min(counts) >= 390 and max(counts) <= 400  # were replaced
 
@@ -142,7 +141,7 @@ def test_a_network_converted_from_openstreetmap_runs(tmp_path):
     for seed in range(1, 5):
         plain["scenario"]["seed"] = seed
         spec = ScenarioSpec.from_plain(plain)
-        road = network_road(spec)
+        road = make_road(spec)
         assert road.area.contains(road.center_xy).all()  # the route runs on the road
         row = run_episode(spec).row
         assert row["status"] == "ok" and row["network_vehicles"] >= 35

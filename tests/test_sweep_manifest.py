@@ -48,7 +48,7 @@ OLD = {"runs": 4, "sweep": {"sweep": {"name": "old"}}, "status": "complete",
 
 
 def _text(plain: dict) -> str:
-    return json.dumps(plain, indent=2) + "\n"  # as sdc.batch.manifest writes it
+    return json.dumps(plain, indent=2) + "\n"  # as sdc.batch.sweeps.manifest writes it
 
 
 @pytest.mark.parametrize("plain", [SEARCH, OLD, {}], ids=["search", "old", "empty"])

@@ -15,27 +15,34 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from click.testing import CliRunner
 
 from analysis.measures.commands import program_words
 from analysis.measures.sweep_manifest import SweepManifest
 from scenarios import CATALOG_DIR
 from scenarios.scene import traffic_model
 from scenarios.spec.sweep_spec import expand, load_sweep
-from sdc.batch.executors import LocalExecutor, RayExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.result_store import ResultStore
-from sdc.batch.run_task import RunTask, execute
-from sdc.batch.sweep_runner import run_sweep, sweep_columns
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.executors.ray_executor import RayExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.result_store import ResultStore
+from sdc.batch.sweeps.sweep_runner import run_sweep, sweep_columns
+from sdc.batch.tasks.run_task import RunTask
+from sdc.batch.tasks.task import execute
+from sdc.cli import main
 from sdc.run.result_row import RUN_COLUMNS, result_schema
 
 pytestmark = pytest.mark.slow
 
 BASE = CATALOG_DIR / "seed-lesson.toml"
+#: the lesson on the scripted backend (a world without a simulator): the base of the sweeps
+#: here but those whose workers are watched for libsumo (:func:`_in_a_run`)
+SCRIPTED = Path(__file__).resolve().parent / "data" / "seed-lesson-scripted.toml"
 SDC = [sys.executable, "-m", "sdc"]
 # 6 samples x 2 controllers of short lesson runs, with and without traffic
-TINY = f"""[sweep]
+TINY_ON = """[sweep]
 name = "tiny"
-base = "{BASE}"
+base = "{base}"
 sampler = "grid"
 controllers = ["seed", "lane-keep"]
 
@@ -45,10 +52,12 @@ controllers = ["seed", "lane-keep"]
 "road.speed_limit_mps" = {{ choice = [27.78] }}
 "scenario.duration_s" = {{ choice = [12.0] }}
 """
+TINY = TINY_ON.format(base=SCRIPTED)
+TINY_SUMO = TINY_ON.format(base=BASE)
 # three short lane-keep runs; the first one hangs under _hangs
 HANGS = f"""[sweep]
 name = "hangs"
-base = "{BASE}"
+base = "{SCRIPTED}"
 sampler = "grid"
 controllers = ["lane-keep"]
 
@@ -139,9 +148,9 @@ def test_local_and_ray_executors_give_identical_results(tmp_path, ray_session):
         traces = sorted(p.stem for p in (tmp_path / name / "traces").glob("*.parquet"))
         assert traces == sorted(reference.run_id)
     for run_id in reference.run_id[:2]:  # a Ray sweep's run replays identically here
-        replay = subprocess.run([*SDC, "replay", str(tmp_path / "ray"), "--run", run_id,
-                                 "--verify"], capture_output=True, text=True, timeout=120)
-        assert replay.returncode == 0 and "identical" in replay.stdout, replay.stdout
+        replay = CliRunner().invoke(main, ["replay", str(tmp_path / "ray"), "--run", run_id,
+                                           "--verify"])
+        assert replay.exit_code == 0 and "identical" in replay.stdout, replay.output
     # the same spec run alone, in this process, gives the same row
     first = expand(sweep)[0]
     alone = execute(RunTask(first.run_id, first.spec))
@@ -217,11 +226,8 @@ def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path, monkey
     assert _gone(int((tmp_path / f"{HUNG_RUN}.pid").read_text()))  # its worker
 
 
-def test_ray_stops_a_hung_run(tmp_path, monkeypatch, fresh_ray):
-    # Ray's workers find _hangs by importing this module
-    monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(
-        [str(Path(__file__).parent), *filter(None, [os.environ.get("PYTHONPATH")])]))
+def test_ray_stops_a_hung_run(tmp_path, ray_pids):
+    # the session's workers find _hangs by importing this module, and note its pid in ray_pids
     sweep = load_sweep(write(tmp_path, "hangs", HANGS))
     tasks = [RunTask(run.run_id, run.spec, trace_path=tmp_path / f"{run.run_id}.parquet")
              for run in expand(sweep)]
@@ -230,7 +236,7 @@ def test_ray_stops_a_hung_run(tmp_path, monkeypatch, fresh_ray):
     timeout_s = 3 * RUN_TIMEOUT_S
     with RayExecutor(2, run_timeout_s=timeout_s, task_fn=_hangs) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
-        hung_pid = int((tmp_path / f"{HUNG_RUN}.pid").read_text())
+        hung_pid = int((ray_pids / f"{HUNG_RUN}.pid").read_text())
         _wait_for(lambda: _gone(hung_pid), 60)  # Ray's force cancel ends its worker
     assert {run_id: row["status"] for run_id, row in rows.items()} == {
         HUNG_RUN: "timeout", "00001-lane-keep": "ok", "00002-lane-keep": "ok"}
@@ -240,7 +246,7 @@ def test_ray_stops_a_hung_run(tmp_path, monkeypatch, fresh_ray):
 
 def test_a_run_that_never_ends_becomes_a_timeout_row_on_the_command_line(tmp_path):
     out = tmp_path / "out"
-    proc = subprocess.Popen([*SDC, "sweep", str(write(tmp_path, "tiny", TINY)), "--out",
+    proc = subprocess.Popen([*SDC, "sweep", str(write(tmp_path, "tiny", TINY_SUMO)), "--out",
                              str(out), "--workers", "2", "--run-timeout", f"{RUN_TIMEOUT_S:g}",
                              "--quiet"], start_new_session=True, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
@@ -262,10 +268,10 @@ def test_a_run_that_never_ends_becomes_a_timeout_row_on_the_command_line(tmp_pat
 
 
 # 96 short lesson runs: many more than one worker runs while the other starts
-MANY = TINY.replace('"scenario.duration_s" = { choice = [12.0] }',
-                    '"scenario.duration_s" = { choice = [12.0] }\n'
-                    '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
-                    '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
+MANY = TINY_SUMO.replace('"scenario.duration_s" = { choice = [12.0] }',
+                         '"scenario.duration_s" = { choice = [12.0] }\n'
+                         '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
+                         '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
 MANY_RUNS = 96
 FLUSH_S = inspect.signature(ResultStore).parameters["flush_s"].default
 
@@ -291,11 +297,20 @@ def _rows_kept(out: Path) -> int:
     return pd.concat([pd.read_parquet(f) for f in files if f.exists()]).run_id.nunique()
 
 
-@pytest.mark.parametrize("how", ["kill -9", "ctrl-c"])
-def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how):
-    path = write(tmp_path, "many", MANY)
-    reference, out = tmp_path / "reference", tmp_path / "out"
+@pytest.fixture(scope="module")
+def many_reference(tmp_path_factory) -> Path:
+    """The MANY sweep, run through uninterrupted: what each interrupted one must equal."""
+    reference = tmp_path_factory.mktemp("many") / "reference"
+    path = write(reference.parent, "many", MANY)
     assert sweep_cli(path, "--out", reference, "--workers", "2").returncode == 0
+    return reference
+
+
+@pytest.mark.parametrize("how", ["kill -9", "ctrl-c"])
+def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how,
+                                                                  many_reference):
+    path = write(tmp_path, "many", MANY)
+    reference, out = many_reference, tmp_path / "out"
 
     # a shell starts a background job with SIGINT ignored, and children inherit that:
     # the sweep gets the disposition of a foreground command, as for a user's Ctrl-C
@@ -396,7 +411,7 @@ def test_the_resume_hint_repeats_the_set_options(tmp_path):
 # two short lane-keep runs: the base's duration and obstacle offset changed by --set
 SET_SWEEP = f"""[sweep]
 name = "set"
-base = "{BASE}"
+base = "{SCRIPTED}"
 sampler = "grid"
 controllers = ["lane-keep"]
 

@@ -377,7 +377,7 @@ def test_the_planning_bar_shows_on_a_terminal_for_big_plans():
 
     from rich.console import Console
 
-    from sdc.batch.progress import PLANNING_SHOWN_RUNS, RichReporter
+    from sdc.batch.sweeps.progress import PLANNING_SHOWN_RUNS, RichReporter
 
     out = io.StringIO()
     reporter = RichReporter(Console(file=out, force_terminal=True, width=100))

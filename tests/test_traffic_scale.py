@@ -8,10 +8,9 @@ import traci.constants as tc
 
 from scenarios.scene import road_kernels
 from scenarios.scene.lane_bodies import PIECE_TOLERANCE_M, STRETCH_MIN_M
-from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import in_start_zone, sensing_radius_m
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.world_backends import make_world
+from scenarios.world_backends import make_road, make_world
 from sdc.car.vehicle import Command
 from sdc.run.episode import Simulation, run_episode
 from sdc.run.world_loop import WorldLoop
@@ -54,7 +53,7 @@ def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, ...]
     laid = np.full(n, np.nan)
     count, _ = traffic(nearby, (tc.VAR_POSITION, tc.VAR_ANGLE, tc.VAR_SPEED,
                                 tc.VAR_LANEPOSITION_LAT, tc.VAR_LANEPOSITION, tc.VAR_LANE_ID),
-                       "ego", "obstacle.", world._types.sizes, dict(world._paths.flat),
+                       "ego", "obstacle.", world._types.sizes, dict(world._reader.paths.flat),
                        float(ego_box[0]), float(ego_box[1]), radius_m, PIECE_TOLERANCE_M,
                        STRETCH_MIN_M, boxes, speeds, kinds, laid)
     return boxes[:count], speeds[:count], kinds[:count], laid[:count]
@@ -64,7 +63,7 @@ def traffic_read_by(traffic, world, ego_box, radius_m) -> tuple[np.ndarray, ...]
 def test_after_a_warm_up_the_ego_starts_inside_traffic_and_sees_only_its_surroundings(
         lesson_plain, backend):
     spec = busy_road(lesson_plain, backend)
-    road = RoadGeometry.from_spec(spec.road)
+    road = make_road(spec)
     with make_world(spec, road) as world:
         sim = Simulation(spec, world, 5.0)
         WorldLoop(world, [sim]).start()

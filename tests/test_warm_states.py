@@ -27,9 +27,9 @@ from scenarios.spec.toml_io import load_spec
 from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo.warm_state import WARM_FORMAT, WarmState, cached_path, warm_key
 from scenarios.world_backends import make_road
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.cli import main
 from sdc.run.episode import run_episode
 
@@ -299,7 +299,7 @@ def test_sdc_settle_watches_the_traffic_and_suggests_a_warm_up(tmp_path):
 def test_a_run_without_an_outcome_still_names_its_warm_state():
     """An error or timeout row names the warm state its run was to start from, so the
     report's gate counts it with the runs sharing its traffic, not as one apart."""
-    from sdc.batch.warm_states import with_warm_state
+    from sdc.batch.sweeps.warm_states import with_warm_state
     from sdc.run.result_row import error_row
 
     key = "ab" * 32

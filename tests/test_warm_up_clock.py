@@ -11,10 +11,12 @@ import pytest
 from scenarios import CATALOG_DIR
 from scenarios.spec.toml_io import load_spec
 from scenarios.world_backends import warm_up_span_s
-from sdc.batch import warm_states, warm_up_clock
-from sdc.batch.local_executor import LocalExecutor
-from sdc.batch.run_task import RunTask, execute
-from sdc.batch.warm_up_clock import ClockWriter, clock_path, read_clock
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps import warm_states
+from sdc.batch.tasks import warm_up_clock
+from sdc.batch.tasks.run_task import RunTask
+from sdc.batch.tasks.task import execute
+from sdc.batch.tasks.warm_up_clock import ClockWriter, clock_path, read_clock
 
 WARM_UP_S = 8.0
 #: a warm-up of several seconds of wall time on the highway (at 600 s it took under
@@ -74,11 +76,11 @@ def test_a_worker_writes_its_clock_as_it_goes_and_takes_it_away(monkeypatch):
 
     monkeypatch.setattr(ClockWriter, "__call__", recording)
     task = warm_states.warm_up_tasks([warm_task(3)], {"run-3": "k" * 64})[0]
-    task.trace_path.parent.mkdir(parents=True)
-    assert execute(task)["status"] == "ok" and task.trace_path.is_file()
+    task.state_path.parent.mkdir(parents=True)
+    assert execute(task)["status"] == "ok" and task.state_path.is_file()
     assert len(written) > 1 and all(t_s == read for t_s, read in written)
     assert written[0][0] > 0 and written[-1][0] == pytest.approx(WARM_UP_S)
-    assert not clock_path(task.trace_path).exists()
+    assert not clock_path(task.state_path).exists()
 
 
 @pytest.mark.slow

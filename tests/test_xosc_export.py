@@ -40,9 +40,9 @@ from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.sweep_spec import load_sweep
 from scenarios.sumo_net.net_xml import read_net
 from scenarios.sumo_net.road_source import road_source
-from sdc.batch.executors import LocalExecutor
-from sdc.batch.progress import QuietReporter
-from sdc.batch.sweep_runner import run_sweep
+from sdc.batch.executors.local_executor import LocalExecutor
+from sdc.batch.sweeps.progress import QuietReporter
+from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.cli import main
 from tests.asam_samples import write_arc_road
 

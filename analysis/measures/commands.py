@@ -1,8 +1,11 @@
-"""The commands sdc prints for a user to run next (replay a run, finish a sweep, read
-a report), spelled with the executable this process was started as, so that each
-runs as printed: ``.venv/bin/sdc`` after ``make demo``, ``sdc`` where that is on
-PATH, ``python -m sdc`` (with the interpreter that ran it) for a module run or a
-call from Python."""
+"""The commands sdc prints for a user to run next (replay a run, export it, draw an
+overlap, finish a sweep, read a report), spelled with the executable this process was
+started as, so that each runs as printed: ``.venv/bin/sdc`` after ``make demo``,
+``sdc`` where that is on PATH, ``python -m sdc`` (with the interpreter that ran it)
+for a module run or a call from Python.
+
+The one home of the printed commands: one function per command, which the CLI and
+the report both call (no command line is spelled anywhere else)."""
 
 from __future__ import annotations
 
@@ -52,6 +55,33 @@ def sdc_command(*args: object) -> str:
     return shlex.join([*program_words(), *(str(a) for a in args)])
 
 
+def report_command(out_dir: Path) -> str:
+    """The command that writes the report of a sweep, search or estimate directory
+    (``sdc report``)."""
+    return sdc_command("report", out_dir)
+
+
+def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
+                   executor: str, workers: int, ray_address: str | None,
+                   run_timeout: float | None, batch_runs: int | None,
+                   overrides: tuple[str, ...] = (), controllers: str | None = None,
+                   ego: str | None = None) -> str:
+    """The command that finishes an interrupted sweep (``sdc sweep ... --resume``): every
+    option that shaped its plan (--set, --samples; another plan is refused) and how it
+    ran, then --resume; shell-quoted."""
+    words: list[object] = ["sweep", sweep_file, "--out", out_dir]
+    words += [word for text in overrides for word in ("--set", text)]
+    optional = [("--controllers", controllers), ("--ego", ego), ("--samples", samples),
+                ("--traces", None if traces == "failures" else traces),
+                ("--executor", None if executor == "local" else executor),
+                ("--workers", workers), ("--ray-address", ray_address),
+                ("--run-timeout", run_timeout), ("--batch", batch_runs)]
+    for option, value in optional:
+        if value is not None:
+            words += [option, value]
+    return sdc_command(*words, "--resume")
+
+
 def replay_command(sweep_dir: Path, run_id: str) -> str:
     """The command that re-simulates run ``run_id`` of a sweep directory and compares its
     trace with the recorded one (``sdc replay``)."""
@@ -71,9 +101,24 @@ def export_command(sweep_dir: Path, run_id: str) -> str:
     return sdc_command("export", sweep_dir, "--run", run_id)
 
 
+def kept_trace_path(sweep_dir: Path, run_id: str) -> Path:
+    """Where a sweep keeps the trace of ``run_id`` (``--traces failures`` or ``all``)."""
+    return Path(sweep_dir) / "traces" / f"{run_id}.parquet"
+
+
 def kept_trace(sweep_dir: Path, run_id: str) -> bool:
     """Did the sweep keep the trace of ``run_id`` (what ``sdc export`` reads)?"""
-    return (Path(sweep_dir) / "traces" / f"{run_id}.parquet").is_file()
+    return kept_trace_path(sweep_dir, run_id).is_file()
+
+
+def run_commands(sweep_dir: Path, run_id: str) -> list[tuple[str, str]]:
+    """The commands the report shows for run ``run_id`` of a sweep directory, each with
+    what it does: ``replay`` (:func:`replay_command`), and ``export``
+    (:func:`export_command`) where the sweep kept its trace."""
+    commands = [("replay", replay_command(sweep_dir, run_id))]
+    if kept_trace(sweep_dir, run_id):
+        commands.append(("export", export_command(sweep_dir, run_id)))
+    return commands
 
 
 def draw_overlap_command(sweep_dir: Path, run_id: str, t_s: float) -> str:

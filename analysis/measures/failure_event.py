@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_score import ScoreKind, run_score
 
 if TYPE_CHECKING:
@@ -56,7 +57,7 @@ class FailureEvent:
     def failed_rows(self, rows: pd.DataFrame) -> pd.Series:
         """Per row of a table with a ``score`` column: did it fail (NaN or None: no run,
         no failure)?"""
-        return rows.score.notna() & (rows.score <= self.threshold)
+        return rows[RowCol.score].notna() & (rows[RowCol.score] <= self.threshold)
 
     @staticmethod
     def told(score: float | None) -> float:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.measures.row_columns import RowCol
+from analysis.measures.trace_columns import TraceCol
 from scenarios.common.plain_json import json_scalar
 
 #: |lane offset| [m] under which the car counts as back in its lane
@@ -70,18 +72,19 @@ def trace_metrics(floats: dict[str, np.ndarray], phase: list[str], lidar: list[n
     detection = None
     if started:
         detection = central_range_m(lidar[int(np.argmax(avoiding))], detect_beams)
-    returned, return_time = return_to_lane(floats["t_s"], floats["lane_offset_m"], phase)
-    offsets = np.abs(floats["lane_offset_m"])
-    gaps = floats["obstacle_gap_m"]
+    returned, return_time = return_to_lane(floats[TraceCol.t_s], floats[TraceCol.lane_offset_m],
+                                           phase)
+    offsets = np.abs(floats[TraceCol.lane_offset_m])
+    gaps = floats[TraceCol.obstacle_gap_m]
     return {
-        "maneuver_started": started,
-        "detection_range_m": json_scalar(detection) if started else None,
-        "returned_to_lane": returned,
-        "return_time_s": return_time,
-        "max_abs_lane_offset_m": json_scalar(np.max(offsets, initial=-np.inf,
-                                                     where=np.isfinite(offsets))),
-        "min_gap_obstacle_m": json_scalar(np.min(gaps)) if gaps.size else None,
-        "min_ttc_s": json_scalar(np.min(floats["ttc_s"], initial=np.inf)),
-        "max_drac_mps2": float(np.max(floats["drac_mps2"], initial=0.0)),
-        "min_headway_s": json_scalar(np.min(floats["headway_s"], initial=np.inf)),
+        RowCol.maneuver_started: started,
+        RowCol.detection_range_m: json_scalar(detection) if started else None,
+        RowCol.returned_to_lane: returned,
+        RowCol.return_time_s: return_time,
+        RowCol.max_abs_lane_offset_m: json_scalar(np.max(offsets, initial=-np.inf,
+                                                          where=np.isfinite(offsets))),
+        RowCol.min_gap_obstacle_m: json_scalar(np.min(gaps)) if gaps.size else None,
+        RowCol.min_ttc_s: json_scalar(np.min(floats[TraceCol.ttc_s], initial=np.inf)),
+        RowCol.max_drac_mps2: float(np.max(floats[TraceCol.drac_mps2], initial=0.0)),
+        RowCol.min_headway_s: json_scalar(np.min(floats[TraceCol.headway_s], initial=np.inf)),
     }

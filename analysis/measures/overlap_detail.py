@@ -20,13 +20,14 @@ from typing import NamedTuple
 import numpy as np
 
 from analysis.measures.numbers import time_text
+from analysis.measures.trace_columns import TraceCol, TraceMeta
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import box_owners, overlap_depth_m, overlapping_pairs
 from scenarios.scene.boxes import as_boxes
 from scenarios.spec.scenario_spec import ScenarioSpec
 
 #: where an episode's metadata (the trace file's) keeps the overlaps it named
-METADATA_KEY = "overlaps"
+METADATA_KEY = TraceMeta.overlaps
 #: whose an overlap is, by :attr:`Overlap.sumo_own`
 WHOSE = {False: "ours: SUMO's own lanes hold the two apart",
          True: "SUMO's own: its lanes hold the two inside each other too",
@@ -88,7 +89,8 @@ def describe(trace: Trace, step: int, boxes: tuple[int, int], obstacle_boxes: np
     both = np.vstack([traffic, obstacles])[list(boxes)]
     if names is None:
         names = tuple(f"traffic[{i}]" if i < n else f"obstacles[{i - n}]" for i in boxes)
-    return Overlap(int(step), float(trace.floats["t_s"][step]), (int(boxes[0]), int(boxes[1])),
+    return Overlap(int(step), float(trace.floats[TraceCol.t_s][step]),
+                   (int(boxes[0]), int(boxes[1])),
                    Body(names[0], classes[boxes[0]]), Body(names[1], classes[boxes[1]]),
                    float(overlap_depth_m(both[:1], both[1:])[0]), sumo_own)
 
@@ -120,8 +122,8 @@ def drawn_overlaps(trace: Trace, metadata: dict, step: int) -> list[tuple[Overla
     (:func:`overlaps_at`), named as the run named them where it did (its metadata's
     :data:`METADATA_KEY`: SUMO's ids, whose), with their two boxes, (2, 5). A trace
     without its obstacles' boxes in its metadata (older) marks traffic only."""
-    spec = ScenarioSpec.from_plain(metadata["spec"])
-    obstacles = as_boxes(metadata.get("obstacle_boxes", np.zeros((0, 5))))
+    spec = ScenarioSpec.from_plain(metadata[TraceMeta.spec])
+    obstacles = as_boxes(metadata.get(TraceMeta.obstacle_boxes, np.zeros((0, 5))))
     classes = (tuple(o.vehicle_class for o in spec.obstacles)
                if len(spec.obstacles) == len(obstacles) else ())
     _, _, _, owners = _step_bodies(trace, step, obstacles, classes)

@@ -22,6 +22,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.stood_for import QUEUE, RED_LIGHT, Standing, waited_for_light
 
 #: the statuses a run ends with (as the sweep runner writes them); only ``ok`` has an outcome
@@ -42,22 +43,23 @@ def outcomes_text(outcomes) -> str:
 
 def collided(rows: pd.DataFrame) -> pd.Series:
     """Per result row: True when the run collided (an error or timeout row did not)."""
-    return rows.collision.fillna(False).astype(bool)
+    return rows[RowCol.collision].fillna(False).astype(bool)
 
 
 def failed_or_collided(rows: pd.DataFrame) -> pd.Series:
     """Per result row: True when the run did not run ok (error, timeout) or collided;
     missing evidence is never safety."""
-    return (rows.status != "ok") | collided(rows)
+    return (rows[RowCol.status] != "ok") | collided(rows)
 
 
 def too_short_at_light(rows: pd.DataFrame) -> pd.Series:
     """Per result row: True when the run ended waiting at a red light, or in the queue
     before one, for less than the light's cycle (unfinished: too short to tell)."""
-    if "stood_for_cycle_s" not in rows:  # results from before the column
+    if RowCol.stood_for_cycle_s not in rows:  # results from before the column
         return pd.Series(False, index=rows.index)
-    return ((rows.status == "ok") & (rows.outcome == UNFINISHED)
-            & rows.stood_for.isin([RED_LIGHT, QUEUE]) & rows.stood_for_cycle_s.notna())
+    return ((rows[RowCol.status] == "ok") & (rows[RowCol.outcome] == UNFINISHED)
+            & rows[RowCol.stood_for].isin([RED_LIGHT, QUEUE])
+            & rows[RowCol.stood_for_cycle_s].notna())
 
 
 def duration_to_tell_s(rows: pd.DataFrame) -> float | None:
@@ -67,7 +69,8 @@ def duration_to_tell_s(rows: pd.DataFrame) -> float | None:
     short = rows[too_short_at_light(rows)]
     if not len(short):
         return None
-    need_s = (short.sim_time_s - short.stood_at_end_s + short.stood_for_cycle_s).max()
+    need_s = (short[RowCol.sim_time_s] - short[RowCol.stood_at_end_s]
+              + short[RowCol.stood_for_cycle_s]).max()
     return float(math.ceil(need_s / 10.0) * 10.0)
 
 

@@ -17,11 +17,13 @@ import math
 from collections.abc import Mapping
 from typing import Any, Literal
 
+from analysis.measures.row_columns import RowCol
+
 ScoreKind = Literal["gap", "ttc"]
 #: what each kind reads from the row, and its unit
 SCORE_COLUMNS: dict[ScoreKind, tuple[str, ...]] = {
-    "gap": ("min_gap_obstacle_m", "min_road_edge_gap_m"),
-    "ttc": ("min_ttc_s",),
+    "gap": (RowCol.min_gap_obstacle_m, RowCol.min_road_edge_gap_m),
+    "ttc": (RowCol.min_ttc_s,),
 }
 #: the score of a run that did not collide but whose measure is 0 or below
 #: (a grazing contact the collision check did not count): positive, so not a failure
@@ -37,7 +39,7 @@ def run_score(row: Mapping[str, Any], kind: ScoreKind = "gap") -> float:
     (``sdc.car.road_frame``) [s]. Infinite when the run never came near anything
     measurable.
     """
-    if row["status"] != "ok" or row["collision"]:
+    if row[RowCol.status] != "ok" or row[RowCol.collision]:
         return 0.0
     values = [row[c] for c in SCORE_COLUMNS[kind]]
     values = [float(v) for v in values if v is not None and not math.isnan(v)]

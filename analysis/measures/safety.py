@@ -54,12 +54,12 @@ def stop_gap_m(spec: ScenarioSpec, road: RoadGeometry, model: VehicleModel) -> f
 
 
 def lane_scale(spec: ScenarioSpec, road: RoadGeometry) -> float:
-    """Metres along the ego's lane per metre along the road's centre line: on a curve
-    ``1 - d / curve_radius_m``, ``d`` the lane centre's offset (left positive); 1
-    elsewhere (a ``sumo_net`` road is the route's own lane)."""
-    if spec.road.kind != "curve":
-        return 1.0
-    return 1 - road.lane_center_d_m(spec.ego.lane) / spec.road.curve_radius_m
+    """Metres along the ego's lane per metre along the road's centre line:
+    ``1 - curvature d``, ``d`` the lane centre's offset (left positive), as the car's
+    road frame has it (``sdc.car.road_frame``); 1 where the centre line does not turn
+    or its lanes are measured on their own (a ``sumo_net`` road is the route's own
+    lane: :attr:`RoadGeometry.curvature_1pm`)."""
+    return 1 - road.curvature_1pm * road.lane_center_d_m(spec.ego.lane)
 
 
 #: the time between seeing the obstacle and full braking that ``stop_possible`` allows

@@ -29,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from analysis.measures.row_columns import RowCol
 from scenarios.scene.boxes import as_boxes, box_corners
 from scenarios.scene.signals import holds_the_car, link_signal
 from scenarios.spec.bodies import PEDESTRIAN
@@ -193,13 +194,13 @@ def stood_for_text(value: Mapping) -> str:
     a red light 1.5 m ahead``, ``behind a vehicle 4.0 m ahead (a queue before a red
     light)``, ``with nothing within 30 m ahead``; empty when it ended moving or the
     results do not say."""
-    what = value.get("stood_for")
+    what = value.get(RowCol.stood_for)
     if what is None:
         return ""
     if what == NOTHING:
         return f"with nothing within {REACH_M:.0f} m ahead"
-    gap = value.get("stood_for_gap_m")
+    gap = value.get(RowCol.stood_for_gap_m)
     where = "" if gap is None else (" on it" if gap < 0.05 else f" {gap:.1f} m ahead")
     queue = (" (a queue before a red light)"
-             if what == QUEUE and value.get("stood_for_cycle_s") is not None else "")
+             if what == QUEUE and value.get(RowCol.stood_for_cycle_s) is not None else "")
     return f"{STOOD_FOR_WORDS[what]}{where}{queue}"

@@ -1,7 +1,7 @@
 """A sweep directory's ``manifest.json``, typed: :class:`SweepManifest`, its
 :class:`Session` records and a search's or estimate's :class:`AdaptiveRecord`.
 
-The sweep runner writes it (``sdc.batch.sweep_runner``: new, a session starts, its
+The sweep runner writes it (``sdc.batch.sweeps.sweep_runner``: new, a session starts, its
 warm states and job files, the end) and the report reads it; both see attributes,
 never string keys. Every record is frozen: a change is a new record
 (:meth:`Record.updated`, which places a key the file did not hold after the others,
@@ -9,6 +9,11 @@ as a dict's update does). :meth:`Record.from_dict` reads any manifest, an older
 version's too: a key it lacks reads None and stays out of the file, a key this
 version does not know is kept; so :meth:`Record.to_dict` gives back the very dict
 read, in its order, and the file written is byte for byte what a plain dict made.
+
+This module is the one home of the manifest's keys: the records' fields, the keys a
+reader requires (:data:`READ_KEYS`, :data:`RESUME_KEYS`, spelled through
+:meth:`Record.key`, so a renamed field breaks them at import) and the keys of the sweep
+file's plain form the manifest is read by (:class:`SweepFileKey`).
 """
 
 from __future__ import annotations
@@ -19,6 +24,16 @@ from typing import Any, ClassVar
 
 #: the sweep directory's file
 MANIFEST_FILE = "manifest.json"
+
+
+class SweepFileKey:
+    """The keys of a sweep file's plain form (``scenarios.spec.sweep_spec.SweepSpec.to_plain``,
+    the manifest's ``sweep``) that the manifest is read by."""
+
+    sweep = "sweep"  # its [sweep] table
+    name = "name"
+    egos_per_world = "egos_per_world"  # only when above 1
+    params = "params"  # path -> distribution
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -34,6 +49,14 @@ class Record:
     def names(cls) -> tuple[str, ...]:
         """The keys this version knows, in the order a new record writes them."""
         return tuple(f.name for f in dataclasses.fields(cls) if not f.name.startswith("_"))
+
+    @classmethod
+    def key(cls, field: str, *within: str) -> str:
+        """The dotted path of ``field`` (a key this version knows) and the keys ``within``
+        its value, as :func:`scenarios.common.file_read.require_keys` takes it; a field
+        this version does not know is a TypeError, where the path is spelled."""
+        cls._check({field: None})
+        return ".".join((field, *within))
 
     @classmethod
     def new(cls, **fields):
@@ -103,7 +126,7 @@ class Session(Record):
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class AdaptiveRecord(Record):
     """What a search or an estimate did beyond its sweep file (its options:
-    ``sdc.batch.adaptive_runner.AdaptiveSettings``)."""
+    ``sdc.batch.sweeps.adaptive_runner.AdaptiveSettings``)."""
 
     mode: str | None = None  # search, estimate
     controller: str | None = None  # the controller judged
@@ -150,17 +173,18 @@ class SweepManifest(Record):
 
     @property
     def sweep_name(self) -> str:
-        return self.sweep["sweep"]["name"]
+        return self.sweep[SweepFileKey.sweep][SweepFileKey.name]
 
     @property
     def egos_per_world(self) -> int:
         """The runs the sweep let share a world (``[sweep] egos_per_world``; 1: none)."""
-        return int((self.sweep or {}).get("sweep", {}).get("egos_per_world", 1))
+        return int((self.sweep or {}).get(SweepFileKey.sweep, {})
+                   .get(SweepFileKey.egos_per_world, 1))
 
     @property
     def sweep_params(self) -> dict:
         """The swept parameters as the sweep file gives them: path -> distribution."""
-        return self.sweep["sweep"].get("params", {})
+        return self.sweep[SweepFileKey.sweep].get(SweepFileKey.params, {})
 
     @property
     def session(self) -> Session:
@@ -170,3 +194,13 @@ class SweepManifest(Record):
     def with_session(self, **changes) -> SweepManifest:
         """The manifest with ``changes`` to the session that runs now."""
         return self.updated(sessions=(*self.sessions[:-1], self.session.updated(**changes)))
+
+
+#: what every reader of a manifest requires, with its type (the report reads no more)
+READ_KEYS: dict[str, type] = {
+    SweepManifest.key("sweep", SweepFileKey.sweep, SweepFileKey.name): str}
+#: what resuming a sweep and replaying its runs require besides
+#: (``sdc.batch.sweeps.manifest.read_manifest``)
+RESUME_KEYS: dict[str, type] = {**READ_KEYS, SweepManifest.key("plan_sha256"): str,
+                                SweepManifest.key("versions"): dict,
+                                SweepManifest.key("sessions"): list}

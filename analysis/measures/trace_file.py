@@ -2,7 +2,8 @@
 hash, and a Parquet file that carries the spec and road geometry in its metadata.
 
 The car's run fills one with :class:`sdc.run.trace_recorder.TraceRecorder`;
-everything in ``analysis`` reads it from here, without the simulator.
+everything in ``analysis`` reads it from here, without the simulator. The columns'
+names and the metadata's keys: :mod:`analysis.measures.trace_columns`.
 """
 
 from __future__ import annotations
@@ -16,31 +17,21 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.measures.trace_columns import (
+    BODY_COLUMN,
+    CLASS_COLUMN,
+    FLOAT_COLUMNS,
+    LIST_COLUMNS,
+    METADATA_KEY,
+    SIGNAL_COLUMN,
+    TraceCol,
+    TraceMeta,
+    VehicleMeta,
+)
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import FileError, SpecError
 from scenarios.common.file_read import read_parquet, require_keys
 from scenarios.spec.scenario_spec import ScenarioSpec
-
-#: scalar float columns, in file order
-FLOAT_COLUMNS = (
-    "t_s", "x_m", "y_m", "yaw_rad", "speed_mps", "steer_rad", "steer_cmd_rad",
-    "lane_offset_m", "heading_error_rad", "s_m", "obstacle_gap_m", "ttc_s", "drac_mps2",
-    "headway_s",
-)
-#: list-of-float32 columns: the range image and the traffic boxes (N x 5, flattened)
-LIST_COLUMNS = ("lidar", "traffic")
-#: list-of-string column: each traffic box's vehicle class; a trace written before it
-#: had only cars (SUMO's vClass "passenger")
-CLASS_COLUMN = "traffic_class"
-#: list-of-int column: which body each traffic box is of, at steps where a vehicle is
-#: several boxes (laid along its lane's bend); empty where each box is its own
-BODY_COLUMN = "traffic_body"
-#: string column: what every light along the route showed the car's way, one character
-#: per stop line of the road (``road.stops`` in the metadata, in order): SUMO's link
-#: state (r, y, G, g, ...; ``scenarios.scene.signals``), ``-`` where a line has no
-#: light; empty at every step of a route without lights, and in a trace before it
-SIGNAL_COLUMN = "signals"
-METADATA_KEY = b"sdc"
 
 
 @dataclass(frozen=True)
@@ -72,7 +63,7 @@ class Trace:
             h.update(name.encode())
             h.update(np.ascontiguousarray(self.floats[name], dtype="<f8").tobytes())
         h.update("\n".join(self.phase).encode())
-        for name, rows in (("lidar", self.lidar), ("traffic", self.traffic)):
+        for name, rows in ((TraceCol.lidar, self.lidar), (TraceCol.traffic, self.traffic)):
             h.update(name.encode())
             for row in rows:
                 h.update(len(row).to_bytes(4, "little"))
@@ -97,15 +88,16 @@ class Trace:
     def body_boxes(self, ahead_m: float, length_m: float, width_m: float) -> np.ndarray:
         """The ego's body box ``[cx, cy, yaw, length, width]`` at every step, (N, 5);
         ``ahead_m`` is the body centre's distance ahead of the rear axle."""
-        x, y, yaw = self.floats["x_m"], self.floats["y_m"], self.floats["yaw_rad"]
+        x, y, yaw = (self.floats[TraceCol.x_m], self.floats[TraceCol.y_m],
+                     self.floats[TraceCol.yaw_rad])
         n = len(self)
         return np.column_stack([x + ahead_m * np.cos(yaw), y + ahead_m * np.sin(yaw), yaw,
                                 np.full(n, length_m), np.full(n, width_m)])
 
     def to_table(self, metadata: dict) -> pa.Table:
         columns = {name: pa.array(self.floats[name], pa.float64()) for name in FLOAT_COLUMNS}
-        columns["phase"] = pa.array(self.phase, pa.string())
-        for name, rows in (("lidar", self.lidar), ("traffic", self.traffic)):
+        columns[TraceCol.phase] = pa.array(self.phase, pa.string())
+        for name, rows in ((TraceCol.lidar, self.lidar), (TraceCol.traffic, self.traffic)):
             columns[name] = pa.array([np.asarray(r, np.float32) for r in rows],
                                      pa.list_(pa.float32()))
         columns[CLASS_COLUMN] = pa.array(self.traffic_class, pa.list_(pa.string()))
@@ -123,13 +115,14 @@ class Trace:
 
 #: the columns :func:`read_trace` needs, with their types
 TRACE_SCHEMA = pa.schema([*((name, pa.float64()) for name in FLOAT_COLUMNS),
-                          ("phase", pa.string()),
+                          (TraceCol.phase, pa.string()),
                           *((name, pa.list_(pa.float32())) for name in LIST_COLUMNS)])
 #: the metadata :func:`read_trace` needs, with their types
-_METADATA_KEYS = {"spec": dict, "road.center_xy": list, "road.lanes": int,
-                  "road.lane_width_m": int | float, "vehicle.length_m": int | float,
-                  "vehicle.width_m": int | float,
-                  "vehicle.center_ahead_of_rear_axle_m": int | float}
+_METADATA_KEYS = {TraceMeta.spec: dict, f"{TraceMeta.road}.center_xy": list,
+                  f"{TraceMeta.road}.lanes": int, f"{TraceMeta.road}.lane_width_m": int | float,
+                  f"{TraceMeta.vehicle}.{VehicleMeta.length_m}": int | float,
+                  f"{TraceMeta.vehicle}.{VehicleMeta.width_m}": int | float,
+                  f"{TraceMeta.vehicle}.{VehicleMeta.center_ahead_of_rear_axle_m}": int | float}
 
 
 def _metadata(table: pa.Table, path: Path) -> dict:
@@ -143,7 +136,7 @@ def _metadata(table: pa.Table, path: Path) -> dict:
         raise FileError(path, f"the trace's metadata is not valid JSON ({e})") from None
     require_keys(metadata, _METADATA_KEYS, path, "the trace")
     try:
-        ScenarioSpec.from_plain(metadata["spec"])
+        ScenarioSpec.from_plain(metadata[TraceMeta.spec])
     except SpecError as e:
         raise FileError(path, f"the trace is from another sdc version (its spec: {e})") from None
     return metadata
@@ -163,10 +156,10 @@ def read_trace(path: str | Path) -> tuple[Trace, dict]:
     if CLASS_COLUMN in table.column_names:
         classes = table.column(CLASS_COLUMN).to_pylist()
     else:
-        classes = [["passenger"] * (len(row) // 5) for row in lists["traffic"]]
+        classes = [["passenger"] * (len(row) // 5) for row in lists[TraceCol.traffic]]
     bodies = (table.column(BODY_COLUMN).to_pylist() if BODY_COLUMN in table.column_names
               else [])
     signals = (table.column(SIGNAL_COLUMN).to_pylist() if SIGNAL_COLUMN in table.column_names
                else [])
-    return Trace(floats, table.column("phase").to_pylist(), **lists,
+    return Trace(floats, table.column(TraceCol.phase).to_pylist(), **lists,
                  traffic_class=classes, traffic_body=bodies, signals=signals), metadata

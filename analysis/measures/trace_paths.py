@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from analysis.measures.trace_columns import TraceCol, TraceMeta
 from scenarios.asam.xosc_export import (
     PEDESTRIAN_KINDS,
     VEHICLE_CATEGORIES,
@@ -33,7 +34,7 @@ MATCH_GATE_M = 5.0
 def standing_bodies(metadata: dict, spec) -> list[StandingBody]:
     """The run's obstacles, as they stood: the spec's, in its order, then any other
     standing box the run saw (a shared world's), its kind the obstacle kind of its size."""
-    boxes = np.array(metadata.get("obstacle_boxes", []), float).reshape(-1, 5)
+    boxes = np.array(metadata.get(TraceMeta.obstacle_boxes, []), float).reshape(-1, 5)
     kinds = [o.kind for o in spec.obstacles]
     found = []
     for i, box in enumerate(boxes):
@@ -68,7 +69,7 @@ def body_paths(trace) -> list:
     appear (the module's docstring says how a body is followed from step to step)."""
     from scipy.optimize import linear_sum_assignment
 
-    t_s = trace.floats["t_s"]
+    t_s = trace.floats[TraceCol.t_s]
     tracks: list[dict] = []  # each: kind, t, xy, heading, length, width
     live: list[int] = []  # the tracks seen at the last step
     for k in range(len(trace)):

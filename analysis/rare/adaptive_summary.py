@@ -16,7 +16,8 @@ import pandas as pd
 
 from analysis.measures.commands import replay_command
 from analysis.measures.failure_event import FAILURE
-from analysis.measures.run_outcome import OUTCOMES, STUCK
+from analysis.measures.row_columns import RowCol
+from analysis.measures.run_outcome import OUTCOMES, STATUSES, STUCK
 from analysis.measures.sweep_manifest import SweepManifest
 from analysis.rare.failure_modes import failure_modes, weighed_rows
 from analysis.rare.rare_events import Estimate, estimate_from_rows
@@ -34,11 +35,11 @@ def estimate_of(results: pd.DataFrame, upto_batch: int | None = None,
                 max_weight: float = math.inf) -> Estimate | None:
     """The estimate from the rows' weights: the estimation-phase rows (of batches up to
     ``upto_batch``), counting every run drawn so far. None before the estimation phase."""
-    rows = results if upto_batch is None else results[results.batch <= upto_batch]
-    estimation = rows[rows.phase == "estimate"]
+    rows = results if upto_batch is None else results[results[RowCol.batch] <= upto_batch]
+    estimation = rows[rows[RowCol.phase] == "estimate"]
     if estimation.empty:
         return None
-    return estimate_from_rows(estimation.weight.to_numpy(dtype=float),
+    return estimate_from_rows(estimation[RowCol.weight].to_numpy(dtype=float),
                               FAILURE.failed_rows(estimation).to_numpy(), runs=len(rows),
                               max_weight=max_weight)
 
@@ -51,15 +52,15 @@ def mode_estimates(results: pd.DataFrame, modes: list[dict],
     in exactly one mode, so the parts add up to the total. ``modes``: plain failure
     modes (``FailureMode.to_plain``); returns them with ``p_collision, ci_low,
     ci_high, share`` (of the total) and ``estimation_failures`` added."""
-    estimation = results[results.phase == "estimate"]
+    estimation = results[results[RowCol.phase] == "estimate"]
     if estimation.empty:
         return modes
-    weights = estimation.weight.to_numpy(dtype=float)
+    weights = estimation[RowCol.weight].to_numpy(dtype=float)
     failed = FAILURE.failed_rows(estimation).to_numpy()
     total = float(np.mean(weights * failed))
     out = []
     for mode in modes:
-        in_mode = failed & estimation.run_id.isin(mode["run_ids"]).to_numpy()
+        in_mode = failed & estimation[RowCol.run_id].isin(mode["run_ids"]).to_numpy()
         part = estimate_from_rows(weights, in_mode, max_weight=max_weight)
         out.append({**mode, "p_collision": part.p_collision, "ci_low": part.ci_low,
                     "ci_high": part.ci_high, "share": part.p_collision / total if total else 0.0,
@@ -71,7 +72,7 @@ def _described(results: pd.DataFrame, params: list[Param], failed: pd.Series,
                sweep_dir: Path) -> list[dict]:
     """The modes of the ``failed`` rows among the runs (a sample that made no valid
     scenario, score None, is no run: no evidence either way)."""
-    runs = results[results.score.notna()] if "score" in results else results
+    runs = results[results[RowCol.score].notna()] if RowCol.score in results else results
     return [{**m.to_plain(), "replay": replay_command(sweep_dir, m.example_run)}
             for m in failure_modes(runs, params, failed[runs.index], weighed_rows(runs))]
 
@@ -91,22 +92,23 @@ def described_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path,
 def stuck_modes(results: pd.DataFrame, params: list[Param], sweep_dir: Path) -> list[dict]:
     """The stuck runs (no collision, standing still at the end) grouped the same way as
     the failures, plain, each with its replay command."""
-    if results.empty or "outcome" not in results:
+    if results.empty or RowCol.outcome not in results:
         return []
-    return _described(results, params, results.outcome == STUCK, sweep_dir)
+    return _described(results, params, results[RowCol.outcome] == STUCK, sweep_dir)
 
 
 def outcome_counts(results: pd.DataFrame) -> dict[str, int]:
     """Runs per outcome (:data:`analysis.measures.run_outcome.OUTCOMES`), and ``failed`` for the
     runs without one (error, timeout)."""
-    outcomes = results.get("outcome", pd.Series(index=results.index, dtype=object))
-    counts = {o: int((outcomes[results.status == "ok"] == o).sum()) for o in OUTCOMES}
-    return {**counts, "failed": int((results.status != "ok").sum())}
+    outcomes = results.get(RowCol.outcome, pd.Series(index=results.index, dtype=object))
+    status = results[RowCol.status]
+    counts = {o: int((outcomes[status == "ok"] == o).sum()) for o in OUTCOMES}
+    return {**counts, "failed": int((status != "ok").sum())}
 
 
 def convergence(results: pd.DataFrame, max_weight: float = math.inf) -> pd.DataFrame:
     """The estimate after each estimation batch: runs, p_collision, ci_low, ci_high, rhw."""
-    batches = sorted(results[results.phase == "estimate"].batch.unique())
+    batches = sorted(results[results[RowCol.phase] == "estimate"][RowCol.batch].unique())
     points = []
     for batch in batches:
         e = estimate_of(results, batch, max_weight)
@@ -181,19 +183,20 @@ def adaptive_summary(results: pd.DataFrame, manifest: SweepManifest, saved: dict
     mode = settings.mode
     failed = results[FAILURE.failed_rows(results)]
     max_weight = saved.get("max_weight") or math.inf
-    first = failed.run_index.idxmin() if len(failed) else None
+    first = failed[RowCol.run_index].idxmin() if len(failed) else None
     common = {
         "mode": mode,
         "sweep": manifest.sweep_name,
-        "controller": saved.get("controller", results.controller.iloc[0]),
+        "controller": saved.get("controller", results[RowCol.controller].iloc[0]),
         "runs": len(results),
-        "counts": {s: int((results.status == s).sum()) for s in ("ok", "error", "timeout")},
+        "counts": {s: int((results[RowCol.status] == s).sum()) for s in STATUSES},
         "state": saved.get("state", manifest.status),
         "score": settings.score,
-        "batches": int(results.batch.max()) + 1,
+        "batches": int(results[RowCol.batch].max()) + 1,
         "failures": len(failed),
-        "first_failure_run": None if first is None else int(failed.run_index.min()) + 1,
-        "first_failure_run_id": None if first is None else failed.loc[first, "run_id"],
+        "first_failure_run": (None if first is None
+                              else int(failed[RowCol.run_index].min()) + 1),
+        "first_failure_run_id": None if first is None else failed.loc[first, RowCol.run_id],
         "outcomes": outcome_counts(results),
         "failure_modes": described_modes(results, sweep_params(manifest), sweep_dir,
                                          max_weight),

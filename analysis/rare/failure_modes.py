@@ -51,6 +51,7 @@ from scipy import sparse, special
 from scipy.spatial import cKDTree
 
 from analysis.measures.numbers import number_text
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import collided
 from scenarios.common.plain_json import json_plain
 from scenarios.spec.sweep_spec import PARAM_PREFIX, Param
@@ -115,7 +116,7 @@ def weighed_rows(results: pd.DataFrame) -> pd.Series | None:
     """The rows of a search or estimate whose weights measure the modes' shares: an
     estimate's estimation rows (its P), else every row (a search's: a rough share; it
     estimates nothing)."""
-    estimation = results.phase == "estimate"
+    estimation = results[RowCol.phase] == "estimate"
     return estimation if estimation.any() else None
 
 
@@ -131,10 +132,11 @@ def mode_lines(modes: list[dict], shown: int, rest: str) -> list[str]:
 def run_kinds(results: pd.DataFrame, failed: pd.Series) -> pd.Series:
     """How each failed run failed: ``collision_with``, else its status, else its
     outcome (``stuck``); empty for the rest."""
-    kind = np.where(results.status != "ok", results.status.astype(str),
+    status = results[RowCol.status]
+    kind = np.where(status != "ok", status.astype(str),
                     np.where(collided(results),
-                             results.collision_with.astype(str),
-                             results.get("outcome", pd.Series("", index=results.index))
+                             results[RowCol.collision_with].astype(str),
+                             results.get(RowCol.outcome, pd.Series("", index=results.index))
                              .fillna("").astype(str)))
     return pd.Series(np.where(failed, kind, ""), index=results.index)
 
@@ -145,7 +147,8 @@ def failure_modes(results: pd.DataFrame, params: Sequence[Param], failed: pd.Ser
     ``p.<path>`` columns; the other rows are the runs that did not fail that way),
     the heaviest first and ``other`` last. ``weighed``: the rows whose ``weight``
     counts toward the shares (default all; without a ``weight`` column, none)."""
-    results = results.sort_values("run_index") if "run_index" in results else results
+    results = (results.sort_values(RowCol.run_index) if RowCol.run_index in results
+               else results)
     failed = failed.reindex(results.index).fillna(False).astype(bool)
     if not failed.any():
         return []
@@ -163,7 +166,8 @@ def failure_modes(results: pd.DataFrame, params: Sequence[Param], failed: pd.Ser
         members = results[labels == label]
         first = members.iloc[0]
         modes.append(FailureMode(
-            outcome=kinds[members.index[0]], runs=len(members), run_ids=tuple(members.run_id),
+            outcome=kinds[members.index[0]], runs=len(members),
+            run_ids=tuple(members[RowCol.run_id]),
             discrete={p.path: json_plain(first[PARAM_PREFIX + p.path]) for p in choices},
             ranges={p.path: (float(members[PARAM_PREFIX + p.path].min()),
                              float(members[PARAM_PREFIX + p.path].max())) for p in ordinal},
@@ -183,10 +187,10 @@ def _points(results: pd.DataFrame, params: Sequence[Param]) -> np.ndarray:
 def _shares(results: pd.DataFrame, failed: pd.Series, labels: pd.Series,
             weighed: pd.Series | None) -> dict | None:
     """Each label's share of the weighted failures; None when nothing is weighed."""
-    if "weight" not in results:
+    if RowCol.weight not in results:
         return None
     counted = pd.Series(True, index=results.index) if weighed is None else weighed
-    weights = results.weight.astype(float).where(counted & failed, 0.0)
+    weights = results[RowCol.weight].astype(float).where(counted & failed, 0.0)
     total = float(weights.sum())
     if not total > 0:
         return None
@@ -200,7 +204,7 @@ def _fold_light(modes: list[FailureMode], results: pd.DataFrame) -> list[Failure
         return modes
     heavy = [m for m in modes if m not in light]
     ids = set().union(*(m.run_ids for m in light))
-    run_ids = tuple(r for r in results.run_id if r in ids)
+    run_ids = tuple(r for r in results[RowCol.run_id] if r in ids)
     outcomes: dict[str, int] = {}
     for m in light:
         outcomes[m.outcome] = outcomes.get(m.outcome, 0) + m.runs

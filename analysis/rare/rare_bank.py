@@ -29,6 +29,7 @@ import pandas as pd
 from scipy import special
 
 from analysis.measures.failure_event import FAILURE
+from analysis.measures.row_columns import RowCol
 from scenarios import CATALOG_DIR
 from scenarios.common.file_read import read_json
 from scenarios.spec.sweep_spec import PARAM_PREFIX, Param
@@ -315,16 +316,18 @@ def sampled_runs(case: Problem, mode: str, seed: int, max_runs: int) -> pd.DataF
         phase = "estimate" if mode == "estimate" and not loop.adapting else "adapt"
         weights, scores = np.exp(loop.log_weights(z)), case.score(z)
         loop.tell(z, scores)
-        parts.append(pd.DataFrame({"phase": phase, "weight": weights, "score": scores,
+        parts.append(pd.DataFrame({RowCol.phase: phase, RowCol.weight: weights,
+                                   RowCol.score: scores,
                                    **{PARAM_PREFIX + p.path: z[:, k]
                                       for k, p in enumerate(normal_params(case.dims))}}))
     runs = pd.concat(parts, ignore_index=True)
     failed = FAILURE.failed_rows(runs)
     kinds = (case.kinds(normal_scores(runs, case.dims)) if case.kinds is not None
              else np.full(len(runs), "failure"))
-    return runs.assign(run_id=[f"r{i}" for i in range(len(runs))], run_index=runs.index,
-                       status="ok", collision=failed,
-                       collision_with=np.where(failed, kinds, None))
+    return runs.assign(**{RowCol.run_id: [f"r{i}" for i in range(len(runs))],
+                          RowCol.run_index: runs.index, RowCol.status: "ok",
+                          RowCol.collision: failed,
+                          RowCol.collision_with: np.where(failed, kinds, None)})
 
 
 def normal_params(dims: int) -> list[Param]:

@@ -7,6 +7,8 @@ from __future__ import annotations
 import base64
 import html
 
+from analysis.measures.row_columns import RowCol
+
 CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1300px; color: #222; }
 table { border-collapse: collapse; margin: 1em 0; }
@@ -68,9 +70,10 @@ def markdown_table(rows: list[list[str]]) -> list[str]:
 
 def row_outcome(row: dict) -> str:
     """How a run (a record) ended, in words."""
-    if row["status"] != "ok":
-        return f"{row['status']}: {row['error']}"
-    outcome = row.get("outcome") or ("collided" if row["collision"] else "no collision")
-    if row["collision"]:
-        outcome += f" with {row['collision_with']} at {row['collision_time_s']:.2f} s"
+    if row[RowCol.status] != "ok":
+        return f"{row[RowCol.status]}: {row[RowCol.error]}"
+    outcome = row.get(RowCol.outcome) or ("collided" if row[RowCol.collision] else "no collision")
+    if row[RowCol.collision]:
+        outcome += (f" with {row[RowCol.collision_with]} at "
+                    f"{row[RowCol.collision_time_s]:.2f} s")
     return outcome

@@ -13,7 +13,8 @@ import pandas as pd
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from analysis.measures.run_outcome import STUCK
+from analysis.measures.row_columns import RowCol
+from analysis.measures.run_outcome import STATUSES, STUCK
 from analysis.rare.failure_modes import OTHER
 from analysis.stats.rates import (
     HIT_ORDER,
@@ -71,16 +72,17 @@ def failures_by_parameter(results: pd.DataFrame, column: str, method: Method = "
     differ by colour and marker and are nudged apart along x, so none hides another."""
     table = outcomes_by(results, column, method)
     shown = [o for o in FAILED_OUTCOMES
-             if o == "collided" or table[table.outcome == o].runs.sum() > 0]
+             if o == "collided" or table[table[RowCol.outcome] == o].runs.sum() > 0]
     fig = Figure(figsize=(4.2 * len(shown) + 1.6, 3.8))
     axes = np.atleast_1d(fig.subplots(1, len(shown), sharex=True, sharey=True))
-    controllers = list(dict.fromkeys(results.controller))
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
     xs = _positions(table.group.drop_duplicates())[0]
     span = float(np.ptp(xs)) if len(xs) > 1 else 1.0
     categories: list[str] = []
     for ax, outcome in zip(axes, shown, strict=True):
         for i, controller in enumerate(controllers):
-            rows = table[(table.controller == controller) & (table.outcome == outcome)]
+            rows = table[(table[RowCol.controller] == controller)
+                         & (table[RowCol.outcome] == outcome)]
             x, categories = _positions(rows.group)
             style = {"marker": MARKERS[i % len(MARKERS)], "label": controller, "alpha": 0.85}
             rate = rows.rate.to_numpy(dtype=float)
@@ -109,11 +111,12 @@ def collided_heatmap(results: pd.DataFrame, x: str, y: str, controller: str) -> 
     """The share of every run of ``controller`` that collided, over two parameters (a
     cell without a run says "no data"; a cell whose runs got stuck or ended without an
     outcome says how many: no collision there is no safety)."""
-    mine = results[results.controller == controller]
+    mine = results[results[RowCol.controller] == controller]
     all_x, all_y = group_values(results[x], 8), group_values(results[y], 8)
-    failed = run_outcomes(mine) if "outcome" in mine else pd.Series("", index=mine.index)
+    failed = run_outcomes(mine) if RowCol.outcome in mine else pd.Series("", index=mine.index)
     cells = mine.assign(_x=all_x[mine.index], _y=all_y[mine.index],
-                        _collided=(mine.status == "ok") & mine.collision.astype(bool),
+                        _collided=((mine[RowCol.status] == "ok")
+                                   & mine[RowCol.collision].astype(bool)),
                         _stuck=failed == STUCK, _failed=failed == NO_OUTCOME)
     grouped = cells.groupby(["_y", "_x"], observed=True)
 
@@ -154,18 +157,18 @@ OUTCOME_STYLE = {"completed": ("tab:green", "o"), "collided": ("tab:red", "X"),
 
 def run_outcomes(results: pd.DataFrame) -> pd.Series:
     """Each run's outcome, :data:`NO_OUTCOME` for errors and timeouts."""
-    return results.outcome.where(results.status == "ok", NO_OUTCOME)
+    return results[RowCol.outcome].where(results[RowCol.status] == "ok", NO_OUTCOME)
 
 
 def outcome_bars(results: pd.DataFrame) -> bytes:
     """How each controller's runs ended, as shares of all its runs (stacked bars)."""
-    controllers = list(dict.fromkeys(results.controller))
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
     outcomes = run_outcomes(results)
     fig = Figure(figsize=(7, 0.6 * len(controllers) + 1.6))
     ax = fig.subplots()
     left = np.zeros(len(controllers))
     for name, (color, _) in OUTCOME_STYLE.items():
-        share = np.array([(outcomes[results.controller == c] == name).mean()
+        share = np.array([(outcomes[results[RowCol.controller] == c] == name).mean()
                           for c in controllers])
         ax.barh(controllers, share, left=left, color=color, label=name,
                 hatch="//" if name == "no outcome" else None)
@@ -199,13 +202,13 @@ def separating_parameters(results: pd.DataFrame, columns: list[str]) -> list[str
 def failure_map(results: pd.DataFrame, x: str, y: str | None) -> bytes:
     """Every run's outcome over the two parameters that separate failures best, one
     panel per controller (with one parameter, runs are spread over y by outcome)."""
-    controllers = list(dict.fromkeys(results.controller))
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
     fig = Figure(figsize=(4.2 * len(controllers), 3.8))
     axes = np.atleast_1d(fig.subplots(1, len(controllers), sharex=True, sharey=True))
     outcomes = run_outcomes(results)
     names = list(OUTCOME_STYLE)
     for ax, controller in zip(axes, controllers, strict=True):
-        mine = results.controller == controller
+        mine = results[RowCol.controller] == controller
         for name, (color, marker) in OUTCOME_STYLE.items():
             rows = results[mine & (outcomes == name)]
             ys = rows[y] if y else np.full(len(rows), names.index(name))
@@ -230,9 +233,9 @@ DRAC_SHOWN_MPS2 = 20.0
 def distributions(results: pd.DataFrame) -> bytes:
     """Histograms of the minimum gap to the obstacle, the minimum TTC and (results
     that have it) the maximum DRAC, per controller."""
-    ok = results[results.status == "ok"]
-    panels = [("min_gap_obstacle_m", "[m]", None), ("min_ttc_s", "[s]", None),
-              ("max_drac_mps2", f"[m/s^2], {DRAC_SHOWN_MPS2:g} and more in the last bin",
+    ok = results[results[RowCol.status] == "ok"]
+    panels = [(RowCol.min_gap_obstacle_m, "[m]", None), (RowCol.min_ttc_s, "[s]", None),
+              (RowCol.max_drac_mps2, f"[m/s^2], {DRAC_SHOWN_MPS2:g} and more in the last bin",
                DRAC_SHOWN_MPS2)]
     panels = [panel for panel in panels if panel[0] in ok.columns]
     fig = Figure(figsize=(5 * len(panels), 3.8))
@@ -240,7 +243,7 @@ def distributions(results: pd.DataFrame) -> bytes:
     for ax, (column, unit, cap) in zip(axes, panels, strict=True):
         values = ok[column].dropna().clip(upper=cap)  # no cap: upper=None clips nothing
         top = cap or (max(float(values.max()), 1.0) if len(values) else 1.0)
-        for controller, rows in ok.groupby("controller", sort=False):
+        for controller, rows in ok.groupby(RowCol.controller, sort=False):
             ax.hist(rows[column].dropna().clip(upper=cap), bins=np.linspace(0, top, 25),
                     alpha=0.5, label=controller)
         ax.set(xlabel=f"{column} {unit}", ylabel="runs")
@@ -254,19 +257,22 @@ def distributions(results: pd.DataFrame) -> bytes:
 def collision_breakdown(results: pd.DataFrame) -> bytes:
     """How the runs failed, per controller: collisions by what was hit, the runs that
     got stuck, and the error and timeout runs."""
-    controllers = list(dict.fromkeys(results.controller))
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
     fig = Figure(figsize=(7, 3.5))
     ax = fig.subplots()
     bottom = np.zeros(len(controllers))
-    ok = results[results.status == "ok"]
-    bars = [(kind, ok[ok.collision_with == kind]) for kind in HIT_ORDER]
-    if "outcome" in ok:
-        bars.append((STUCK, ok[ok.outcome == STUCK]))
-    bars += [(status, results[results.status == status]) for status in ("error", "timeout")]
+    status = results[RowCol.status]
+    ok = results[status == "ok"]
+    bars = [(kind, ok[ok[RowCol.collision_with] == kind]) for kind in HIT_ORDER]
+    if RowCol.outcome in ok:
+        bars.append((STUCK, ok[ok[RowCol.outcome] == STUCK]))
+    no_outcome = [s for s in STATUSES if s != "ok"]  # error, timeout
+    bars += [(s, results[status == s]) for s in no_outcome]
     for label, rows in bars:
-        counts = rows.controller.value_counts().reindex(controllers, fill_value=0).to_numpy()
+        counts = (rows[RowCol.controller].value_counts().reindex(controllers, fill_value=0)
+                  .to_numpy())
         ax.bar(controllers, counts, bottom=bottom, label=label,
-               hatch="//" if label in ("error", "timeout") else None)
+               hatch="//" if label in no_outcome else None)
         bottom += counts
     ax.set(ylabel="runs", title="How the runs failed: collisions by what was hit, stuck, "
                                 "errors and timeouts")
@@ -305,14 +311,14 @@ def sampling_path(results: pd.DataFrame, x: str, y: str, modes: list[dict],
     of their own, and the stuck runs (``stuck_ids``) marked."""
     fig = Figure(figsize=(7, 5))
     ax = fig.subplots()
-    points = ax.scatter(results[x], results[y], c=results.batch, cmap="viridis", s=10)
+    points = ax.scatter(results[x], results[y], c=results[RowCol.batch], cmap="viridis", s=10)
     colours = colormaps["tab10"].colors
     for i, mode in enumerate(modes, start=1):
-        runs = results[results.run_id.isin(mode["run_ids"])]
+        runs = results[results[RowCol.run_id].isin(mode["run_ids"])]
         colour = "0.5" if mode["outcome"] == OTHER else colours[(i - 1) % len(colours)]
         ax.scatter(runs[x], runs[y], facecolors="none", edgecolors=[colour], s=46,
                    linewidths=1.4, label=f"mode {i}: {mode['outcome']}")
-    stuck = results[results.run_id.isin(stuck_ids)]
+    stuck = results[results[RowCol.run_id].isin(stuck_ids)]
     if len(stuck):
         ax.scatter(stuck[x], stuck[y], marker="x", color="tab:orange", s=30, label="stuck")
     fig.colorbar(points, ax=ax, label="batch")

@@ -12,6 +12,7 @@ from pathlib import Path
 import pandas as pd
 
 from analysis.measures.commands import replay_command
+from analysis.measures.row_columns import RowCol
 from analysis.measures.sweep_manifest import SweepManifest
 from analysis.rare.adaptive_summary import RareSummary, adaptive_summary, saved_summary
 from analysis.rare.failure_modes import mode_lines
@@ -47,7 +48,7 @@ class _Page:
                      if len(self.bad) > len(self.listed) else None)
 
     def replay(self, row: dict) -> str:
-        return replay_command(self.sweep_dir, row["run_id"])
+        return replay_command(self.sweep_dir, row[RowCol.run_id])
 
     def markdown(self) -> str:
         md = [f"# {self.title}", "", *self.lines, "", *self.terms, "", "## Failure modes", "",
@@ -56,7 +57,7 @@ class _Page:
               STUCK_WORDS, "",
               *(markdown_table(self.stuck) if len(self.stuck) > 1 else ["No run was stuck."]),
               "", "## Runs to look at", "", rare_report.LOOK_AT, ""]
-        md += [f"- `{row['run_id']}` (batch {row['batch']}): {row_outcome(row)} — "
+        md += [f"- `{row[RowCol.run_id]}` (batch {row[RowCol.batch]}): {row_outcome(row)} — "
                f"`{self.replay(row)}`" for row in self.listed]
         md += [f"- {self.more}"] if self.more else []
         return "\n".join(md) + "\n"
@@ -70,7 +71,7 @@ class _Page:
                  table_html(self.stuck) if len(self.stuck) > 1 else "<p>No run was stuck.</p>"]
         parts += [figure_html(t, png) for t, png in images]
         table = [["run", "batch", "outcome", "replay"]]
-        table += [[row["run_id"], str(row["batch"]), row_outcome(row), self.replay(row)]
+        table += [[row[RowCol.run_id], str(row[RowCol.batch]), row_outcome(row), self.replay(row)]
                   for row in self.listed]
         parts += [f"<h2>Runs to look at ({len(self.bad)})</h2>",
                   f"<p>{html.escape(rare_report.LOOK_AT)}</p>", table_html(table),

@@ -15,6 +15,7 @@ import math
 import pandas as pd
 
 from analysis.measures.failure_event import FAILURE
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import STUCK, failed_or_collided, outcomes_text
 from analysis.rare.adaptive_summary import RareSummary, convergence
 from analysis.rare.failure_modes import OTHER, region_words
@@ -33,12 +34,13 @@ def runs_to_look_at(results: pd.DataFrame, estimate: bool = False) -> pd.DataFra
     collisions and stuck runs; in an estimate, the estimation runs that count in P (those
     of the failure event) by weight, the largest share of P first, before the rest;
     otherwise by run."""
-    stuck = results.outcome == STUCK if "outcome" in results else False
+    stuck = results[RowCol.outcome] == STUCK if RowCol.outcome in results else False
     bad = results[failed_or_collided(results) | stuck]
-    counted = (bad.phase == "estimate") & FAILURE.failed_rows(bad) & estimate
-    key = pd.DataFrame({"ok": bad.status == "ok", "counted": counted,
-                        "weight": bad.weight.where(counted, 0.0), "run": bad.run_index})
-    order = key.sort_values(["ok", "counted", "weight", "run"],
+    counted = (bad[RowCol.phase] == "estimate") & FAILURE.failed_rows(bad) & estimate
+    key = pd.DataFrame({"ok": bad[RowCol.status] == "ok", "counted": counted,
+                        "counted_weight": bad[RowCol.weight].where(counted, 0.0),
+                        RowCol.run_index: bad[RowCol.run_index]})
+    order = key.sort_values(["ok", "counted", "counted_weight", RowCol.run_index],
                             ascending=[True, False, False, True], kind="stable").index
     return bad.loc[order]
 

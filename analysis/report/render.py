@@ -25,7 +25,9 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from analysis.measures.metrics import central_range_m
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import rest_step
+from analysis.measures.trace_columns import TraceCol, TraceMeta, VehicleMeta
 from analysis.measures.trace_file import Trace
 from scenarios.scene.boxes import box_corners
 from scenarios.scene.road_geometry import RoadGeometry
@@ -120,46 +122,53 @@ def stop_line_segments(road: RoadGeometry, stops: list) -> np.ndarray:
     return np.stack([road.xy_at(s_m, -half_m), road.xy_at(s_m, half_m)], axis=1)
 
 
+def recorded_outcome(metadata: dict) -> str | None:
+    """The outcome a trace's metadata records of its run (None: it records none)."""
+    return metadata.get(TraceMeta.run, {}).get(RowCol.outcome)
+
+
 def scene_from_trace(trace: Trace, metadata: dict) -> Scene:
-    spec = ScenarioSpec.from_plain(metadata["spec"])
-    plain_road = metadata["road"]
+    spec = ScenarioSpec.from_plain(metadata[TraceMeta.spec])
+    plain_road = metadata[TraceMeta.road]
     road = RoadGeometry(np.array(plain_road["center_xy"]), plain_road["lanes"],
                         plain_road["lane_width_m"])
-    vehicle = metadata["vehicle"]
-    ego = trace.body_boxes(vehicle["center_ahead_of_rear_axle_m"], vehicle["length_m"],
-                           vehicle["width_m"])
+    vehicle = metadata[TraceMeta.vehicle]
+    ego = trace.body_boxes(vehicle[VehicleMeta.center_ahead_of_rear_axle_m],
+                           vehicle[VehicleMeta.length_m], vehicle[VehicleMeta.width_m])
     f = trace.floats
+    yaw = f[TraceCol.yaw_rad]
     mount = spec.lidar.mount_ahead_m
-    mount_xy = np.column_stack([f["x_m"] + mount * np.cos(f["yaw_rad"]),
-                                f["y_m"] + mount * np.sin(f["yaw_rad"])])
+    mount_xy = np.column_stack([f[TraceCol.x_m] + mount * np.cos(yaw),
+                                f[TraceCol.y_m] + mount * np.sin(yaw)])
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)
     ranges = np.array(trace.lidar, dtype=float).reshape(len(trace), -1)
     lane_lines, edges = road_lines(road, plain_road.get("edge_segments"))
-    obstacles = (np.array(metadata["obstacle_boxes"], float).reshape(-1, 5)
-                 if "obstacle_boxes" in metadata else obstacle_boxes(spec, road))
-    run = metadata.get("run", {})
+    obstacles = (np.array(metadata[TraceMeta.obstacle_boxes], float).reshape(-1, 5)
+                 if TraceMeta.obstacle_boxes in metadata else obstacle_boxes(spec, road))
+    run = metadata.get(TraceMeta.run, {})
+    outcome, termination = recorded_outcome(metadata), run.get(RowCol.termination, "?")
+    hit, stood_for = run.get(RowCol.collision_with, "none"), run.get(RowCol.stood_for)
     traffic = [np.asarray(row, float).reshape(-1, 5) for row in trace.traffic]
     return Scene(
-        t_s=f["t_s"], step=np.arange(len(trace)), ego=ego, traffic=traffic,
+        t_s=f[TraceCol.t_s], step=np.arange(len(trace)), ego=ego, traffic=traffic,
         people=[people_xy(boxes, classes)
                 for boxes, classes in zip(traffic, trace.traffic_class, strict=True)],
         obstacles=obstacles, standing_people=standing_people_xy(spec, obstacles),
         mount_xy=mount_xy,
-        beam_yaw_rad=f["yaw_rad"][:, None] + angles[None, :], ranges_m=ranges,
-        max_range_m=spec.lidar.max_range_m, phase=list(trace.phase), speed_mps=f["speed_mps"],
-        lane_offset_m=f["lane_offset_m"],
-        view_yaw_rad=road_heading_rad(f["yaw_rad"], f["heading_error_rad"]),
+        beam_yaw_rad=yaw[:, None] + angles[None, :], ranges_m=ranges,
+        max_range_m=spec.lidar.max_range_m, phase=list(trace.phase),
+        speed_mps=f[TraceCol.speed_mps], lane_offset_m=f[TraceCol.lane_offset_m],
+        view_yaw_rad=road_heading_rad(yaw, f[TraceCol.heading_error_rad]),
         central_range_m=np.array([central_range_m(r, spec.controller.detect_beams)
                                   for r in ranges]),
         lane_lines=lane_lines, edges=edges,
         stop_lines=stop_line_segments(road, plain_road.get("stops", [])),
         signals=list(trace.signals),
         title=(f"{spec.scenario.name}  controller {spec.controller.label}  seed "
-               f"{spec.scenario.seed}  ({run.get('outcome') or run.get('termination', '?')}"
-               + (f", hit {run['collision_with']}" if run.get("collision_with", "none") != "none"
-                  else "")
-               + (f", stood for {run['stood_for']}" if run.get("stood_for") else "")
-               + f"; ended by {run.get('termination', '?')})"),
+               f"{spec.scenario.seed}  ({outcome or termination}"
+               + (f", hit {hit}" if hit != "none" else "")
+               + (f", stood for {stood_for}" if stood_for else "")
+               + f"; ended by {termination})"),
     )
 
 

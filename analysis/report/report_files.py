@@ -11,7 +11,8 @@ from xml.etree import ElementTree
 
 import pandas as pd
 
-from analysis.measures.sweep_manifest import MANIFEST_FILE, SweepManifest
+from analysis.measures.row_columns import RowCol
+from analysis.measures.sweep_manifest import MANIFEST_FILE, READ_KEYS, SweepManifest
 from analysis.report.page_parts import row_outcome
 from analysis.stats.gate import Gate
 from scenarios.common.errors import SpecError
@@ -19,10 +20,10 @@ from scenarios.common.file_read import read_json, read_parquet, require_keys
 from scenarios.common.plain_json import json_plain, json_scalar
 
 #: the result columns the report reads (a results file without one is another version's)
-RESULT_COLUMNS = ("run_id", "run_index", "sample", "controller", "backend", "status", "error",
-                  "collision", "collision_with", "collision_time_s", "min_gap_obstacle_m",
-                  "min_ttc_s", "wall_time_s")
-_MANIFEST_KEYS = {"sweep.sweep.name": str}
+RESULT_COLUMNS = (RowCol.run_id, RowCol.run_index, RowCol.sample, RowCol.controller,
+                  RowCol.backend, RowCol.status, RowCol.error, RowCol.collision,
+                  RowCol.collision_with, RowCol.collision_time_s, RowCol.min_gap_obstacle_m,
+                  RowCol.min_ttc_s, RowCol.wall_time_s)
 #: a report's files in the sweep directory (the page's is the default, --out moves it)
 HTML_FILE, SUMMARY_FILE, MARKDOWN_FILE = "report.html", "summary.json", "report.md"
 
@@ -53,15 +54,15 @@ def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, SweepManifest]:
     manifest_path = sweep_dir / MANIFEST_FILE
     if not manifest_path.exists():
         raise ReportError("DIR", f"{sweep_dir} is not a sweep directory (no manifest.json)")
-    manifest = require_keys(read_json(manifest_path, "the sweep manifest"), _MANIFEST_KEYS,
+    manifest = require_keys(read_json(manifest_path, "the sweep manifest"), READ_KEYS,
                             manifest_path, "the sweep manifest")
     files = [sweep_dir / "results.parquet"] + sorted((sweep_dir / "parts").glob("*.parquet"))
     frames = [read_parquet(f, "the results file", required=RESULT_COLUMNS).to_pandas()
               for f in files if f.exists()]
     if not frames:
         raise ReportError("DIR", f"{sweep_dir} has no results yet")
-    results = (pd.concat(frames, ignore_index=True).drop_duplicates("run_id")
-               .sort_values("run_index").reset_index(drop=True))
+    results = (pd.concat(frames, ignore_index=True).drop_duplicates(RowCol.run_id)
+               .sort_values(RowCol.run_index).reset_index(drop=True))
     return results, SweepManifest.from_dict(manifest)
 
 
@@ -70,13 +71,15 @@ def junit_xml(results: pd.DataFrame, name: str) -> str:
     suite = ElementTree.Element("testsuite", name=name, tests=str(len(results)))
     n_failures = n_errors = 0
     for row in results.to_dict("records"):
-        case = ElementTree.SubElement(suite, "testcase", classname=f"{name}.{row['controller']}",
-                                      name=row["run_id"],
-                                      time=f"{json_scalar(row['wall_time_s']) or 0:.3f}")
-        if row["status"] != "ok":
+        case = ElementTree.SubElement(suite, "testcase",
+                                      classname=f"{name}.{row[RowCol.controller]}",
+                                      name=row[RowCol.run_id],
+                                      time=f"{json_scalar(row[RowCol.wall_time_s]) or 0:.3f}")
+        if row[RowCol.status] != "ok":
             n_errors += 1
-            ElementTree.SubElement(case, "error", message=row_outcome(row), type=row["status"])
-        elif row["collision"]:
+            ElementTree.SubElement(case, "error", message=row_outcome(row),
+                                   type=row[RowCol.status])
+        elif row[RowCol.collision]:
             n_failures += 1
             ElementTree.SubElement(case, "failure", message=row_outcome(row), type="collision")
     suite.set("failures", str(n_failures))

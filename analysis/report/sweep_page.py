@@ -13,8 +13,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from analysis.measures.commands import export_command, kept_trace, replay_command
+from analysis.measures.commands import replay_command, run_commands
 from analysis.measures.numbers import params_text
+from analysis.measures.row_columns import RowCol
 from analysis.measures.sweep_manifest import SweepManifest
 from analysis.report import plots
 from analysis.report.look_at import (
@@ -79,24 +80,22 @@ def _look_at_tables(bad: pd.DataFrame, sweep_dir: Path, params: list[str],
     head = ["#", "run", "class", "what happened", "parameters", "decisive moment"]
     header = "".join(f"<th>{html.escape(c)}</th>" for c in head)
     parts = []
-    for controller, rows in bad.groupby("controller", sort=False):
+    for controller, rows in bad.groupby(RowCol.controller, sort=False):
         body = []
         for rank_class, shown, more in classes_shown(rows):
             for row in shown:
-                png = thumbnail(sweep_dir, row["run_id"])
+                run_id = row[RowCol.run_id]
+                png = thumbnail(sweep_dir, run_id)
                 picture = ("" if png is None else
-                           f'<img class="thumb" alt="run {html.escape(row["run_id"])}" '
+                           f'<img class="thumb" alt="run {html.escape(run_id)}" '
                            f'src="data:image/png;base64,{base64.b64encode(png).decode()}">')
-                cells = [str(row["rank"]), row["run_id"], row["rank_class"], row["why"],
+                cells = [str(row["rank"]), run_id, row["rank_class"], row["why"],
                          params_text(row, params)]
                 body.append("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
                             + f"<td>{picture}</td></tr>")
-                commands = [("replay", replay_command(sweep_dir, row["run_id"]))]
-                if kept_trace(sweep_dir, row["run_id"]):
-                    commands.append(("export", export_command(sweep_dir, row["run_id"])))
                 body += [f'<tr><td></td><td colspan="{len(head) - 1}">{what}: <code '
                          f'class="command">{html.escape(command)}</code></td></tr>'
-                         for what, command in commands]
+                         for what, command in run_commands(sweep_dir, run_id)]
             if more:
                 body.append(f'<tr class="more"><td></td><td colspan="{len(head) - 1}">'
                             f"{more} more {html.escape(str(rank_class))} in "
@@ -151,14 +150,14 @@ def markdown(summary: SweepSummary, results: pd.DataFrame, sweep_dir: Path,
     sections["traffic"] = [f"{line}\n" for line in not_warnings(warm_state_lines(summary))]
     look_at = [f"{RANKING} {SHOWN_WORDS}", ""]
     params = varying_parameters(results)
-    for controller, rows in bad.groupby("controller", sort=False):
+    for controller, rows in bad.groupby(RowCol.controller, sort=False):
         look_at += ["", f"### {controller} ({len(rows)})", ""]
         for rank_class, shown, more in classes_shown(rows):
-            look_at += [f"{row['rank']}. `{row['run_id']}`: {row['why']}; "
+            look_at += [f"{row['rank']}. `{row[RowCol.run_id]}`: {row['why']}; "
                         f"{params_text(row, params)} — "
-                        f"`{replay_command(sweep_dir, row['run_id'])}`"
-                        + (f"; export: `{export_command(sweep_dir, row['run_id'])}`"
-                           if kept_trace(sweep_dir, row["run_id"]) else "")
+                        + "; ".join(f"`{command}`" if what == "replay" else f"{what}: `{command}`"
+                                    for what, command in run_commands(sweep_dir,
+                                                                      row[RowCol.run_id]))
                         for row in shown]
             if more:
                 look_at.append(f"- {more} more {rank_class} in [{LIST_FILE}]({LIST_FILE})")
@@ -187,7 +186,7 @@ def figures(results: pd.DataFrame, by: list[str], method: Method) -> list[tuple[
              plots.failures_by_parameter(results, c, method)) for c in by]
     numeric = [c for c in by if pd.api.types.is_numeric_dtype(results[c])]
     if len(numeric) >= 2:
-        for controller in dict.fromkeys(results.controller):
+        for controller in dict.fromkeys(results[RowCol.controller]):
             out.append((f"Collided over {numeric[0]} and {numeric[1]}, {controller}",
                         plots.collided_heatmap(results, numeric[0], numeric[1], controller)))
     out.append(("Safety margins: minimum gap, minimum TTC, maximum DRAC",
@@ -253,7 +252,7 @@ def _by_rows(summary: SweepSummary, rows: list[dict]) -> list[list[str]]:
     deff = shares_traffic(summary)
     table = [["group", "controller", "ok runs", "collisions", "rate", "95% interval",
               "failed", *([DEFF_HEAD] if deff else [])]]
-    return table + [[r["group"], r["controller"], str(r["n_ok"]), str(r["collisions"]),
+    return table + [[r["group"], r[RowCol.controller], str(r["n_ok"]), str(r["collisions"]),
                      percent(json_scalar(r["collision_rate"])),
                      f"{percent(r['low'])} - {percent(r['high'])}", str(r["n_failed"]),
                      *([deff_text(r["deff"])] if deff else [])]
@@ -276,7 +275,7 @@ def write_sweep_report(sweep_dir: Path, results: pd.DataFrame, manifest: SweepMa
     warm_ups = read_settling(sweep_dir)
     summary = dataclasses.replace(summary, settling=settling_summary(
         warm_ups, on_config_clock=bool(summary.sumo_config)), sweep_dir=str(sweep_dir))
-    counted = results[results["sample"].isin(shared)]
+    counted = results[results[RowCol.sample].isin(shared)]
     images = figures(counted, by, method)
     list_path, bad = sweep_dir / LIST_FILE, ranked_runs(results)
     look_at_list(bad, varying_parameters(results),

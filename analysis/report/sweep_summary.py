@@ -8,6 +8,8 @@ import itertools
 
 import pandas as pd
 
+from analysis.measures.row_columns import RowCol
+from analysis.measures.run_outcome import STATUSES
 from analysis.measures.sweep_manifest import SweepManifest
 from analysis.measures.world_sharing import world_sharing
 from analysis.report.report_files import ReportError
@@ -58,10 +60,10 @@ def coverage(results: pd.DataFrame, manifest: SweepManifest, shared: pd.Index) -
     """The :class:`Coverage` of the results (``shared``: the samples compared)."""
     planned = manifest.runs
     missing = max(0, planned - len(results)) if planned is not None else None
-    compared = results["sample"].isin(shared)
+    compared = results[RowCol.sample].isin(shared)
     return Coverage(planned, len(results), missing,
                     bool(missing) or manifest.status not in (None, "complete"),
-                    manifest.status, int(results["sample"].nunique()), len(shared),
+                    manifest.status, int(results[RowCol.sample].nunique()), len(shared),
                     int((~compared).sum()))
 
 
@@ -125,20 +127,20 @@ def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str],
     """Everything the report says. Controllers are compared on the ``shared`` samples,
     those every one of them ran (:func:`analysis.stats.verdicts.shared_samples`: all of them,
     unless the sweep is partial or lost runs)."""
-    counted = results[results["sample"].isin(shared)]
-    controllers = list(dict.fromkeys(results.controller))
+    counted = results[results[RowCol.sample].isin(shared)]
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
     grouped = {}
     for column in by:
         table = rates_by(counted, column, method)
         grouped[column] = [{**row, "group": group_label(row["group"]),
                             "collision_rate": json_scalar(row["collision_rate"])}
                            for row in table.to_dict(orient="records")]
-    status = results.status.value_counts()
+    status = results[RowCol.status].value_counts()
     return SweepSummary(
         sweep=manifest.sweep_name,
         runs_planned=manifest.runs,
         runs=len(results),
-        counts={s: int(status.get(s, 0)) for s in ("ok", "error", "timeout")},
+        counts={s: int(status.get(s, 0)) for s in STATUSES},
         sweep_status=manifest.status,
         coverage=coverage(results, manifest, shared),
         interval=method,
@@ -148,8 +150,8 @@ def build_summary(results: pd.DataFrame, manifest: SweepManifest, by: list[str],
         by_controller=by_controller(counted),
         # side by side when a sweep ran on more than one world backend
         by_backend=({str(b): by_controller(rows) for b, rows in
-                        counted.groupby("backend", sort=False)}
-                       if counted.backend.nunique() > 1 else {}),
+                        counted.groupby(RowCol.backend, sort=False)}
+                       if counted[RowCol.backend].nunique() > 1 else {}),
         paired=[mcnemar(counted, a, b) for a, b in itertools.combinations(controllers, 2)],
         # the same where braking alone could have stopped the car before the obstacle
         stop_possible=stop_possible_summary(counted, controllers),

@@ -9,6 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from analysis.measures.commands import draw_overlap_command, replay_command
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import collided
 from analysis.measures.world_audit import ROLE_TEXT
 from scenarios.scene.snapshot import OTHER_EGO, OTHER_OBSTACLE
@@ -22,67 +23,71 @@ def world_summary(results: pd.DataFrame) -> dict:
     """The world audit (runs with ``world_overlaps``) and, per controller, its
     collisions by who moved into whom and the part of the ego hit (sweeps made before
     these columns: not recorded)."""
-    if "world_overlaps" not in results.columns:
+    if RowCol.world_overlaps not in results.columns:
         return {"recorded": False}
-    ok = results[results.status == "ok"]
-    overlaps = ok.world_overlaps.fillna(0)
-    hits = ok[collided(ok) & ok.collision_role.notna()]
-    classes = (hits[hits.collision_vclass.notna() & (hits.collision_vclass != PEDESTRIAN)]
-               if "collision_vclass" in hits.columns
-               else hits.iloc[:0].assign(collision_vclass=None))
-    others = (hits[hits.collision_body.isin(list(OTHER_RUNS_BODIES))]
-              if "collision_body" in hits.columns else hits.iloc[:0])
+    ok = results[results[RowCol.status] == "ok"]
+    overlaps = ok[RowCol.world_overlaps].fillna(0)
+    hits = ok[collided(ok) & ok[RowCol.collision_role].notna()]
+    vclass, body = RowCol.collision_vclass, RowCol.collision_body
+    classes = (hits[hits[vclass].notna() & (hits[vclass] != PEDESTRIAN)]
+               if vclass in hits.columns else hits.iloc[:0].assign(**{vclass: None}))
+    others = (hits[hits[body].isin(list(OTHER_RUNS_BODIES))]
+              if body in hits.columns else hits.iloc[:0])
     classes = classes.drop(index=others.index, errors="ignore")  # traffic's classes only
-    sumo = ok.sumo_overlaps.fillna(0) if "sumo_overlaps" in ok.columns else overlaps * 0
+    sumo = (ok[RowCol.sumo_overlaps].fillna(0) if RowCol.sumo_overlaps in ok.columns
+            else overlaps * 0)
+    controller = RowCol.controller
     return {"recorded": True, "runs_with_overlaps": int((overlaps > 0).sum()),
             "overlap_steps": int(overlaps.sum()),
             "first_overlap_run": _first_run(ok, overlaps),
-            **_first_overlap(ok, overlaps, "first_overlap"),
+            **_first_overlap(ok, overlaps, RowCol.first_overlap, RowCol.first_overlap_s),
             "runs_with_sumo_overlaps": int((sumo > 0).sum()),
             "sumo_overlap_steps": int(sumo.sum()),
             "first_sumo_overlap_run": _first_run(ok, sumo),
-            **_first_overlap(ok, sumo, "first_sumo_overlap"),
+            **_first_overlap(ok, sumo, RowCol.first_sumo_overlap, RowCol.first_sumo_overlap_s),
             "collisions": {str(c): {str(role): {str(part): int(n) for part, n in
-                                                 by_role.collision_part.value_counts().items()}
-                                    for role, by_role in rows.groupby("collision_role")}
-                           for c, rows in hits.groupby("controller", sort=False)},
+                                                 by_role[RowCol.collision_part]
+                                                 .value_counts().items()}
+                                    for role, by_role in rows.groupby(RowCol.collision_role)}
+                           for c, rows in hits.groupby(controller, sort=False)},
             "vehicle_classes": {str(c): {str(k): int(n) for k, n in
-                                         rows.collision_vclass.value_counts().items()}
-                                for c, rows in classes.groupby("controller", sort=False)},
+                                         rows[vclass].value_counts().items()}
+                                for c, rows in classes.groupby(controller, sort=False)},
             # collisions with another run's ego or obstacle (a shared world)
             "other_runs": {str(c): {str(k): int(n) for k, n in
-                                    rows.collision_body.value_counts().items()}
-                           for c, rows in others.groupby("controller", sort=False)},
+                                    rows[body].value_counts().items()}
+                           for c, rows in others.groupby(controller, sort=False)},
             "red_lights": _red_lights(ok)}
 
 
 def _first_run(ok: pd.DataFrame, steps: pd.Series) -> str | None:
     """The id of the first run with ``steps`` > 0 (None: none)."""
-    return str(ok.run_id[steps > 0].iloc[0]) if (steps > 0).any() else None
+    return str(ok[RowCol.run_id][steps > 0].iloc[0]) if (steps > 0).any() else None
 
 
-def _first_overlap(ok: pd.DataFrame, steps: pd.Series, column: str) -> dict:
-    """The first run's first overlap (``column``: in words; ``column``_s: its time),
-    where the row names it (sweeps before the column: not at all)."""
+def _first_overlap(ok: pd.DataFrame, steps: pd.Series, column: str, time_column: str) -> dict:
+    """The first run's first overlap (``column``: in words; ``time_column``, named
+    ``column``_s: its time), where the row names it (sweeps before the column: not at
+    all)."""
     if column not in ok.columns or not (steps > 0).any():
         return {}
     row = ok[steps > 0].iloc[0]
     if pd.isna(row[column]):
         return {}
-    return {column: str(row[column]), f"{column}_s": float(row[f"{column}_s"])}
+    return {column: str(row[column]), time_column: float(row[time_column])}
 
 
 def _red_lights(ok: pd.DataFrame) -> dict | None:
     """Per controller: runs that crossed a red light, and the crossings (None: the
     sweep predates the column, or no run met a traffic light's red)."""
-    if "red_light_violations" not in ok.columns:
+    if RowCol.red_light_violations not in ok.columns:
         return None
-    counts = ok.red_light_violations.fillna(0)
+    counts = ok[RowCol.red_light_violations].fillna(0)
     if not counts.any():
         return None
     return {str(c): {"runs": int((rows > 0).sum()), "crossings": int(rows.sum()),
                      "of": int(len(rows))}
-            for c, rows in counts.groupby(ok.controller, sort=False)}
+            for c, rows in counts.groupby(ok[RowCol.controller], sort=False)}
 
 
 def world_lines(world: dict, traffic_model: str | None = None,
@@ -112,7 +117,7 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      f"({world['overlap_steps']} steps in all, column world_overlaps): sdc's "
                      "world made something up, and their verdicts are suspect; see one with "
                      f"{replay(world.get('first_overlap_run'))} and report it."
-                     + _overlap_told(world, "first_overlap", sweep_dir))
+                     + _overlap_told(world, RowCol.first_overlap, sweep_dir))
     else:
         lines.append("World audit: no two bodies other than the ego overlapped in any run "
                      "where SUMO's own lanes hold them apart (world_overlaps 0).")
@@ -123,7 +128,7 @@ def world_lines(world: dict, traffic_model: str | None = None,
                      "waiting on a junction's crossing lanes, bicycles through pedestrians); "
                      "that is SUMO's world as it is, not sdc's coupling, and the ego's verdicts "
                      f"stand; to see one: {replay(world['first_sumo_overlap_run'])}."
-                     + _overlap_told(world, "first_sumo_overlap", sweep_dir))
+                     + _overlap_told(world, RowCol.first_sumo_overlap, sweep_dir))
     for controller, roles in world["collisions"].items():
         parts = [f"{ROLE_TEXT.get(role, role)} {sum(by_part.values())} ("
                  + ", ".join(f"{part} {n}" for part, n in sorted(by_part.items())) + ")"

@@ -16,6 +16,7 @@ import dataclasses
 
 import pandas as pd
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import STATUSES
 from analysis.stats.rates import Method, flag_interval, upper_bound_counting_failures
 from analysis.stats.verdicts import completed_runs, percent
@@ -47,7 +48,7 @@ def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None
     upper, lower, effects, completed_effects, reasons = {}, {}, {}, {}, {}
     people, people_effects = {}, {}
     for c in controllers:
-        rows = results[results.controller == c]
+        rows = results[results[RowCol.controller] == c]
         why = []
         if fail_above is not None:
             upper[c], effects[c] = upper_bound_counting_failures(rows, method)
@@ -61,7 +62,7 @@ def gate(results: pd.DataFrame, controllers: list[str], fail_above: float | None
                 why.append(f"collisions with people up to {percent(people[c])}, over "
                            f"--max-pedestrian-rate {max_pedestrian_rate:g}")
         if min_completed is not None:
-            counted = rows[rows.status.isin(STATUSES)]
+            counted = rows[rows[RowCol.status].isin(STATUSES)]
             (lower[c], _), counts = flag_interval(completed_runs(counted), counted, method)
             completed_effects[c] = counts.deff
             if lower[c] < min_completed:

@@ -25,6 +25,7 @@ import pandas as pd
 from scipy import stats
 
 from analysis.measures.numbers import number_text
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import STATUSES, failed_or_collided
 from scenarios.spec.bodies import PEDESTRIAN
 
@@ -32,10 +33,6 @@ Method = Literal["wilson", "clopper-pearson"]
 #: a continuous parameter with more distinct values than this is binned for grouping
 MAX_GROUPS = 12
 ENVELOPE_RATE = 0.05
-#: the column naming the warm state (shared background traffic) a run started from
-WARM_STATE = "warm_state"
-#: the column naming the shared world a run's traffic came from ([sweep] egos_per_world)
-WORLD_ID = "world_id"
 
 
 def wilson_interval(k: float, n: float, confidence: float = 0.95) -> tuple[float, float]:
@@ -148,18 +145,18 @@ def _degrees_of_freedom_factor(n_runs: int, n_clusters: int, confidence: float) 
 
 def warm_states_of(rows: pd.DataFrame) -> pd.Series | None:
     """The warm state each run started from (null: none shared), or None for results
-    from before the :data:`WARM_STATE` column."""
-    return rows[WARM_STATE] if WARM_STATE in rows.columns else None
+    from before the ``warm_state`` column."""
+    return rows[RowCol.warm_state] if RowCol.warm_state in rows.columns else None
 
 
 def traffic_clusters(rows: pd.DataFrame) -> pd.Series | None:
     """The traffic each run shares with others, its cluster in every interval: its warm
-    state, else its shared world (a world without a warm-up shares its traffic's seed;
-    null: its own traffic); None for results with neither column."""
+    state, else its shared world (``world_id``: a world without a warm-up shares its
+    traffic's seed; null: its own traffic); None for results with neither column."""
     states = warm_states_of(rows)
-    if WORLD_ID not in rows.columns:
+    if RowCol.world_id not in rows.columns:
         return states
-    worlds = "world " + rows[WORLD_ID]
+    worlds = "world " + rows[RowCol.world_id]
     return worlds if states is None else states.where(states.notna(), worlds)
 
 
@@ -188,7 +185,7 @@ def warm_state_summary(rows: pd.DataFrame) -> WarmStates | None:
     if states is None:
         return None
     per_controller = rows.assign(_state=states).dropna(subset=["_state"]).groupby(
-        ["controller", "_state"]).size()
+        [RowCol.controller, "_state"]).size()
     sharing = int(per_controller[per_controller > 1].sum())
     return WarmStates(len(rows), int(states.nunique(dropna=True)), sharing, sharing > 0)
 
@@ -242,22 +239,24 @@ class CollisionRate:
 
 def rate_summary(rows: pd.DataFrame) -> CollisionRate:
     """The :class:`CollisionRate` of ``rows``."""
-    ok = rows[rows.status == "ok"]
-    k, n = int(ok.collision.sum()), len(ok)
-    counts = clustered_counts(ok.collision, traffic_clusters(ok))
+    status = rows[RowCol.status]
+    ok = rows[status == "ok"]
+    collision = ok[RowCol.collision]
+    k, n = int(collision.sum()), len(ok)
+    counts = clustered_counts(collision, traffic_clusters(ok))
     wilson = wilson_interval(counts.k_eff, counts.n_eff)
     exact = clopper_pearson_interval(counts.k_eff, counts.n_eff)
     return CollisionRate(
         n_ok=n,
-        n_error=int((rows.status == "error").sum()),
-        n_timeout=int((rows.status == "timeout").sum()),
+        n_error=int((status == "error").sum()),
+        n_timeout=int((status == "timeout").sum()),
         collisions=k,
         collision_rate=k / n if n else None,
         wilson_low=wilson[0], wilson_high=wilson[1],
         cp_low=exact[0], cp_high=exact[1],
         deff=counts.deff, n_eff=float(counts.n_eff),
         warm_states=count_warm_states(ok),
-        collision_with=hits_by_kind(ok.collision_with[ok.collision]),
+        collision_with=hits_by_kind(ok[RowCol.collision_with][collision]),
     )
 
 
@@ -277,7 +276,7 @@ def hits_by_kind(collision_with: pd.Series) -> dict[str, int]:
 def counted_failures(rows: pd.DataFrame) -> pd.Series:
     """Per run of the rows with a known status: did it fail or collide
     (:func:`analysis.measures.run_outcome.failed_or_collided`)?"""
-    return failed_or_collided(rows[rows.status.isin(STATUSES)])
+    return failed_or_collided(rows[rows[RowCol.status].isin(STATUSES)])
 
 
 def upper_bound_counting_failures(rows: pd.DataFrame, method: Method = "wilson",
@@ -289,14 +288,15 @@ def upper_bound_counting_failures(rows: pd.DataFrame, method: Method = "wilson",
     flags = counted_failures(rows)
     if collision_with is not None:
         counted = rows.loc[flags.index]
-        flags = (counted.status != "ok") | (counted.collision_with == collision_with)
+        flags = ((counted[RowCol.status] != "ok")
+                 | (counted[RowCol.collision_with] == collision_with))
     (_, high), counts = flag_interval(flags, rows.loc[flags.index], method)
     return high, counts.deff
 
 
 def by_controller(results: pd.DataFrame) -> dict[str, CollisionRate]:
     return {str(c): rate_summary(rows)
-            for c, rows in results.groupby("controller", sort=False)}
+            for c, rows in results.groupby(RowCol.controller, sort=False)}
 
 
 def group_values(column: pd.Series, max_groups: int = MAX_GROUPS) -> pd.Series:
@@ -328,7 +328,7 @@ def grouped_runs(results: pd.DataFrame, column: str):
         known = ", ".join(c for c in results.columns if c.startswith("p.")) or "none"
         raise KeyError(f"--by: no column {column!r} (swept parameters: {known})")
     groups = group_values(results[column])
-    for (group, controller), rows in results.groupby([groups, "controller"], sort=True,
+    for (group, controller), rows in results.groupby([groups, RowCol.controller], sort=True,
                                                      observed=True):
         yield group, controller, rows
 
@@ -340,7 +340,7 @@ def rates_by(results: pd.DataFrame, column: str, method: Method = "wilson") -> p
     for group, controller, rows in grouped_runs(results, column):
         rate = rate_summary(rows)
         low, high = rate.interval(method)
-        out.append({"group": group, "controller": controller, "n_ok": rate.n_ok,
+        out.append({"group": group, RowCol.controller: controller, "n_ok": rate.n_ok,
                     "n_failed": rate.n_failed, "collisions": rate.collisions,
                     "collision_rate": rate.collision_rate, "low": low, "high": high,
                     "deff": rate.deff, "warm_states": rate.warm_states})
@@ -381,9 +381,10 @@ def paired_test(flags: pd.DataFrame, a: str, b: str) -> PairedTest:
 def mcnemar(results: pd.DataFrame, a: str, b: str) -> PairedTest:
     """:func:`paired_test` of collisions on the samples both controllers ran ok
     (``only_a``: samples where only ``a`` collided)."""
-    ok = results[results.status == "ok"]
-    flags = (ok.pivot_table(index="sample", columns="controller", values="collision",
-                            aggfunc="first") if len(ok) else pd.DataFrame())
+    ok = results[results[RowCol.status] == "ok"]
+    flags = (ok.pivot_table(index=RowCol.sample, columns=RowCol.controller,
+                            values=RowCol.collision, aggfunc="first")
+             if len(ok) else pd.DataFrame())
     return paired_test(flags, a, b)
 
 
@@ -392,10 +393,10 @@ def sample_stop_possible(results: pd.DataFrame) -> pd.Series | None:
     the car before it (``stop_possible`` depends on the sample's scenario alone, so every
     controller's ok run of a sample holds the same); None when the results do not
     record it (written before the column)."""
-    if "stop_possible" not in results.columns:
+    if RowCol.stop_possible not in results.columns:
         return None
-    known = results.dropna(subset=["stop_possible"])
-    return known.groupby("sample").stop_possible.first().astype(bool)
+    known = results.dropna(subset=[RowCol.stop_possible])
+    return known.groupby(RowCol.sample)[RowCol.stop_possible].first().astype(bool)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -416,12 +417,12 @@ def stop_possible_summary(results: pd.DataFrame, controllers: list[str]) -> Stop
     flags = sample_stop_possible(results)
     if flags is None:
         return None
-    possible = results[results["sample"].isin(flags.index[flags])]
+    possible = results[results[RowCol.sample].isin(flags.index[flags])]
     return StopPossible(
-        samples=int(results["sample"][results.status == "ok"].nunique()),
+        samples=int(results[RowCol.sample][results[RowCol.status] == "ok"].nunique()),
         samples_obstacle_in_path=len(flags),
         samples_stop_possible=int(flags.sum()),
-        by_controller={c: rate_summary(possible[possible.controller == c])
+        by_controller={c: rate_summary(possible[possible[RowCol.controller] == c])
                        for c in controllers},
         paired=[mcnemar(possible, a, b) for a, b in itertools.combinations(controllers, 2)])
 

@@ -17,6 +17,7 @@ import itertools
 
 import pandas as pd
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import (
     COLLIDED,
     COMPLETED,
@@ -43,15 +44,15 @@ RARELY_COMPLETES = 0.5
 def outcomes_recorded(results: pd.DataFrame) -> bool:
     """Do the results say how every ok run ended (sweeps before the ``outcome``
     column do not)?"""
-    if "outcome" not in results.columns:
+    if RowCol.outcome not in results.columns:
         return False
-    return bool(results.outcome[results.status == "ok"].notna().all())
+    return bool(results[RowCol.outcome][results[RowCol.status] == "ok"].notna().all())
 
 
 def shared_samples(results: pd.DataFrame) -> pd.Index:
     """The samples every controller of the results has a run of (ok or not)."""
-    present = results.groupby("sample").controller.nunique()
-    return present.index[present == results.controller.nunique()]
+    present = results.groupby(RowCol.sample)[RowCol.controller].nunique()
+    return present.index[present == results[RowCol.controller].nunique()]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -78,10 +79,10 @@ def _rate(flags: pd.Series, rows: pd.DataFrame, method: Method = "wilson") -> Ou
 def outcome_flags(rows: pd.DataFrame) -> dict[str, pd.Series]:
     """Per outcome (and :data:`NO_OUTCOME`), which of ``rows`` ended so; of results from
     before the ``outcome`` column only which collided and which have no outcome."""
-    ok = rows.status == "ok"
-    if "outcome" not in rows.columns:
-        return {COLLIDED: ok & rows.collision.astype(bool), NO_OUTCOME: ~ok}
-    flags = {o: ok & (rows.outcome == o) for o in OUTCOMES}
+    ok = rows[RowCol.status] == "ok"
+    if RowCol.outcome not in rows.columns:
+        return {COLLIDED: ok & rows[RowCol.collision].astype(bool), NO_OUTCOME: ~ok}
+    flags = {o: ok & (rows[RowCol.outcome] == o) for o in OUTCOMES}
     flags[NO_OUTCOME] = ~ok
     return flags
 
@@ -114,14 +115,14 @@ class OutcomeSummary:
 
 def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> OutcomeSummary:
     """The :class:`OutcomeSummary` of one controller's ``rows`` (intervals by ``method``)."""
-    ok = rows[rows.status == "ok"]
-    time_lost = rows.time_lost_s[completed_runs(rows)].dropna()
+    ok = rows[rows[RowCol.status] == "ok"]
+    time_lost = rows[RowCol.time_lost_s][completed_runs(rows)].dropna()
     return OutcomeSummary(
         runs=len(rows),
         outcomes={o: _rate(flags, rows, method) for o, flags in outcome_flags(rows).items()},
         warm_states=count_warm_states(rows),
         median_time_lost_s=float(time_lost.median()) if len(time_lost) else None,
-        median_progress_m=float(ok.progress_m.median()) if len(ok) else None,
+        median_progress_m=float(ok[RowCol.progress_m].median()) if len(ok) else None,
         stood_for=stood_for_counts(ok),
         too_short=int(too_short_at_light(rows).sum()),
         duration_to_tell_s=duration_to_tell_s(rows),
@@ -131,11 +132,12 @@ def outcome_summary(rows: pd.DataFrame, method: Method = "wilson") -> OutcomeSum
 def stood_for_counts(ok: pd.DataFrame) -> dict[str, dict[str, int]]:
     """Of ok runs that were stuck or unfinished and ended standing: per outcome, how
     many stood for what (most first); {} for results without the column."""
-    if "stood_for" not in ok:
+    if RowCol.stood_for not in ok:
         return {}
     counts = {}
+    stood_for = ok[RowCol.stood_for]
     for outcome in (STUCK, UNFINISHED):
-        stood = ok.stood_for[(ok.outcome == outcome) & ok.stood_for.notna()]
+        stood = stood_for[(ok[RowCol.outcome] == outcome) & stood_for.notna()]
         if len(stood):
             counts[outcome] = {str(k): int(v) for k, v in stood.value_counts().items()}
     return counts
@@ -149,7 +151,7 @@ def outcomes_by(results: pd.DataFrame, column: str, method: Method = "wilson") -
     for group, controller, rows in grouped_runs(results, column):
         for outcome, flags in outcome_flags(rows).items():
             rate = _rate(flags, rows, method)
-            out.append({"group": group, "controller": controller, "outcome": outcome,
+            out.append({"group": group, RowCol.controller: controller, RowCol.outcome: outcome,
                         "runs": rate.runs, "of": len(rows), "rate": rate.rate,
                         "low": rate.low, "high": rate.high})
     return pd.DataFrame(out)
@@ -158,16 +160,16 @@ def outcomes_by(results: pd.DataFrame, column: str, method: Method = "wilson") -
 def completed_runs(results: pd.DataFrame) -> pd.Series:
     """Per run: did it complete without a collision (an error or timeout did not;
     none did in results from before the ``outcome`` column)."""
-    if "outcome" not in results.columns:
+    if RowCol.outcome not in results.columns:
         return pd.Series(False, index=results.index)
-    return (results.status == "ok") & (results.outcome == COMPLETED)
+    return (results[RowCol.status] == "ok") & (results[RowCol.outcome] == COMPLETED)
 
 
 def completed_flags(results: pd.DataFrame) -> pd.DataFrame:
     """Per sample (rows) and controller (columns): :func:`completed_runs`; NaN where
     the controller has no run."""
     return results.assign(_done=completed_runs(results)).pivot_table(
-        index="sample", columns="controller", values="_done", aggfunc="first")
+        index=RowCol.sample, columns=RowCol.controller, values="_done", aggfunc="first")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,8 +186,8 @@ def verdict_summary(results: pd.DataFrame, method: Method = "wilson") -> Verdict
     without the ``outcome`` column."""
     if not outcomes_recorded(results):
         return None
-    controllers = list(dict.fromkeys(results.controller))
-    summaries = {c: outcome_summary(results[results.controller == c], method)
+    controllers = list(dict.fromkeys(results[RowCol.controller]))
+    summaries = {c: outcome_summary(results[results[RowCol.controller] == c], method)
                  for c in controllers}
     ranked = sorted(controllers, key=lambda c: -(summaries[c].completed.rate or 0.0))
     flags = completed_flags(results)

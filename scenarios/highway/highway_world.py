@@ -47,7 +47,7 @@ def _lanes(spec: ScenarioSpec, road: RoadGeometry):
         lines = [LineType.CONTINUOUS if i == 0 else LineType.STRIPED,
                  LineType.CONTINUOUS if i == r.lanes - 1 else LineType.NONE]
         common = {"width": r.lane_width_m, "line_types": lines, "speed_limit": r.speed_limit_mps}
-        if r.kind == "straight":
+        if not road.curvature_1pm:  # a straight road: its centre line does not turn
             lanes.append(StraightLane([0.0, d], [r.length_m, d], **common))
         elif r.curve_radius_m > 0:  # left: counter-clockwise around (0, R)
             sweep = r.length_m / r.curve_radius_m

@@ -13,7 +13,7 @@ through a junction's curve is one chord across it.
 :class:`LanePath` lays a body along its lane's shape (and the lanes before it, where
 it reaches back into them), as SUMO holds it: shifted sideways by its lateral offset,
 never turned by it, and in as many boxes as its path bends under it. The world draws its
-traffic so (:meth:`scenarios.sumo.sumo_world.SumoWorld._traffic`, one box in compiled
+traffic so (:meth:`scenarios.sumo.traffic_reading.TrafficReader.read`, one box in compiled
 code); the witness of whose an overlap is (:mod:`sdc.run.world_witness`) lays them in
 :data:`BODY_PIECES` boxes.
 """

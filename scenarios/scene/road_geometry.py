@@ -72,27 +72,13 @@ def merged_stretches(rows: np.ndarray, join_m: float = 1e-6) -> np.ndarray:
     return np.array(out).reshape(-1, 2)
 
 
-def centre_line_xy(road: RoadSpec) -> np.ndarray:
-    """The centre line as an (M, 2) polyline starting at the origin heading +x [m]."""
-    if road.kind == "straight":
-        return np.array([[0.0, 0.0], [road.length_m, 0.0]])
-    radius_m = road.curve_radius_m
-    outer_m = abs(radius_m) + road.half_width_m
-    step_rad = 2 * math.acos(1 - CHORD_TOLERANCE_M / outer_m)
-    sweep_rad = road.length_m / abs(radius_m)
-    theta = np.linspace(0.0, sweep_rad, max(2, math.ceil(sweep_rad / step_rad) + 1))
-    # a left curve (radius > 0) turns around (0, radius); a right one around (0, -|radius|)
-    x = abs(radius_m) * np.sin(theta)
-    y = radius_m * (1 - np.cos(theta))
-    return np.column_stack([x, y])
-
-
 #: the SUMO edge of a built-in road (one edge, its lanes numbered from the right)
 EDGE_ID = "road"
 
 
 class RoadGeometry:
-    """A one-way road along a polyline centre line."""
+    """A one-way road along a polyline centre line (a built road's is of its shape:
+    :class:`StraightRoad`, :class:`CurveRoad`; a network route's is its lane's)."""
 
     def __init__(self, center_xy: np.ndarray, lanes: int, lane_width_m: float,
                  curvature_1pm: float = 0.0):
@@ -108,11 +94,6 @@ class RoadGeometry:
         self.length_m = float(self.frame.seg_len_m.sum())
         self._seg_heading_rad = np.arctan2(self.frame.seg_dir[:, 1], self.frame.seg_dir[:, 0])
         self._seg_heading_list = self._seg_heading_rad.tolist()
-
-    @classmethod
-    def from_spec(cls, road: RoadSpec) -> RoadGeometry:
-        curvature_1pm = 1 / road.curve_radius_m if road.kind == "curve" else 0.0
-        return cls(centre_line_xy(road), road.lanes, road.lane_width_m, curvature_1pm)
 
     def sumo_place(self, s_m: float, lane: int = 0) -> tuple[str, int, float]:
         """SUMO's edge, lane index and lane position of road position ``s_m`` in
@@ -266,3 +247,29 @@ class RoadGeometry:
             "lanes": self.lanes,
             "lane_width_m": self.lane_width_m,
         }
+
+
+class StraightRoad(RoadGeometry):
+    """A built ``straight`` road: its centre line from the origin along +x."""
+
+    @classmethod
+    def from_spec(cls, road: RoadSpec) -> StraightRoad:
+        return cls(np.array([[0.0, 0.0], [road.length_m, 0.0]]), road.lanes, road.lane_width_m)
+
+
+class CurveRoad(RoadGeometry):
+    """A built ``curve`` road: its centre line an arc of ``road.curve_radius_m``
+    (signed: positive turns left) from the origin heading +x, a polyline within
+    :data:`CHORD_TOLERANCE_M` of the arc across the road's whole width."""
+
+    @classmethod
+    def from_spec(cls, road: RoadSpec) -> CurveRoad:
+        radius_m = road.curve_radius_m
+        outer_m = abs(radius_m) + road.half_width_m
+        step_rad = 2 * math.acos(1 - CHORD_TOLERANCE_M / outer_m)
+        sweep_rad = road.length_m / abs(radius_m)
+        theta = np.linspace(0.0, sweep_rad, max(2, math.ceil(sweep_rad / step_rad) + 1))
+        # a left curve (radius > 0) turns around (0, radius); a right one around (0, -|radius|)
+        x = abs(radius_m) * np.sin(theta)
+        y = radius_m * (1 - np.cos(theta))
+        return cls(np.column_stack([x, y]), road.lanes, road.lane_width_m, 1 / radius_m)

@@ -9,7 +9,7 @@ was built, else their numpy twins below, chosen once at import
   numpy only: the compiled placement is part of the car's step
   (``sdc.car.geometry_kernels.step``, through ``scenarios/scene/_polyline.h``);
 - :func:`traffic`: SUMO's context subscription results as traffic boxes, speeds
-  and vehicle classes (:meth:`scenarios.sumo.sumo_world.SumoWorld._traffic`).
+  and vehicle classes (:meth:`scenarios.sumo.traffic_reading.TrafficReader.read`).
 
 Each twin takes the compiled function's arguments, writes the same outputs and
 computes in the same order (no fused multiply-adds), so the answers agree to the

@@ -20,7 +20,7 @@ body is shown in a neighbouring lane exactly when the part reaching into it leav
 traffic car driving at that lane's centre less than :data:`PASS_CLEARANCE_M` to pass
 (:func:`blocks_neighbour`), as a body of its own in that lane: an obstacle as a second
 stopped vehicle, the ego as a vehicle of its size pushed along beside it every step
-(its stand-in, :meth:`scenarios.sumo.sumo_world.SumoWorld._place_stand_ins`). SUMO itself is
+(its stand-in, :func:`scenarios.sumo.ego_pose.place_stand_ins`). SUMO itself is
 shown every body inside one lane (:func:`inside_lane_m`): it does not reliably see a
 ``moveToXY`` vehicle over a lane line (``docs/world.md``). A part that leaves room to
 pass is not shown, so traffic passes it with at least that clearance instead of

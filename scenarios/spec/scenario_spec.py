@@ -16,6 +16,7 @@ import numpy as np
 
 from scenarios.common.errors import SpecError
 from scenarios.common.seeding import SEED_LIMIT
+from scenarios.spec.backends import BACKENDS, Backend
 from scenarios.spec.bodies import OBSTACLE_CLASSES, OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.spec.controller_params import (
     CONTROLLER_PARAMS,
@@ -50,7 +51,7 @@ class ScenarioMeta(Spec):
     #: own step-length where it has one
     step_s: float = num(0.064, ge=MIN_STEP_S, le=1.0)
     seed: int = num(0, ge=0, lt=SEED_LIMIT)
-    backend: Literal["sumo", "highway"] = "sumo"  # the world simulator
+    backend: Literal["sumo", "highway", "scripted"] = "sumo"  # the world simulator
 
     def __post_init__(self):
         super().__post_init__()
@@ -62,6 +63,11 @@ class ScenarioMeta(Spec):
             raise SpecError("duration_s", f"{self.duration_s:g} s is "
                             f"{self.duration_s / self.step_s:,.0f} steps of {self.step_s:g} s, "
                             f"more than the {MAX_STEPS:,} a run may take")
+
+    @property
+    def world_backend(self) -> Backend:
+        """What the backend it runs on can do (:mod:`scenarios.spec.backends`)."""
+        return BACKENDS[self.backend]
 
 
 #: the road kinds that are a route through a SUMO network
@@ -560,7 +566,7 @@ def _check_road_kind(spec: ScenarioSpec) -> None:
     if road.kind == "sumo_config" and traffic.warm_up_s > 0:
         raise SpecError("traffic.warm_up_s", 'a "sumo_config" road warms up on its '
                         "configuration's demand until traffic.enter_s")
-    if spec.scenario.backend != "sumo":
+    if not spec.scenario.world_backend.loads_networks:
         raise SpecError("scenario.backend",
                         f'{spec.scenario.backend} cannot load a SUMO network '
                         f'(road.kind "{road.kind}")')

@@ -35,6 +35,7 @@ from scenarios.common.seeding import (
     stream_rng,
     warm_rng,
 )
+from scenarios.spec.backends import BACKENDS
 from scenarios.spec.controller_params import CONTROLLER_PARAMS
 from scenarios.spec.controller_ref import controller_label, resolve_file
 from scenarios.spec.overrides import Override, blame
@@ -368,7 +369,7 @@ class SweepSpec:
             check_runs("sweep.samples", f"{meta.samples} samples", meta.samples,
                        len(controllers), "fewer samples")
         _check_warm_states(meta.warm_states, base, parsed)
-        if meta.egos_per_world > 1 and base.scenario.backend != "sumo":
+        if meta.egos_per_world > 1 and not base.scenario.world_backend.holds_several_egos:
             raise SpecError("sweep.egos_per_world", "only the sumo backend holds several "
                             f"egos in one world; the base scenario runs on "
                             f"{base.scenario.backend!r}")
@@ -450,9 +451,10 @@ def _check_warm_states(warm_states: int | None, base: ScenarioSpec,
     swept = {p.path: p for p in params}
     backend = swept.get("scenario.backend")
     backends = set(backend.args) if backend is not None else {base.scenario.backend}
-    if "sumo" not in backends:
+    if not any(BACKENDS[name].warm_states for name in backends):
         raise SpecError("sweep.warm_states", "warm states are SUMO's saved traffic; the "
-                        "sweep runs on the highway backend only, which has none to share")
+                        f"sweep runs on the {' and '.join(sorted(backends))} backend only, "
+                        "which has none to share")
     if "traffic.warm_seed" in swept:
         raise SpecError("sweep.warm_states", "and a swept traffic.warm_seed both choose the "
                         "warm-ups' seeds: keep one")
@@ -644,7 +646,8 @@ def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[Pla
         return plan
     grouped = group_worlds([(k, f"{run.sample:0{width}d}", run.controller, run.spec)
                             for k, run in enumerate(plan)
-                            if run.spec is not None and run.spec.scenario.backend == "sumo"
+                            if run.spec is not None
+                            and run.spec.scenario.world_backend.holds_several_egos
                             and run.spec.road.on_network],
                            egos_per_world)
     return [run if k not in grouped else

@@ -1,13 +1,14 @@
 """Vehicles laid along their lanes where SUMO holds them: the lanes a vehicle came
 by (read from SUMO's links and its route), and its body in as many boxes as its
-path bends under it (:class:`scenarios.scene.lane_bodies.LanePath`)."""
+path bends under it (:class:`scenarios.scene.lane_bodies.LanePath`); the bodies of a
+snapshot as SUMO's own lanes hold them (:func:`held_bodies`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import traci.constants as tc  # plain numbers, shared by libsumo and traci
 
-from scenarios.scene.lane_bodies import LanePaths
+from scenarios.scene.lane_bodies import BODY_PIECES, LanePaths
 
 
 def lay(paths: LanePaths, nearby: dict, boxes: np.ndarray, laid: np.ndarray
@@ -39,6 +40,38 @@ def lay(paths: LanePaths, nearby: dict, boxes: np.ndarray, laid: np.ndarray
     for row, body in pieces.items():
         out[first[row]:first[row] + len(body)] = body
     return out, bodies
+
+
+def held_bodies(sim, paths: LanePaths, ids: list[str], traffic_boxes: np.ndarray, rows,
+                obstacle_prefix: str, obstacles, people_subscribed: bool) -> list[np.ndarray]:
+    """The bodies of a snapshot's traffic ``rows`` (indices into its ``traffic_boxes``,
+    of rows read from SUMO, whose SUMO ids are ``ids``) and of the ego's ``obstacles``
+    (indices; their ids start with ``obstacle_prefix``) as SUMO's own lanes hold them
+    (``sim``: libsumo or traci): each (P, 5) boxes laid along its lane in
+    :data:`scenarios.scene.lane_bodies.BODY_PIECES` boxes, an obstacle with the
+    vehicles it stands as in lanes beside (no box: SUMO has not inserted it), a person
+    on foot (no lane holds it; with ``people_subscribed``) as its own box."""
+    vehicle = sim.vehicle
+    standing = vehicle.getIDList()
+    people = frozenset(sim.person.getIDList()) if people_subscribed else ()
+
+    def laid(vid: str) -> np.ndarray:
+        lane_id, length_m = vehicle.getLaneID(vid), vehicle.getLength(vid)
+        pos_m = vehicle.getLanePosition(vid)
+        path = paths.path(vid, lane_id, length_m - pos_m)
+        return np.array(path.body(pos_m, vehicle.getLateralLanePosition(vid), length_m,
+                                  vehicle.getWidth(vid), BODY_PIECES))
+
+    bodies = []
+    for row in rows:
+        vid = ids[row]
+        bodies.append(traffic_boxes[row][None, :] if vid in people else laid(vid))
+    for i in obstacles:
+        own = f"{obstacle_prefix}{i}"
+        # none where SUMO holds it nowhere (not inserted yet): no alibi for SUMO
+        bodies.append(np.vstack([np.empty((0, 5)), *(
+            laid(vid) for vid in standing if vid == own or vid.startswith(own + "."))]))
+    return bodies
 
 
 def lanes_behind(sumo, vid: str, lane_id: str, reach_m: float) -> list[str]:

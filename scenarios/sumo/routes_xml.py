@@ -5,8 +5,8 @@ traffic (flows per lane on a built road, random trips across a network), as
 
 On a built-in road an obstacle that reaches too far into a lane beside its own
 for the traffic to pass stands there too, as a second vehicle; on a network
-:class:`~scenarios.sumo.sumo_world.SumoWorld` adds it once SUMO's vehicle types
-are known.
+the world adds it once SUMO's vehicle types are known
+(:mod:`scenarios.sumo.obstacles_beside`).
 """
 
 from __future__ import annotations
@@ -167,7 +167,7 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, depart: 
                                             strict=True)):
         length_m = obstacle.size_m[0]
         s_m = road.place_s_m(obstacle.position_m, length_m)
-        # on a network, a second body beside it waits for SUMO's types (_show_obstacles_beside)
+        # on a network, a second body beside it waits for SUMO's types (obstacles_beside.py)
         lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
         for k, spec_lane in enumerate(lanes):
             edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)

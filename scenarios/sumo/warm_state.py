@@ -64,8 +64,8 @@ def warm_seed(spec: ScenarioSpec) -> int:
 def uses_warm_state(spec: ScenarioSpec) -> bool:
     """Does a run of ``spec`` start from a warm state (a SUMO run with a warm-up; a
     ``sumo_config`` road always: its demand runs until ``traffic.enter_s``)?"""
-    return spec.scenario.backend == "sumo" and (spec.traffic.warm_up_s > 0
-                                                or spec.road.own_demand)
+    return spec.scenario.world_backend.warm_states and (spec.traffic.warm_up_s > 0
+                                                       or spec.road.own_demand)
 
 
 def sumo_version() -> str:

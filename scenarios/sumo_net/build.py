@@ -87,26 +87,29 @@ def netconvert_version() -> str:
         return sumo_binary("netconvert")
 
 
-def network_file_name(road: RoadSpec) -> str:
-    """The cache's name for the network of ``road``: a hash of netconvert's inputs."""
-    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
+def network_file_name(road: RoadSpec, geometry: RoadGeometry) -> str:
+    """The cache's name for the network of ``road`` (its ``geometry``): a hash of
+    netconvert's inputs."""
+    nodes, edges = _xml_sources(road, geometry)
     digest = hashlib.sha256(f"{netconvert_version()}\n{nodes}\n{edges}".encode())
     return f"{digest.hexdigest()[:20]}.net.xml"
 
 
-def build_network(road: RoadSpec, cache_dir: Path | None = None) -> Path:
-    """Path of the ``.net.xml`` for ``road``, built on first use and cached (in
-    ``cache_dir``, by default :func:`~scenarios.common.cache_dir.network_cache_dir`,
-    as :func:`network_file_name`).
+def build_network(road: RoadSpec, geometry: RoadGeometry, cache_dir: Path | None = None
+                  ) -> Path:
+    """Path of the ``.net.xml`` for ``road`` (its ``geometry``: its source's,
+    :class:`~scenarios.sumo_net.road_source.BuiltRoad`), built on first use and cached
+    (in ``cache_dir``, by default
+    :func:`~scenarios.common.cache_dir.network_cache_dir`, as :func:`network_file_name`).
 
     Concurrent builders of the same network are safe: each writes a temporary
     file and renames it into place.
     """
     cache_dir = Path(cache_dir) if cache_dir is not None else network_cache_dir()
-    target = cache_dir / network_file_name(road)
+    target = cache_dir / network_file_name(road, geometry)
     if target.exists():
         return target
-    nodes, edges = _xml_sources(road, RoadGeometry.from_spec(road))
+    nodes, edges = _xml_sources(road, geometry)
     tool = sumo_binary("netconvert")
     cache_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=cache_dir) as tmp:

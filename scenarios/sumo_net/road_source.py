@@ -2,7 +2,8 @@
 the road's source and never its kind.
 
 - :class:`BuiltRoad` (``straight``, ``curve``): a network netconvert builds from
-  the spec, traffic entering as flows per lane at the road's start;
+  the spec, its geometry of its shape's class (:class:`StraightRoad`,
+  :class:`CurveRoad`), traffic entering as flows per lane at the road's start;
 - :class:`NetworkFileRoad` (``sumo_net``): a network file, its traffic random trips
   across it (``traffic.vehicles``);
 - :class:`OpenDriveRoad` (``opendrive``): an OpenDRIVE file as netconvert converts it,
@@ -11,8 +12,9 @@ the road's source and never its kind.
   which runs from the configuration's begin until ``traffic.enter_s`` as the
   warm-up of every run.
 
-Each says what its runs are built on (its geometry, its network file, what a job
-ships of it), the identity of its warm states, and how its warm-up is counted.
+Each says what its runs are built on (its geometry, its network file, a network
+road's network as read, what a job ships of it), the identity of its warm states, and
+how its warm-up is counted.
 Where SUMO places a lane position and which edges a route takes are the
 geometry's (:meth:`RoadGeometry.sumo_place`, :meth:`RoadGeometry.route_edges`).
 :func:`road_source` is the one place a kind is turned into its class.
@@ -22,14 +24,17 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
+from collections.abc import Callable
 from pathlib import Path
 from typing import Protocol
 
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.file_read import file_sha256, read_bytes, sha256_hex
-from scenarios.scene.road_geometry import RoadGeometry
+from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec, TrafficSpec
 from scenarios.sumo_net.build import build_network, input_path, sumo_load_error
+from scenarios.sumo_net.net_xml import NetFile, parse_net, read_net
 from scenarios.sumo_net.opendrive_net import opendrive_network
 
 
@@ -125,24 +130,25 @@ class _WarmsUpFromZero:
 
 
 class BuiltRoad(_Exported, _WarmsUpFromZero):
-    """A ``straight`` or ``curve`` road: netconvert builds its network from the spec."""
+    """A ``straight`` or ``curve`` road: its geometry of its ``shape``'s class, and
+    netconvert builds its network from the spec and that geometry."""
 
     flows = True
 
-    def __init__(self, road: RoadSpec):
-        self.road = road
+    def __init__(self, road: RoadSpec, shape: type[StraightRoad | CurveRoad]):
+        self.road, self.shape = road, shape
 
     def geometry(self, spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
-        return RoadGeometry.from_spec(self.road)
+        return self.shape.from_spec(self.road)
 
     def check_inputs(self, spec: ScenarioSpec) -> None:
         pass
 
     def prepare(self, cache_dir: Path | None = None) -> None:
-        build_network(self.road, cache_dir)
+        self.network_file(cache_dir)
 
     def network_file(self, cache_dir: Path | None = None) -> Path:
-        return build_network(self.road, cache_dir)
+        return build_network(self.road, self.shape.from_spec(self.road), cache_dir)
 
     def shipped(self, cache_dir: Path | None = None) -> ShippedFile:
         path = self.network_file(cache_dir)
@@ -164,16 +170,28 @@ class _NetworkRoad(_Exported):
     def __init__(self, road: RoadSpec):
         self.road = road
 
+    def network(self, cache_dir: Path | None = None) -> NetFile:
+        """The road's network as read (its network file, cached in ``cache_dir`` where
+        it is converted); a missing, unreadable or foreign file is a
+        :class:`SpecError` naming the road's field (``road.network_field``)."""
+        path = self.network_file(cache_dir)
+        if not path.exists():
+            raise SpecError(self.road.network_field, f"no such file: {path}")
+        try:
+            return read_net(path)
+        except SdcError as e:
+            raise SpecError(self.road.network_field, str(e)) from None
+
     def geometry(self, spec: ScenarioSpec, cache_dir: Path | None = None) -> RoadGeometry:
         from scenarios.sumo_net.route_road import network_road
 
-        return network_road(spec, cache_dir)
+        return network_road(spec, self.network(cache_dir), cache_dir)
 
     def prepare(self, cache_dir: Path | None = None) -> None:
-        from scenarios.sumo_net.route_road import network_area, road_network
+        from scenarios.sumo_net.route_road import network_area
 
         with contextlib.suppress(SdcError):
-            network_area(road_network(self.road, cache_dir), cache_dir)
+            network_area(self.network(cache_dir), cache_dir)
 
 
 class NetworkFileRoad(_NetworkRoad, _WarmsUpFromZero):
@@ -250,6 +268,17 @@ class ConfigRoad(_NetworkRoad):
         raise SdcError("a configuration's network is one of its files: a run writes "
                        "them out (SumoWorld.net_path)")
 
+    def network(self, cache_dir: Path | None = None) -> NetFile:
+        """The configuration's network, read from its bundle (a bad one is a
+        :class:`SpecError` naming ``road.config_file``)."""
+        from scenarios.sumo_net.sumo_config import FIELD
+
+        bundle = self._bundle()
+        try:
+            return parse_net(bundle.files[bundle.net_name], Path(bundle.net_name))
+        except SdcError as e:
+            raise SpecError(FIELD, str(e)) from None
+
     def shipped(self, cache_dir: Path | None = None) -> ShippedFile:
         from scenarios.sumo_net.sumo_config import BUNDLE_SUFFIX
 
@@ -292,9 +321,10 @@ class ConfigRoad(_NetworkRoad):
         return Path(bundle.net_name).name, bundle.files[bundle.net_name]
 
 
-_BY_KIND: dict[str, type] = {"straight": BuiltRoad, "curve": BuiltRoad,
-                             "sumo_net": NetworkFileRoad, "sumo_config": ConfigRoad,
-                             "opendrive": OpenDriveRoad}
+_BY_KIND: dict[str, Callable[[RoadSpec], RoadSource]] = {
+    "straight": functools.partial(BuiltRoad, shape=StraightRoad),
+    "curve": functools.partial(BuiltRoad, shape=CurveRoad),
+    "sumo_net": NetworkFileRoad, "sumo_config": ConfigRoad, "opendrive": OpenDriveRoad}
 
 
 def road_source(road: RoadSpec) -> RoadSource:

@@ -37,8 +37,7 @@ from scenarios.scene.road_geometry import (
     merged_stretches,
 )
 from scenarios.spec.bodies import GRAVITY_MPS2, VEHICLE_MODELS
-from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
-from scenarios.sumo_net.build import input_path
+from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo_net.crosswalks import route_crosswalks
 from scenarios.sumo_net.drivable_area import EDGE_SEARCH_VERSION, DrivableArea
 from scenarios.sumo_net.grade_separation import crossing_lanes
@@ -48,12 +47,7 @@ from scenarios.sumo_net.net_xml import (
     NetFile,
     NetLane,
     Turn,
-    parse_net,
-    read_net,
 )
-from scenarios.sumo_net.opendrive_net import opendrive_network
-from scenarios.sumo_net.sumo_config import FIELD as CONFIG_FIELD
-from scenarios.sumo_net.sumo_config import load_bundle
 
 #: tries at drawing a route that long before giving up (dead ends cut walks short)
 ROUTE_TRIES = 50
@@ -467,35 +461,16 @@ def _save(path: Path, array: np.ndarray) -> None:
         np.save(f, array)
 
 
-def road_network(road: RoadSpec, cache_dir: Path | None = None) -> NetFile:
-    """The road's network: its file, its configuration's, or its OpenDRIVE file's as
-    netconvert converts it (cached in ``cache_dir``); a missing, unreadable or foreign
-    file is a :class:`SpecError` naming the road's field (``road.network_field``)."""
-    if road.kind == "sumo_config":
-        bundle = load_bundle(road.config_file)
-        try:
-            return parse_net(bundle.files[bundle.net_name], Path(bundle.net_name))
-        except SdcError as e:
-            raise SpecError(CONFIG_FIELD, str(e)) from None
-    if road.kind == "opendrive":
-        path = opendrive_network(road.xodr_file, cache_dir)
-    else:
-        path = input_path(road.net_file)
-    if not path.exists():
-        raise SpecError(road.network_field, f"no such file: {path}")
-    try:
-        return read_net(path)
-    except SdcError as e:
-        raise SpecError(road.network_field, str(e)) from None
+def network_road(spec: ScenarioSpec, net: NetFile, cache_dir: Path | None = None
+                 ) -> NetworkRoad:
+    """The road of a scenario on a network (``net``: the road's, as its source reads
+    it: :meth:`scenarios.sumo_net.road_source.NetworkFileRoad.network`): its route drawn
+    from ``scenario.seed``, its drivable area's edges cached in ``cache_dir``.
 
-
-def network_road(spec: ScenarioSpec, cache_dir: Path | None = None) -> NetworkRoad:
-    """The road of a ``sumo_net`` scenario: its route drawn from ``scenario.seed``.
-
-    Raises :class:`SpecError` naming the field when the file is bad or the network
-    cannot hold the scenario (an obstacle off the drivable area).
+    Raises :class:`SpecError` naming the field when the network cannot hold the
+    scenario (no lane for cars, a pinned route too short, an obstacle off the
+    drivable area).
     """
-    net = road_network(spec.road, cache_dir)
     if not net.normal_lanes():
         field = spec.road.network_field
         raise SpecError(field, f"{getattr(spec.road, field.removeprefix('road.'))}: its "

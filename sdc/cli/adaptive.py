@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from analysis.measures.commands import sdc_command
+from analysis.measures.commands import report_command
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.spec.controller_ref import resolve_file
 from sdc.cli.common import (
@@ -24,7 +24,7 @@ def adaptive_outcome(mode: str, sweep_file: Path, options: dict, max_runs: int,
                      batch_size: int, target_rhw: float | None = None,
                      stop_after: int | None = None):
     """Run a search or an estimate from the CLI's options; its outcome, or exit 2."""
-    from sdc.batch.adaptive_runner import AdaptiveSettings, run_adaptive
+    from sdc.batch.sweeps.adaptive_runner import AdaptiveSettings, run_adaptive
 
     check_executor_options(options)
     try:
@@ -77,7 +77,7 @@ def adaptive_exit(outcome, mode: str, out_dir: Path) -> None:
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout; {outcomes_text(outcome.outcomes)} "
                f"({outcome.wall_time_s:.1f} s)")
-    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: {sdc_command('report', out_dir)}")
+    click.echo(f"{mode}: {summary_path(out_dir, mode)}  report: {report_command(out_dir)}")
     if outcome.interrupted:
         exit_interrupted("interrupted; to finish, run the same command with --resume")
     exit_after_runs(counts)

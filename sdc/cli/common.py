@@ -79,10 +79,10 @@ def warm_up_first(spec: ScenarioSpec) -> None:
 
 class WarmUpProgress:
     """SUMO's clock during a warm-up, on stderr: in place on a terminal, else a line
-    every :data:`~sdc.batch.progress.LINE_EVERY_S` of wall time."""
+    every :data:`~sdc.batch.sweeps.progress.LINE_EVERY_S` of wall time."""
 
     def __init__(self, end_s: float):
-        from sdc.batch.progress import LINE_EVERY_S
+        from sdc.batch.sweeps.progress import LINE_EVERY_S
 
         self.end_s, self.shown_at = end_s, -math.inf
         self.terminal = sys.stderr.isatty()
@@ -217,7 +217,8 @@ def adaptive_options(command):
 
 def make_executor(options: dict, batch_runs: int | None = None):
     """The executor :func:`executor_options` asked for (``--batch``: Ray's runs per task)."""
-    from sdc.batch.executors import LocalExecutor, RayExecutor
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.executors.ray_executor import RayExecutor
 
     if options["executor"] == "ray":
         return RayExecutor(options["workers"], options["run_timeout"], options["ray_address"],
@@ -234,7 +235,7 @@ def check_executor_options(options: dict) -> None:
 def make_reporter(options: dict, label: str = "sweep"):
     """A progress bar labelled ``label`` (whole lines off a terminal), or none with
     ``--quiet``."""
-    from sdc.batch.progress import QuietReporter, progress_reporter
+    from sdc.batch.sweeps.progress import QuietReporter, progress_reporter
 
     return QuietReporter() if options["quiet"] else progress_reporter(label)
 

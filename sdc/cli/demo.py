@@ -26,9 +26,9 @@ from sdc.cli.report import write_sweep_report
 def demo(out_dir: Path, samples: int | None, workers: int) -> None:
     """Sweep the catalog's seed-envelope on all cores and write its collision report."""
     from scenarios.spec.sweep_spec import load_sweep
-    from sdc.batch.executors import LocalExecutor
-    from sdc.batch.progress import progress_reporter
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.executors.local_executor import LocalExecutor
+    from sdc.batch.sweeps.progress import progress_reporter
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     try:
         spec = load_sweep(CATALOG_DIR / "sweeps" / "seed-envelope.toml")
@@ -57,7 +57,7 @@ def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
     from scenarios.spec.sweep_spec import expand, plan_sha256
-    from sdc.batch.manifest import read_manifest
+    from sdc.batch.sweeps.manifest import read_manifest
 
     manifest = read_manifest(out_dir) if out_dir.is_dir() else None
     if manifest is None:

@@ -69,7 +69,7 @@ def export_run(sweep_dir: Path, run_id: str, out: Path) -> list[str]:
     from scenarios.asam.xosc_export import EGO, MovingBody, write_xosc
     from scenarios.spec.bodies import VEHICLE_MODELS
     from scenarios.spec.scenario_spec import ScenarioSpec
-    from sdc.batch.replay_check import load_recorded_run
+    from sdc.batch.sweeps.replay_check import load_recorded_run
 
     recorded = load_recorded_run(Path(sweep_dir), run_id)
     if recorded.trace_path is None:

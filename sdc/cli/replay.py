@@ -31,6 +31,7 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
         animate,
         decisive_step,
         frame_png,
+        recorded_outcome,
         scene_from_trace,
         step_at,
         write_html,
@@ -38,7 +39,7 @@ def _render(trace, metadata, out: Path, every: int, at_s: float | None = None) -
 
     scene = scene_from_trace(trace, metadata)
     if out.suffix == ".png":
-        k = (decisive_step(scene, metadata.get("run", {}).get("outcome")) if at_s is None
+        k = (decisive_step(scene, recorded_outcome(metadata)) if at_s is None
              else step_at(scene, at_s))
         marked = drawn_overlaps(trace, metadata, k)
         out.write_bytes(frame_png(scene, k, marks=[
@@ -123,7 +124,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     (None: a run that failed in the sweep, not shown as far as it went)."""
     from analysis.measures.commands import draw_overlap_command
     from analysis.measures.trace_file import read_trace
-    from sdc.batch.replay_check import load_recorded_run, replay_verdict, version_warnings
+    from sdc.batch.sweeps.replay_check import load_recorded_run, replay_verdict, version_warnings
     from sdc.run.episode import run_episode
 
     recorded = load_recorded_run(sweep_dir, run_id)

@@ -13,6 +13,7 @@ from analysis.measures.stood_for import stood_for_text
 from analysis.measures.world_audit import ROLE_TEXT
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.seeding import SEED_LIMIT
+from scenarios.spec.backends import BACKENDS
 from scenarios.spec.controller_ref import resolve_file
 from scenarios.spec.overrides import Override
 from scenarios.spec.scenario_spec import ScenarioSpec
@@ -39,11 +40,11 @@ def check_trace_path(trace: Path | None) -> None:
 
 def run_one(spec: ScenarioSpec, trace: Path | None = None) -> dict:
     """Run a spec; a failure inside the run becomes a row with ``status`` error."""
-    from sdc.batch.run_task import RunTask, execute
+    from sdc.batch.tasks.run_task import RunTask
     from sdc.run.episode import default_run_id
 
     warm_up_first(spec)
-    return execute(RunTask(default_run_id(spec), spec, trace_path=trace))
+    return RunTask(default_run_id(spec), spec, trace_path=trace).execute()
 
 
 def set_values(spec: ScenarioSpec, overrides: tuple[str, ...]) -> dict:
@@ -164,7 +165,7 @@ def load_scenario(spec_file: Path, overrides: tuple[str, ...], ego: str | None,
               help="Override the spec's controller: a built-in (seed, lane-keep, avoid), "
                    "FILE.py:Class (from the working directory), package.module:Class, or an "
                    "installed plug-in's name (shared parameters carry over).")
-@click.option("--backend", type=click.Choice(["sumo", "highway"]),
+@click.option("--backend", type=click.Choice(list(BACKENDS)),
               help="Override the spec's scenario.backend (the world simulator).")
 @click.option("--trace", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE.parquet",
               help="Write one row per step (pose, steering, lane offset, phase, lidar, traffic).")

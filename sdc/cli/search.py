@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from analysis.measures.commands import sdc_command
+from analysis.measures.commands import report_command
 from sdc.cli.adaptive import adaptive_exit, adaptive_outcome
 from sdc.cli.common import adaptive_options
 
@@ -52,7 +52,7 @@ def search(sweep_file: Path, budget: int, batch_size: int, stop_after: int | Non
     click.echo(f"failures: {summary.get('failures', 0)} of {outcome.runs} runs"
                + first_failure_words(summary.get("first_failure_run"),
                                      summary.get("first_failure_run_id")))
-    rest = sdc_command("report", options["out_dir"])
+    rest = report_command(options["out_dir"])
     for line in mode_lines(summary.get("failure_modes") or [], SHOWN_MODES, rest):
         click.echo(line)
     stuck = summary.get("stuck_modes") or []

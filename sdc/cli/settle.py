@@ -63,7 +63,7 @@ def settle(spec_file: Path, watch_s: float, seed: int | None, out: Path | None,
         bad_input(f"--out: directory {out.parent} does not exist")
     try:
         spec = load_spec(spec_file, overrides)
-        if spec.scenario.backend != "sumo":
+        if not spec.scenario.world_backend.warm_states:
             raise SpecError("scenario.backend", "sdc settle watches SUMO's traffic; "
                             f"the spec's backend is {spec.scenario.backend!r}")
         traffic = spec.traffic

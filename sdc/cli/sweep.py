@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import shlex
 from pathlib import Path
 
 import click
 
-from analysis.measures.commands import program_words
+from analysis.measures.commands import resume_command
 from scenarios.common.errors import SdcError
 from scenarios.sumo.warm_state import uses_warm_state
 from sdc.cli.common import (
@@ -117,7 +116,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     """
     from analysis.measures.run_outcome import outcomes_text
     from scenarios.spec.sweep_spec import expand
-    from sdc.batch.sweep_runner import run_sweep
+    from sdc.batch.sweeps.sweep_runner import run_sweep
 
     check_executor_options(options)
     if batch_runs and options["executor"] != "ray":
@@ -152,23 +151,3 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
         exit_interrupted(f"interrupted; to finish: {hint}")
     exit_after_runs(counts)
 
-
-def resume_command(sweep_file: Path, out_dir: Path, *, samples: int | None, traces: str,
-                   executor: str, workers: int, ray_address: str | None,
-                   run_timeout: float | None, batch_runs: int | None,
-                   overrides: tuple[str, ...] = (), controllers: str | None = None,
-                   ego: str | None = None) -> str:
-    """The command that finishes an interrupted sweep: every option that shaped its plan
-    (--set, --samples; another plan is refused) and how it ran, then --resume;
-    shell-quoted."""
-    words = [*program_words(), "sweep", str(sweep_file), "--out", str(out_dir)]
-    words += [word for text in overrides for word in ("--set", text)]
-    optional = [("--controllers", controllers), ("--ego", ego), ("--samples", samples),
-                ("--traces", None if traces == "failures" else traces),
-                ("--executor", None if executor == "local" else executor),
-                ("--workers", workers), ("--ray-address", ray_address),
-                ("--run-timeout", run_timeout), ("--batch", batch_runs)]
-    for option, value in optional:
-        if value is not None:
-            words += [option, str(value)]
-    return shlex.join([*words, "--resume"])

@@ -17,6 +17,10 @@ A run's own row (``Episode.row``, ``sdc run --json``) holds every column but the
 sweep's; :func:`sweep_row` adds those. Each constructor returns a complete row,
 None where a column does not apply, and raises :class:`RowKeyError` for a
 missing or unknown key, so a column cannot vanish on its way to the results.
+
+The columns' names are :class:`analysis.measures.row_columns.RowCol`'s (the one home
+of the names sdc writes and analysis reads); this module gives each its type, part and
+meaning, in the same order, and refuses to load when the two differ.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from typing import Any
 
 import pyarrow as pa
 
+from analysis.measures.row_columns import ADAPTIVE_NAMES, ROW_NAMES, RowCol
 from analysis.measures.run_outcome import STUCK_HOLD_S, STUCK_SPEED_MPS
 from scenarios.common.plain_json import json_scalar
 from scenarios.spec.sweep_spec import PARAM_PREFIX
@@ -46,165 +51,180 @@ class Column:
 
 #: every column but the ``p.<path>`` ones, in the order of ``results.parquet``
 COLUMNS: tuple[Column, ...] = (
-    Column("run_id", pa.string(), IDENTITY,
+    Column(RowCol.run_id, pa.string(), IDENTITY,
            "the run's ID: the sweep plan's, or <scenario>-<controller>-<seed> for sdc run"),
-    Column("run_index", pa.int64(), SWEEP, "position in the sweep's plan"),
-    Column("sample", pa.int64(), SWEEP, "the scenario sample; its controllers share it"),
-    Column("world_id", pa.string(), SWEEP,
+    Column(RowCol.run_index, pa.int64(), SWEEP, "position in the sweep's plan"),
+    Column(RowCol.sample, pa.int64(), SWEEP, "the scenario sample; its controllers share it"),
+    Column(RowCol.world_id, pa.string(), SWEEP,
            "the shared world the run's traffic came from ([sweep] egos_per_world): "
            "w<its first sample>-<controller>; its runs are one cluster in every interval; "
            "None: the run had a world of its own"),
-    Column("world_slot", pa.int64(), SWEEP,
+    Column(RowCol.world_slot, pa.int64(), SWEEP,
            "the run's place among its world's runs, from 0; None: a world of its own"),
-    Column("seed", pa.int64(), IDENTITY,
+    Column(RowCol.seed, pa.int64(), IDENTITY,
            "scenario.seed: the run's own randomness (its lidar's noise; on a network its "
            "route) and its traffic's, unless traffic.warm_seed gives the traffic its own "
            "(a warm-state pool's, a shared world's)"),
-    Column("controller", pa.string(), IDENTITY, "the controller's name"),
-    Column("backend", pa.string(), IDENTITY, "the world simulator: sumo | highway"),
-    Column("status", pa.string(), STATUS, "ok | error | timeout"),
-    Column("error", pa.string(), STATUS, "why an error or timeout row has no outcome"),
-    Column("termination", pa.string(), OUTCOME, "what ended the run: "
+    Column(RowCol.controller, pa.string(), IDENTITY, "the controller's name"),
+    Column(RowCol.backend, pa.string(), IDENTITY, "the world simulator: sumo | highway"),
+    Column(RowCol.status, pa.string(), STATUS, "ok | error | timeout"),
+    Column(RowCol.error, pa.string(), STATUS, "why an error or timeout row has no outcome"),
+    Column(RowCol.termination, pa.string(), OUTCOME, "what ended the run: "
            "collision | duration | route_end"),
-    Column("collision", pa.bool_(), OUTCOME, "the ego's body touched something"),
-    Column("collision_with", pa.string(), OUTCOME,
+    Column(RowCol.collision, pa.bool_(), OUTCOME, "the ego's body touched something"),
+    Column(RowCol.collision_with, pa.string(), OUTCOME,
            "none | obstacle | vehicle | road_edge | pedestrian (a person: one of SUMO's, or "
            "a standing person among the obstacles; first whatever else was touched)"),
-    Column("collision_time_s", pa.float64(), OUTCOME, "simulated time of the collision [s]"),
-    Column("collision_part", pa.string(), OUTCOME,
+    Column(RowCol.collision_time_s, pa.float64(), OUTCOME, "simulated time of the collision [s]"),
+    Column(RowCol.collision_part, pa.string(), OUTCOME,
            "front | side | rear: the part of the ego's body nearest the contact (sdc.car."
            "collision); None: no collision"),
-    Column("collision_role", pa.string(), OUTCOME,
+    Column(RowCol.collision_role, pa.string(), OUTCOME,
            "ran_into: the ego closed in on the contact faster than the other body | "
            "was_hit: the other body did (obstacles and road edges stand still), and always "
            "when the ego stood still (under 0.1 m/s) and the other body moved; None: no "
            "collision"),
-    Column("collision_vclass", pa.string(), OUTCOME,
+    Column(RowCol.collision_vclass, pa.string(), OUTCOME,
            "the SUMO vehicle class (vClass) of the vehicle hit: passenger, truck, bus, "
            "motorcycle, bicycle, ...; pedestrian for a person; in a shared world, "
            "another ego is passenger and another run's barrel barrel; None unless "
            "collision_with is vehicle or pedestrian"),
-    Column("collision_body", pa.string(), OUTCOME,
+    Column(RowCol.collision_body, pa.string(), OUTCOME,
            "whose the body hit was: traffic (SUMO's vehicles and persons) | obstacle (the "
            "run's own) | other_ego | other_obstacle (another run's ego or obstacle, in a "
            "shared world: collision_with vehicle, or pedestrian for a standing person); "
            "None: a road edge, or no collision"),
-    Column("world_overlaps", pa.int64(), OUTCOME,
+    Column(RowCol.world_overlaps, pa.int64(), OUTCOME,
            "steps in which a traffic vehicle or person overlapped another one or an "
            "obstacle within the sensing radius, two persons aside "
            "(analysis.measures.world_audit), where SUMO's own placement of the two (along their "
            "lanes) does not overlap: what the coupling made up (sdc.run.world_witness); "
            "in a shared world also any overlap with another run's obstacle (one with "
            "another ego is that ego's collision); 0 in a consistent world"),
-    Column("sumo_overlaps", pa.int64(), OUTCOME,
+    Column(RowCol.sumo_overlaps, pa.int64(), OUTCOME,
            "steps in which such an overlap is SUMO's own: its placement of the two along "
            "their lanes overlaps too (vehicles waiting inside each other on a junction's "
            "crossing lanes, a bicycle through a pedestrian); SUMO's world, not the coupling"),
-    Column("first_overlap_s", pa.float64(), OUTCOME,
+    Column(RowCol.first_overlap_s, pa.float64(), OUTCOME,
            "simulated time of the first step counted in world_overlaps; None: none [s]"),
-    Column("first_overlap", pa.string(), OUTCOME,
+    Column(RowCol.first_overlap, pa.string(), OUTCOME,
            "that step's overlap in words (analysis.measures.overlap_detail): its time and "
            "step, the two bodies (SUMO's ids where the audit's replay read them, else "
            "traffic[i] / obstacles[j] of the trace; their vehicle classes), how deep they "
            "are inside each other (the shortest move that parts their boxes) [m], whose"),
-    Column("first_sumo_overlap_s", pa.float64(), OUTCOME,
+    Column(RowCol.first_sumo_overlap_s, pa.float64(), OUTCOME,
            "simulated time of the first step counted in sumo_overlaps; None: none [s]"),
-    Column("first_sumo_overlap", pa.string(), OUTCOME,
+    Column(RowCol.first_sumo_overlap, pa.string(), OUTCOME,
            "that step's overlap in words, as first_overlap"),
-    Column("red_light_violations", pa.int64(), OUTCOME,
+    Column(RowCol.red_light_violations, pa.int64(), OUTCOME,
            "stop lines the ego's front bumper crossed while their traffic light showed red "
            "for its way (sdc.run.stop_lines); 0 on roads without lights"),
-    Column("outcome", pa.string(), OUTCOME,
+    Column(RowCol.outcome, pa.string(), OUTCOME,
            "how the run ended (analysis/measures/run_outcome.py): completed (passed every obstacle "
            "ahead of its start, no collision) | collided | stuck (neither; under "
            f"{STUCK_SPEED_MPS:g} m/s for the last {STUCK_HOLD_S:g} s or more, and not at a red "
            "light or in the queue before one for less than its cycle) | unfinished "
            "(neither; still moving when it ended, or waiting at a red light for less than its "
            "cycle: the run was too short)"),
-    Column("progress_m", pa.float64(), OUTCOME,
+    Column(RowCol.progress_m, pa.float64(), OUTCOME,
            "distance the body centre made along the route, measured along the ego's lane [m]"),
-    Column("time_lost_s", pa.float64(), OUTCOME,
+    Column(RowCol.time_lost_s, pa.float64(), OUTCOME,
            "the run's time minus the time driving progress_m at the start speed would take; "
            "None: it started at rest [s]"),
-    Column("collision_speed_mps", pa.float64(), OUTCOME,
+    Column(RowCol.collision_speed_mps, pa.float64(), OUTCOME,
            "the ego's speed at the collision; None unless collision [m/s]"),
-    Column("stood_at_end_s", pa.float64(), OUTCOME,
+    Column(RowCol.stood_at_end_s, pa.float64(), OUTCOME,
            f"how long the ego had stood still (under {STUCK_SPEED_MPS:g} m/s) when the run "
            "ended; 0 when it was moving [s]"),
-    Column("stood_for", pa.string(), OUTCOME,
+    Column(RowCol.stood_for, pa.string(), OUTCOME,
            "what the ego stood for when the run ended standing (analysis/measures/"
            "stood_for.py): red_light | queue (a vehicle in its path) | give_way | obstacle "
            "| person | crossing | nothing (none of them within 30 m ahead); None: it ended "
            "moving"),
-    Column("stood_for_gap_m", pa.float64(), OUTCOME,
+    Column(RowCol.stood_for_gap_m, pa.float64(), OUTCOME,
            "from the front bumper to what it stood for, along the road; None: nothing, or "
            "it ended moving [m]"),
-    Column("stood_for_cycle_s", pa.float64(), OUTCOME,
+    Column(RowCol.stood_for_cycle_s, pa.float64(), OUTCOME,
            "the cycle of the light it waited for (at a red light, or in the queue before "
            "one); standing less than that is unfinished, not stuck; None: no light [s]"),
-    Column("min_gap_obstacle_m", pa.float64(), METRIC,
+    Column(RowCol.min_gap_obstacle_m, pa.float64(), METRIC,
            "smallest distance between the ego's body and any obstacle [m]"),
-    Column("min_ttc_s", pa.float64(), METRIC,
+    Column(RowCol.min_ttc_s, pa.float64(), METRIC,
            "smallest time until the ego's body would touch an obstacle or a vehicle, all "
            "at constant velocities along the road (sdc.car.road_frame); 0 only on contact, "
            "None: never on a course to touch [s]"),
-    Column("max_drac_mps2", pa.float64(), METRIC,
+    Column(RowCol.max_drac_mps2, pa.float64(), METRIC,
            "largest deceleration the ego needed to avoid a leader ahead of it along the "
            "road, closing speed^2 / (2 gap); 0: it never closed in on one [m/s^2]"),
-    Column("min_headway_s", pa.float64(), METRIC,
+    Column(RowCol.min_headway_s, pa.float64(), METRIC,
            "smallest time headway to a leader ahead along the road, gap / ego speed; "
            "None: no leader [s]"),
-    Column("min_road_edge_gap_m", pa.float64(), OUTCOME,
+    Column(RowCol.min_road_edge_gap_m, pa.float64(), OUTCOME,
            "closest approach of a body corner to a road edge, negative beyond it [m]"),
-    Column("stop_gap_m", pa.float64(), OUTCOME,
+    Column(RowCol.stop_gap_m, pa.float64(), OUTCOME,
            "at the start, from the front bumper to the rear of the nearest obstacle ahead "
            "whose box reaches into the band the body covers along its lane, along the "
            "lane; None: no obstacle in that path [m]"),
-    Column("stop_possible", pa.bool_(), OUTCOME,
+    Column(RowCol.stop_possible, pa.bool_(), OUTCOME,
            "braking alone could stop the car before it: start speed^2 / (2 * min(the "
            "vehicle model's max_decel_mps2, friction_mu * g)) <= stop_gap_m, braking from "
            "the first step (analysis.measures.safety.REACTION_TIME_S = 0); None: no obstacle "
            "in the path"),
-    Column("maneuver_started", pa.bool_(), METRIC, "the controller entered a phase named avoid_*"),
-    Column("detection_range_m", pa.float64(), METRIC,
+    Column(RowCol.maneuver_started, pa.bool_(), METRIC,
+           "the controller entered a phase named avoid_*"),
+    Column(RowCol.detection_range_m, pa.float64(), METRIC,
            "shortest central lidar range as the maneuver started [m]"),
-    Column("returned_to_lane", pa.bool_(), METRIC,
+    Column(RowCol.returned_to_lane, pa.bool_(), METRIC,
            "the body centre came back within 0.5 m of its lane's centre for 2 s"),
-    Column("return_time_s", pa.float64(), METRIC,
+    Column(RowCol.return_time_s, pa.float64(), METRIC,
            "from the maneuver's start to the start of that hold [s]"),
-    Column("max_abs_lane_offset_m", pa.float64(), METRIC,
+    Column(RowCol.max_abs_lane_offset_m, pa.float64(), METRIC,
            "largest |offset| of the body centre from its lane's centre [m]"),
-    Column("sim_time_s", pa.float64(), OUTCOME, "simulated time at the end of the run [s]"),
-    Column("steps", pa.int64(), OUTCOME, "steps in the trace"),
-    Column("wall_time_s", pa.float64(), OUTCOME,
+    Column(RowCol.sim_time_s, pa.float64(), OUTCOME, "simulated time at the end of the run [s]"),
+    Column(RowCol.steps, pa.int64(), OUTCOME, "steps in the trace"),
+    Column(RowCol.wall_time_s, pa.float64(), OUTCOME,
            "wall time of the run [s] (of a timeout: until it was stopped)"),
-    Column("network_vehicles", pa.int64(), OUTCOME,
+    Column(RowCol.network_vehicles, pa.int64(), OUTCOME,
            "traffic in the whole network as it entered, one step after the ego"),
-    Column("warm_state", pa.string(), OUTCOME,
+    Column(RowCol.warm_state, pa.string(), OUTCOME,
            "the warm state the run's traffic started from (its key's first 16 hex "
            "digits); runs that share one share their traffic; None: no warm-up"),
-    Column("world_egos", pa.int64(), OUTCOME,
+    Column(RowCol.world_egos, pa.int64(), OUTCOME,
            "the egos whose runs shared the run's SUMO world ([sweep] egos_per_world; each "
            "a body to the others); 1: it ran alone. In a shared world every overlap of "
            "other bodies counts in world_overlaps (no twin judges it)"),
-    Column("trace_sha256", pa.string(), OUTCOME,
+    Column(RowCol.trace_sha256, pa.string(), OUTCOME,
            "hash of the trace: same spec and seed, same hash"),
-    Column("traceback", pa.string(), STATUS, "the Python traceback of a run that raised"),
+    Column(RowCol.traceback, pa.string(), STATUS, "the Python traceback of a run that raised"),
 )
 
 
 #: the columns a run drawn by ``sdc search`` or ``sdc estimate`` adds, after the ``p.<path>``
 ADAPTIVE_COLUMNS: tuple[Column, ...] = (
-    Column("batch", pa.int64(), ADAPTIVE, "the batch (iteration) of the search or estimate "
+    Column(RowCol.batch, pa.int64(), ADAPTIVE, "the batch (iteration) of the search or estimate "
            "that drew the run's sample, from 0"),
-    Column("phase", pa.string(), ADAPTIVE, "adapt: the batch moved the sampling distribution "
+    Column(RowCol.phase, pa.string(), ADAPTIVE, "adapt: the batch moved the sampling distribution "
            "| estimate: drawn from the frozen one, counted in the estimate"),
-    Column("weight", pa.float64(), ADAPTIVE, "importance weight of the run's sample: nominal "
+    Column(RowCol.weight, pa.float64(), ADAPTIVE, "importance weight of the run's sample: nominal "
            "density / the density it was drawn from"),
-    Column("score", pa.float64(), ADAPTIVE, "the run's distance from collision that guides "
+    Column(RowCol.score, pa.float64(), ADAPTIVE, "the run's distance from collision that guides "
            "the sampling; <= 0: it collided, or has no outcome (error, timeout); None: its "
            "sample made no valid scenario"),
 )
+
+
+def _check_names() -> None:
+    """The columns here are exactly the home's names, in its order (a column added or
+    renamed in one place and not the other is a programming error, found at import)."""
+    for defined, named in ((COLUMNS, ROW_NAMES), (ADAPTIVE_COLUMNS, ADAPTIVE_NAMES)):
+        names = tuple(c.name for c in defined)
+        if names != named:
+            raise RuntimeError("sdc/run/result_row.py defines the columns "
+                               f"{names}, analysis/measures/row_columns.py names {named}")
+
+
+_check_names()
+
 
 def _names(*parts: str) -> tuple[str, ...]:
     return tuple(c.name for c in COLUMNS if c.part in parts)
@@ -213,7 +233,7 @@ def _names(*parts: str) -> tuple[str, ...]:
 #: a run's own row, in order (every column but the sweep's)
 RUN_COLUMNS = _names(IDENTITY, STATUS, OUTCOME, METRIC)
 #: what ``sdc run --json`` prints: the run's row but its traceback (which goes to stderr)
-JSON_COLUMNS = tuple(n for n in RUN_COLUMNS if n != "traceback")
+JSON_COLUMNS = tuple(n for n in RUN_COLUMNS if n != RowCol.traceback)
 #: the columns :func:`analysis.measures.metrics.trace_metrics` returns
 METRIC_COLUMNS = _names(METRIC)
 _IDENTITY_COLUMNS = _names(IDENTITY)
@@ -262,7 +282,8 @@ def ok_row(metrics: Mapping[str, Any], **values: Any) -> dict:
 def error_row(**values: Any) -> dict:
     """The row of a run that raised or whose worker died: the identity columns,
     ``error`` and ``traceback`` (None when there is none)."""
-    return _run_row("error", "error", values, (*_IDENTITY_COLUMNS, "error", "traceback"))
+    return _run_row("error", "error", values,
+                    (*_IDENTITY_COLUMNS, RowCol.error, RowCol.traceback))
 
 
 def raised_at(traceback_text: str | None) -> str | None:
@@ -278,7 +299,8 @@ def raised_at(traceback_text: str | None) -> str | None:
 def timeout_row(**values: Any) -> dict:
     """The row of a run stopped at the run timeout: the identity columns, ``error``
     and ``wall_time_s`` (how long it ran)."""
-    return _run_row("timeout", "timeout", values, (*_IDENTITY_COLUMNS, "error", "wall_time_s"))
+    return _run_row("timeout", "timeout", values,
+                    (*_IDENTITY_COLUMNS, RowCol.error, RowCol.wall_time_s))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -292,8 +314,8 @@ class SweepColumns:
     world_slot: int | None = None
 
     def values(self) -> dict[str, Any]:
-        return {"run_index": self.run_index, "sample": self.sample,
-                "world_id": self.world_id, "world_slot": self.world_slot,
+        return {RowCol.run_index: self.run_index, RowCol.sample: self.sample,
+                RowCol.world_id: self.world_id, RowCol.world_slot: self.world_slot,
                 **{PARAM_PREFIX + path: value for path, value in self.params.items()}}
 
 
@@ -308,14 +330,15 @@ def sweep_row(row: Mapping[str, Any], sweep: SweepColumns) -> dict:
 def invalid_sample_row(sweep: SweepColumns, **values: Any) -> dict:
     """The error row of a planned run whose sample made no valid scenario: the
     identity columns and ``error``, with its sweep's columns."""
-    row = _run_row("invalid sample", "error", values, (*_IDENTITY_COLUMNS, "error"))
+    row = _run_row("invalid sample", "error", values, (*_IDENTITY_COLUMNS, RowCol.error))
     return sweep_row(row, sweep)
 
 
 def adaptive_row(row: Mapping[str, Any], *, batch: int, phase: str, weight: float,
                  score: float | None) -> dict:
     """A sweep row (:func:`sweep_row`) with the :data:`ADAPTIVE_COLUMNS` of its run."""
-    values = {"batch": batch, "phase": phase, "weight": weight, "score": score}
+    values = {RowCol.batch: batch, RowCol.phase: phase, RowCol.weight: weight,
+              RowCol.score: score}
     return {**row, **{k: json_scalar(v) for k, v in values.items()}}
 
 

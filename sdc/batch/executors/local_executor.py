@@ -4,8 +4,8 @@ each process holds at most one libsumo simulation).
 Every task gives exactly one row, in completion order: the run's, a timeout row
 when it ran past ``run_timeout_s`` (its worker is killed and replaced), or an
 error row when its worker died under it. A task's files
-(:mod:`sdc.batch.job_files`) go to each worker once, with the first task that
-needs them; the worker keeps its copies (:mod:`sdc.batch.worker_files`) and
+(:mod:`sdc.batch.tasks.job_files`) go to each worker once, with the first task that
+needs them; the worker keeps its copies (:mod:`sdc.batch.executors.worker_files`) and
 checks them before every run. The pool lives for the ``with`` block: ``map`` may
 be called any number of times in it.
 """
@@ -24,13 +24,11 @@ from collections.abc import Iterable, Iterator
 from multiprocessing.connection import wait
 
 from scenarios.common.errors import SdcError
-from sdc.batch.job_files import FileCatalog, with_files
-from sdc.batch.run_task import RunTask, execute, task_error_row
-from sdc.batch.timeouts import next_deadline_s, task_limit_s, timeout_row
-from sdc.batch.worker_files import WorkerFiles
-from sdc.batch.worker_run import TaskFn, deliver, run_in_worker
-
-WARM_MODULES = ("sdc.run.episode",)  # imported by each worker before it takes a task
+from sdc.batch.executors.timeouts import next_deadline_s, task_limit_s, timeout_row
+from sdc.batch.executors.worker_files import WorkerFiles
+from sdc.batch.executors.worker_run import WARM_MODULES, TaskFn, deliver, run_in_worker
+from sdc.batch.tasks.job_files import FileCatalog, with_files
+from sdc.batch.tasks.task import Task, execute
 
 
 def _exit_when_orphaned(parent_pid: int) -> None:
@@ -69,11 +67,11 @@ class _Worker:
         self.process.start()
         child.close()
         self.ready = False
-        self.task: RunTask | None = None
+        self.task: Task | None = None
         self.started = 0.0
         self.sent: set[str] = set()  # sha256 of the files this process was given
 
-    def assign(self, task: RunTask, catalog: FileCatalog) -> None:
+    def assign(self, task: Task, catalog: FileCatalog) -> None:
         payloads = {f.sha256: catalog.payload(f.sha256) for f in task.files
                     if f.sha256 not in self.sent}
         self.conn.send((task, payloads))
@@ -145,9 +143,9 @@ class LocalExecutor:
         self._replace(i)
         if task is None:
             return None
-        return task_error_row(task, f"worker process died while running this run ({cause})")
+        return task.error_row(f"worker process died while running this run ({cause})")
 
-    def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
+    def map(self, tasks: Iterable[Task]) -> Iterator[dict]:
         """One row per task, in completion order. A map left before its end (its
         iterator closed) stops the runs it had started, so the next map starts clean."""
         for i in sorted(self._stopped):  # left busy by a map that was left early
@@ -162,12 +160,12 @@ class LocalExecutor:
                     worker.task = None
                     self._stopped.add(i)
 
-    def _map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
-        pending: collections.deque[RunTask] = collections.deque()
+    def _map(self, tasks: Iterable[Task]) -> Iterator[dict]:
+        pending: collections.deque[Task] = collections.deque()
         for task in tasks:
             ready = with_files(task, self.files)
             if isinstance(ready, SdcError):  # a file the driver cannot read
-                yield task_error_row(task, str(ready))
+                yield task.error_row(str(ready))
             else:
                 pending.append(ready)
         while pending or any(w.task for w in self._pool):

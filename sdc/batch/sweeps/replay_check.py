@@ -22,7 +22,7 @@ from analysis.measures.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.common.errors import FileError, SdcError, SpecError
 from scenarios.common.file_read import read_parquet
 from scenarios.spec.scenario_spec import ScenarioSpec
-from sdc.batch.manifest import controller_changes, package_versions, read_manifest
+from sdc.batch.sweeps.manifest import controller_changes, package_versions, read_manifest
 
 _PLAN_COLUMNS = ("run_id", "spec_json", "error")
 _WORLD_COLUMNS = ("world_id", "world_slot")  # in the plans of sweeps with shared worlds

@@ -1,6 +1,6 @@
 """Runs on a Ray cluster, several to a Ray task, each still its own row.
 
-A task carries a batch of runs (:mod:`sdc.batch.batch_size`: from the run times
+A task carries a batch of runs (:mod:`sdc.batch.executors.batch_size`: from the run times
 measured so far, or ``batch_runs``) and is a Ray generator: it yields each run's
 row as the run ends, so rows, progress and the run timeout stay per run. No more
 tasks are in flight than the cluster has CPUs, so a task starts when it is
@@ -14,10 +14,10 @@ row before it.
   so every run of its batch without a row runs again, each alone in a task; a
   run whose lone task dies gets the error row. A run that kills its worker thus
   runs twice, and no other run pays for it.
-- Files (:mod:`sdc.batch.job_files`): each file's bytes are put in Ray's object
+- Files (:mod:`sdc.batch.tasks.job_files`): each file's bytes are put in Ray's object
   store once per ``with`` block; batches carry the references, and a worker
   fetches the bytes only when its machine has no good copy yet
-  (:mod:`sdc.batch.worker_files`). A trace comes back with its row and is written
+  (:mod:`sdc.batch.executors.worker_files`). A trace comes back with its row and is written
   by the driver.
 
 The cluster is joined (``address``) or started locally with ``workers`` CPUs
@@ -34,13 +34,12 @@ import time
 from collections.abc import Iterable, Iterator
 
 from scenarios.common.errors import SdcError
-from sdc.batch.batch_size import BatchSizer
-from sdc.batch.job_files import FileCatalog, with_files
-from sdc.batch.local_executor import WARM_MODULES
-from sdc.batch.run_task import RunTask, execute, task_error_row
-from sdc.batch.timeouts import next_deadline_s, task_limit_s, timeout_row
-from sdc.batch.worker_files import WorkerFiles
-from sdc.batch.worker_run import TaskFn, deliver, run_in_worker
+from sdc.batch.executors.batch_size import BatchSizer
+from sdc.batch.executors.timeouts import next_deadline_s, task_limit_s, timeout_row
+from sdc.batch.executors.worker_files import WorkerFiles
+from sdc.batch.executors.worker_run import WARM_MODULES, TaskFn, deliver, run_in_worker
+from sdc.batch.tasks.job_files import FileCatalog, with_files
+from sdc.batch.tasks.task import Task, execute
 
 
 def _warm_up() -> int:
@@ -49,7 +48,7 @@ def _warm_up() -> int:
     return os.getpid()
 
 
-def _run_batch(tasks: list[RunTask], refs: dict, task_fn: TaskFn):
+def _run_batch(tasks: list[Task], refs: dict, task_fn: TaskFn):
     """In a Ray worker: run ``tasks`` one after the other, yielding each outcome
     (row, trace bytes). ``refs``: the object references of the files' bytes."""
     import ray
@@ -65,13 +64,13 @@ def _run_batch(tasks: list[RunTask], refs: dict, task_fn: TaskFn):
 
 @dataclasses.dataclass
 class _Batch:
-    tasks: list[RunTask]
+    tasks: list[Task]
     alone: bool  # a rerun of a run whose batch lost its worker
     clock_s: float  # when the current run started (monotonic)
     done: int = 0  # runs whose rows arrived
 
     @property
-    def current(self) -> RunTask:
+    def current(self) -> Task:
         return self.tasks[self.done]
 
 
@@ -118,7 +117,7 @@ class RayExecutor:
         if self._owns_session:
             self._ray.shutdown()
 
-    def _submit(self, tasks: list[RunTask], alone: bool):
+    def _submit(self, tasks: list[Task], alone: bool):
         shas = {f.sha256 for task in tasks for f in task.files}
         for sha in shas - self._refs.keys():
             self._refs[sha] = self._ray.put(self.files.payload(sha))
@@ -133,7 +132,7 @@ class RayExecutor:
         """The mean batch size so far (in this ``with`` block)."""
         return self.submitted_runs / max(self.submitted_tasks, 1)
 
-    def _next_batch(self, pending: collections.deque) -> tuple[list[RunTask], bool]:
+    def _next_batch(self, pending: collections.deque) -> tuple[list[Task], bool]:
         task, alone = pending.popleft()
         if alone:
             return [task], True
@@ -143,7 +142,7 @@ class RayExecutor:
             tasks.append(pending.popleft()[0])
         return tasks, False
 
-    def map(self, tasks: Iterable[RunTask]) -> Iterator[dict]:
+    def map(self, tasks: Iterable[Task]) -> Iterator[dict]:
         """One row per task, in completion order. A map left before its end (its
         iterator closed) cancels the tasks it had in flight."""
         running: dict = {}  # ObjectRefGenerator -> _Batch
@@ -154,13 +153,13 @@ class RayExecutor:
                 for generator in running:
                     self._ray.cancel(generator, force=True)
 
-    def _map(self, tasks: Iterable[RunTask], running: dict) -> Iterator[dict]:
+    def _map(self, tasks: Iterable[Task], running: dict) -> Iterator[dict]:
         ray = self._ray
-        pending: collections.deque[tuple[RunTask, bool]] = collections.deque()
+        pending: collections.deque[tuple[Task, bool]] = collections.deque()
         for task in tasks:
             ready = with_files(task, self.files)
             if isinstance(ready, SdcError):  # a file the driver cannot read
-                yield task_error_row(task, str(ready))
+                yield task.error_row(str(ready))
             else:
                 pending.append((ready, False))
         while pending or running:
@@ -187,7 +186,7 @@ class RayExecutor:
             del running[generator]
             if batch.alone:
                 cause = str(e).strip().splitlines()[0] if str(e).strip() else ""
-                yield task_error_row(batch.current, f"{type(e).__name__}: {cause}")
+                yield batch.current.error_row(f"{type(e).__name__}: {cause}")
             else:  # which run killed it is unsure: each runs again, alone
                 pending.extendleft((task, True) for task in reversed(batch.tasks[batch.done:]))
             return

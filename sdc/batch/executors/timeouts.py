@@ -5,20 +5,18 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable
 
-from sdc.batch.run_task import RunTask, task_timeout_row
+from sdc.batch.tasks.task import Task
 
 
-def task_limit_s(task: RunTask, limit_s: float | None) -> float | None:
+def task_limit_s(task: Task, limit_s: float | None) -> float | None:
     """A task's wall limit under the run timeout ``limit_s`` (None: none): a shared
     world's task holds its runs' time, the limit times its runs."""
-    return None if limit_s is None else limit_s * max(1, len(task.members))
+    return None if limit_s is None else task.wall_limit_s(limit_s)
 
 
-def timeout_row(task: RunTask, elapsed_s: float, limit_s: float) -> dict:
-    what = (f"its world of {len(task.members)} runs exceeded {task_limit_s(task, limit_s):g} s "
-            f"(the run timeout of {limit_s:g} s a run)" if task.members
-            else f"run exceeded the run timeout of {limit_s:g} s")
-    return task_timeout_row(task, f"{what}; its worker was stopped", elapsed_s)
+def timeout_row(task: Task, elapsed_s: float, limit_s: float) -> dict:
+    """The row of ``task``, stopped after ``elapsed_s`` under the run timeout ``limit_s``."""
+    return task.timeout_row(f"{task.overrun_text(limit_s)}; its worker was stopped", elapsed_s)
 
 
 def next_deadline_s(running: Iterable[tuple[float, float | None]]) -> float | None:

@@ -1,4 +1,4 @@
-"""A worker's copies of a job's files (:mod:`sdc.batch.job_files`), checked by
+"""A worker's copies of a job's files (:mod:`sdc.batch.tasks.job_files`), checked by
 content hash before every run.
 
 Copies live under a directory of the worker's own machine (its
@@ -21,8 +21,8 @@ from scenarios.common.atomic_write import write_atomic
 from scenarios.common.cache_dir import sdc_cache_dir
 from scenarios.common.errors import SdcError
 from scenarios.common.file_read import sha256_hex
-from sdc.batch.job_files import WARM_STATE_FIELD, JobFile
-from sdc.batch.run_task import RunTask
+from sdc.batch.tasks.job_files import WARM_STATE_FIELD, JobFile
+from sdc.batch.tasks.task import Task
 
 #: the job's bytes of a file, or None when the executor has none to give
 Fetch = Callable[[JobFile], bytes | None]
@@ -77,10 +77,13 @@ class WorkerFiles:
                            f"({e.strerror or e}); not run") from None
         return path
 
-    def localise(self, task: RunTask, fetch: Fetch) -> RunTask:
-        """``task`` as this worker runs it: its spec naming this worker's copies,
-        ``cache_dir`` the folder of its cached file, ``recorded_spec`` the driver's."""
-        spec, cache_dir = task.spec, self.root / "derived"
+    def localise(self, task: Task, fetch: Fetch) -> Task:
+        """``task`` as this worker runs it (:meth:`~sdc.batch.tasks.task.Task.on_worker`):
+        its spec naming this worker's copies, in ``cache_dir`` the folder of its cached
+        file, from its copy of the warm state (a task without files: as it is)."""
+        if not task.files:
+            return task
+        spec, cache_dir, warm_state = task.spec, self.root / "derived", None
         for file in task.files:
             path = self.ensure(file, fetch)
             if file.cached:  # a run uses one at most: a built network, or a net's edges
@@ -90,12 +93,9 @@ class WorkerFiles:
                 spec = dataclasses.replace(spec, road=dataclasses.replace(
                     spec.road, **{name: str(path)}))
             elif file.field == WARM_STATE_FIELD:
-                task = dataclasses.replace(task, warm_state=path)
+                warm_state = path
             elif file.field == "controller.name":
                 cls = spec.controller.name.rpartition(":")[2]
                 spec = dataclasses.replace(spec, controller=dataclasses.replace(
                     spec.controller, name=f"{path}:{cls}"))
-        if not task.files:
-            return task
-        return dataclasses.replace(task, spec=spec, cache_dir=cache_dir,
-                                   recorded_spec=task.spec)
+        return task.on_worker(spec, cache_dir, warm_state)

@@ -10,7 +10,7 @@ import subprocess
 from importlib import metadata
 from pathlib import Path
 
-from analysis.measures.sweep_manifest import MANIFEST_FILE, SweepManifest
+from analysis.measures.sweep_manifest import MANIFEST_FILE, RESUME_KEYS, SweepManifest
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError
 from scenarios.common.file_read import read_json, require_keys
@@ -37,7 +37,7 @@ def package_versions() -> dict[str, str | None]:
 
 def git_state() -> dict | None:
     """The commit of the source tree sdc runs from, when it is a git checkout."""
-    source = Path(__file__).resolve().parent.parent
+    source = Path(__file__).resolve().parents[2]  # sdc/
     try:
         commit = subprocess.run(["git", "-C", str(source), "rev-parse", "HEAD"],
                                 capture_output=True, text=True, timeout=10, check=True)
@@ -91,11 +91,6 @@ def network_file_changes(manifest: SweepManifest) -> list[str]:
     return lines
 
 
-#: what sdc reads of a manifest, with its type
-_MANIFEST_KEYS = {"sweep.sweep.name": str, "plan_sha256": str, "versions": dict,
-                  "sessions": list}
-
-
 def read_manifest(out_dir: Path) -> SweepManifest | None:
     """``out_dir``'s manifest, None when it has none; one that cannot be read or was
     written by another sdc version is a :class:`~scenarios.common.errors.FileError`."""
@@ -103,7 +98,7 @@ def read_manifest(out_dir: Path) -> SweepManifest | None:
     if not path.exists():
         return None
     return SweepManifest.from_dict(require_keys(read_json(path, "the sweep manifest"),
-                                                _MANIFEST_KEYS, path, "the sweep manifest"))
+                                                RESUME_KEYS, path, "the sweep manifest"))
 
 
 def write_manifest(out_dir: Path, manifest: SweepManifest) -> None:

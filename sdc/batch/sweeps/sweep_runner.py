@@ -32,9 +32,8 @@ from scenarios.spec.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expan
 from scenarios.sumo.warm_state import SETTLING_FILE
 from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import prepare_network
-from sdc.batch.executors import Executor
-from sdc.batch.job_files import FileCatalog
-from sdc.batch.manifest import (
+from sdc.batch.executors.executor import Executor
+from sdc.batch.sweeps.manifest import (
     controller_changes,
     controller_sources,
     git_state,
@@ -44,14 +43,17 @@ from sdc.batch.manifest import (
     read_manifest,
     write_manifest,
 )
-from sdc.batch.result_store import ResultStore
-from sdc.batch.run_task import RunTask, TraceMode, rows_of, world_task
-from sdc.batch.warm_states import prepare_warm_states, with_warm_state, write_settling
+from sdc.batch.sweeps.result_store import ResultStore
+from sdc.batch.sweeps.warm_states import prepare_warm_states, with_warm_state, write_settling
+from sdc.batch.tasks.job_files import FileCatalog
+from sdc.batch.tasks.run_task import RunTask, TraceMode
+from sdc.batch.tasks.task import Task, rows_of
+from sdc.batch.tasks.world_task import WorldTask
 from sdc.run.result_row import SweepColumns, invalid_sample_row, result_schema
 
 
 class Reporter(Protocol):
-    """What a sweep tells about its progress (see :mod:`sdc.batch.progress`)."""
+    """What a sweep tells about its progress (see :mod:`sdc.batch.sweeps.progress`)."""
 
     def planning(self, done: int, total: int) -> None: ...  # runs planned so far
     def start(self, total: int, done: int, outcomes: Counter, failed: int) -> None: ...
@@ -96,7 +98,7 @@ def plan_table_of(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
 
 
 def plan_tasks(plan: list[PlannedRun], done: set[str], trace_dir: Path | None,
-               traces: TraceMode) -> list[RunTask]:
+               traces: TraceMode) -> list[Task]:
     """The tasks of the runs of ``plan`` without a row (``done``: those with one). The
     runs of a shared world go as one task, all of them (it re-simulates the world), a
     run that has its row without a trace path (its row is not taken again)."""
@@ -118,14 +120,15 @@ def plan_tasks(plan: list[PlannedRun], done: set[str], trace_dir: Path | None,
             worlds.setdefault(run.world.world_id, []).append(run)
     for world_id, runs in worlds.items():
         if any(run.run_id not in done for run in runs):
-            tasks.append(world_task(world_id, [task(run) for run in runs]))
+            tasks.append(WorldTask.of(world_id, [task(run) for run in runs]))
     return tasks
 
 
-def members_keys(tasks: list[RunTask], keys: dict[str, str]) -> dict[str, str]:
-    """``keys`` (warm-state keys by task ID) also by the run IDs of world tasks' runs."""
-    return {**keys, **{m.run_id: keys[t.run_id] for t in tasks for m in t.members
-                       if t.run_id in keys}}
+def members_keys(tasks: list[Task], keys: dict[str, str]) -> dict[str, str]:
+    """``keys`` (warm-state keys by task ID) also by the run IDs of world tasks' runs
+    (a task's parts: a world's runs, any other task itself)."""
+    return {**keys, **{part.run_id: keys[t.run_id] for t in tasks if t.run_id in keys
+                       for part in t.parts()}}
 
 
 def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
@@ -211,15 +214,16 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun],
                         tuple(r.spec for r in plan if r.spec is not None))
 
 
-def build_networks(tasks: list[RunTask], workers: int) -> None:
+def build_networks(tasks: list[Task], workers: int) -> None:
     """Build each distinct SUMO road network once, before any worker needs it."""
-    roads = list({task.spec.road: None for task in tasks if task.spec.scenario.backend == "sumo"})
+    roads = list({task.spec.road: None for task in tasks
+                  if task.spec.scenario.world_backend.loads_networks})
     with concurrent.futures.ThreadPoolExecutor(max(1, workers)) as pool:
         list(pool.map(prepare_network, roads))
 
 
 def record_job_files(out_dir: Path, manifest: SweepManifest,
-                     tasks: list[RunTask]) -> SweepManifest:
+                     tasks: list[Task]) -> SweepManifest:
     """Record in the manifest (and its session) the files the runs read besides
     their specs, by the driver's path, with their sha256: what travels with the
     job. One the driver cannot read is left out here and makes its runs error rows.

@@ -8,10 +8,10 @@ configuration as one bundle (``scenarios/sumo_net/sumo_config.py``) and the road
 edges; a SUMO run of a built-in road reads
 the network netconvert built for it on the driver; a ``file.py:Class``
 controller reads its file; a run with a warm-up starts from its warm state, once
-the driver has it (:mod:`sdc.batch.warm_states`). Each is a :class:`JobFile`:
+the driver has it (:mod:`sdc.batch.sweeps.warm_states`). Each is a :class:`JobFile`:
 the field that names it, the driver's path (for messages and the manifest; no
 worker opens it), its sha256 and the file name its copy takes. :class:`FileCatalog` is the driver's
-side; :mod:`sdc.batch.worker_files` is the worker's.
+side; :mod:`sdc.batch.executors.worker_files` is the worker's.
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ class FileCatalog:
         """The road's own file (a configuration travels as one bundle) and, where a
         network's road edges are cached, those."""
         road = spec.road
-        if spec.scenario.backend != "sumo":
+        if not spec.scenario.world_backend.loads_networks:
             return ()
         if road not in self._by_road:
             source = road_source(road)
@@ -126,8 +126,8 @@ class FileCatalog:
 
 
 def with_files(task, catalog: FileCatalog):
-    """``task`` (a :class:`~sdc.batch.run_task.RunTask`) with its files, or the
-    :class:`SdcError` that says which one the driver cannot read."""
+    """``task`` (any kind: :class:`~sdc.batch.tasks.task.Task`) with the files of its
+    spec, or the :class:`SdcError` that says which one the driver cannot read."""
     try:
         return dataclasses.replace(task, files=catalog.files(task.spec))
     except SdcError as e:

@@ -2,11 +2,12 @@
 
 Runs with a traffic warm-up start from a warm state (``scenarios/sumo/warm_state.py``).
 Before a batch's runs, every distinct state they need that the driver's cache
-lacks is computed by one ``warm_up`` task on the executor (a worker of any node),
-whose file comes back like a trace and lands in the driver's cache; from there it
-travels with each run by sha256 like the other job files
-(:mod:`sdc.batch.job_files`). A state whose task failed is left to its runs: each
-computes it itself (same trace) or fails the same way, as an error row.
+lacks is computed by one :class:`~sdc.batch.tasks.warm_up_task.WarmUpTask` on the
+executor (a worker of any node), whose file comes back like a trace and lands in
+the driver's cache; from there it travels with each run by sha256 like the other
+job files (:mod:`sdc.batch.tasks.job_files`). A state whose task failed is left to
+its runs: each computes it itself (same trace) or fails the same way, as an error
+row.
 """
 
 from __future__ import annotations
@@ -26,9 +27,10 @@ from scenarios.sumo.warm_state import (
     warm_state_id,
 )
 from scenarios.world_backends import warm_up_span_s
-from sdc.batch.job_files import FileCatalog
-from sdc.batch.run_task import RunTask
-from sdc.batch.warm_up_clock import clock_path, read_clock
+from sdc.batch.tasks.job_files import FileCatalog
+from sdc.batch.tasks.task import Task
+from sdc.batch.tasks.warm_up_clock import clock_path, read_clock
+from sdc.batch.tasks.warm_up_task import WarmUpTask
 
 #: told the warm states done and in all, and the seconds of SUMO simulated of all the
 #: warm-ups' seconds, as they come
@@ -39,7 +41,7 @@ CLOCKS_READ_EVERY_S = 0.5
 SETTLING_SERIES = 20
 
 
-def warm_keys(tasks: Iterable[RunTask], catalog: FileCatalog) -> dict[str, str]:
+def warm_keys(tasks: Iterable[Task], catalog: FileCatalog) -> dict[str, str]:
     """The key of the warm state each of ``tasks`` starts from, by run ID (a run
     without one, or whose files the driver cannot read, is left out: it reports them)."""
     keys: dict[str, str] = {}
@@ -51,15 +53,15 @@ def warm_keys(tasks: Iterable[RunTask], catalog: FileCatalog) -> dict[str, str]:
     return keys
 
 
-def warm_up_tasks(tasks: Iterable[RunTask], keys: dict[str, str]) -> list[RunTask]:
-    """A ``warm_up`` task for each warm state the ``tasks`` start from (``keys``: by run
+def warm_up_tasks(tasks: Iterable[Task], keys: dict[str, str]) -> list[WarmUpTask]:
+    """A :class:`WarmUpTask` for each warm state the ``tasks`` start from (``keys``: by run
     ID) that the driver's cache lacks, on the spec of the first run that needs it."""
     first = {}
     for task in tasks:
         if task.run_id in keys:
             first.setdefault(keys[task.run_id], task)
-    return [RunTask(f"warm-state-{key[:16]}", task.spec, trace_path=cached_path(key),
-                    kind="warm_up", clock_path=clock_path(cached_path(key)))
+    return [WarmUpTask(f"warm-state-{key[:16]}", task.spec, state_path=cached_path(key),
+                       clock_path=clock_path(cached_path(key)))
             for key, task in first.items() if not cached_path(key).is_file()]
 
 
@@ -73,7 +75,7 @@ def with_warm_state(row: dict, keys: dict[str, str]) -> dict:
     return {**row, "warm_state": warm_state_id(key)}
 
 
-def prepare_warm_states(tasks: list[RunTask], executor,
+def prepare_warm_states(tasks: list[Task], executor,
                         progress: Progress) -> tuple[dict, dict[str, str]]:
     """Compute on ``executor`` (inside its ``with`` block) the warm states ``tasks``
     need and the driver's cache lacks. Returns ``{"distinct": n, "computed": n,
@@ -96,10 +98,10 @@ def prepare_warm_states(tasks: list[RunTask], executor,
 
 class _SumoClocks:
     """The progress of ``tasks`` (warm-ups) in seconds of SUMO: those done in full, and
-    of those under way what their workers' clocks say (:mod:`sdc.batch.warm_up_clock`),
+    of those under way what their workers' clocks say (:mod:`sdc.batch.tasks.warm_up_clock`),
     told to ``progress`` every :data:`CLOCKS_READ_EVERY_S` from a thread of its own."""
 
-    def __init__(self, tasks: list[RunTask], progress: Progress):
+    def __init__(self, tasks: list[WarmUpTask], progress: Progress):
         self.progress, self.lock, self.stopped = progress, threading.Lock(), threading.Event()
         self.spans = {task.run_id: (task.clock_path, *warm_up_span_s(task.spec))
                       for task in tasks}

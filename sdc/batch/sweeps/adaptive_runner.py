@@ -47,10 +47,9 @@ from scenarios.common.plain_json import json_plain
 from scenarios.common.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
 from scenarios.spec.controller_ref import controller_label
 from scenarios.spec.sweep_spec import PlannedRun, SweepSpec, plan_samples
-from sdc.batch.executors import Executor
-from sdc.batch.result_store import ResultStore
-from sdc.batch.run_task import TraceMode, rows_of
-from sdc.batch.sweep_runner import (
+from sdc.batch.executors.executor import Executor
+from sdc.batch.sweeps.result_store import ResultStore
+from sdc.batch.sweeps.sweep_runner import (
     Reporter,
     build_networks,
     end_session,
@@ -65,7 +64,9 @@ from sdc.batch.sweep_runner import (
     record_warm_states,
     start_session,
 )
-from sdc.batch.warm_states import prepare_warm_states, with_warm_state
+from sdc.batch.sweeps.warm_states import prepare_warm_states, with_warm_state
+from sdc.batch.tasks.run_task import TraceMode
+from sdc.batch.tasks.task import rows_of
 from sdc.run.result_row import adaptive_row, result_schema
 
 Mode = Literal["search", "estimate"]

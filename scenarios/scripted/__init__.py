@@ -1,0 +1,1 @@
+"""The scripted world backend: a world without a simulator."""
