@@ -42,7 +42,8 @@ from avoid_roads import figures as road_figures
 
 from analysis.stats.rates import wilson_interval
 from scenarios import CATALOG_DIR
-from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import SweepSpec, load_sweep
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.world_backends import check_inputs
 from sdc.batch.executors.local_executor import LocalExecutor

@@ -67,7 +67,8 @@ import traci.constants as tc
 from smoke import SMOKE, size
 
 from scenarios import CATALOG_DIR
-from scenarios.spec.scenario_spec import LidarSpec, ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import LidarSpec
 from scenarios.spec.toml_io import load_spec, read_toml
 from scenarios.sumo.routes_xml import EGO_ID
 from scenarios.world_backends import make_road, make_world

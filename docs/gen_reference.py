@@ -6,8 +6,9 @@ Three pages, none of them written by hand (docs/development.md, "The manual"):
   (``COLUMNS``, ``ADAPTIVE_COLUMNS``: name, Arrow type, part, meaning) and the trace's
   columns (``analysis/measures/trace_file.py``);
 - ``reference/spec.md``: every field of the scenario spec classes
-  (``scenarios/spec/scenario_spec.py``, from ``ScenarioSpec``'s tables down) and of the
-  sweep file (``scenarios/spec/sweep_spec.py``), with type, default, bounds and the
+  (``scenarios/spec/scenario_spec.py``, from ``ScenarioSpec``'s tables down:
+  ``scenario_tables.py``, ``controller_spec.py``) and of the sweep file
+  (``scenarios/spec/sweep_spec.py``, ``sweep_params.py``), with type, default, bounds and the
   description the code gives (its ``#:`` comment above the field or the comment
   after it);
 - ``reference/cli.md``: every command of ``sdc`` with its ``--help``, rendered by
@@ -39,7 +40,13 @@ from typing import Any, Literal
 import click
 
 from analysis.measures import trace_file
-from scenarios.spec import controller_params, scenario_spec, sweep_spec
+from scenarios.spec import (
+    controller_params,
+    controller_spec,
+    scenario_spec,
+    sweep_params,
+    sweep_spec,
+)
 from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP
 from sdc.cli import main as cli_main
 from sdc.run import result_row
@@ -281,7 +288,8 @@ def scenario_tables() -> list[tuple[str, type, bool, bool]]:
 
 
 def spec_page() -> str:
-    sources = "scenarios/spec/scenario_spec.py and scenarios/spec/sweep_spec.py"
+    sources = ("scenarios/spec/scenario_spec.py, scenario_tables.py, controller_spec.py, "
+               "sweep_spec.py and sweep_params.py")
     out = [GENERATED.format(source=sources),
            "# Scenario and sweep fields\n\n",
            "A scenario file is TOML with the tables below; a sweep file one `[sweep]` table "
@@ -289,7 +297,8 @@ def spec_page() -> str:
            "type or range is bad input (exit 2) naming the field's path "
            "(`obstacles[0].lane`). *Bounds* are the range the field is checked against; "
            "fields and bounds are generated from the spec classes "
-           "(`scenarios/spec/scenario_spec.py`, `scenarios/spec/sweep_spec.py`), descriptions from "
+           "(`scenarios/spec/scenario_tables.py`, `scenarios/spec/controller_spec.py`, "
+           "`scenarios/spec/sweep_spec.py`), descriptions from "
            "their comments. Names carry units: `_m` metres, `_s` seconds, `_mps` m/s, "
            "`_mps2` m/s², `_rad` radians, `_deg` degrees, `_vph` vehicles per hour.\n\n",
            prose(scenario_spec.__doc__), "\n\n## Scenario files\n\n"]
@@ -298,7 +307,7 @@ def spec_page() -> str:
         need = "required" if required else ("any number" if array else "optional")
         out.append(f"### `{title}`\n\n*{need}*; `{cls.__name__}`. {prose(cls.__doc__)}".rstrip()
                    + "\n\n")
-        if cls is scenario_spec.ControllerSpec:
+        if cls is controller_spec.ControllerSpec:
             out.append(controller_section())
         else:
             out.append(field_table(cls) + "\n")
@@ -325,7 +334,7 @@ def controller_section() -> str:
 
 def sweep_section() -> str:
     table = sweep_spec._SweepTable  # the [sweep] table's fields (the spec class of it)
-    kinds = typing.get_args(typing.get_type_hints(sweep_spec.Param)["kind"])
+    kinds = typing.get_args(typing.get_type_hints(sweep_params.Param)["kind"])
     return "".join([
         "## Sweep files\n\n", prose(sweep_spec.__doc__), "\n\n",
         "### `[sweep]`\n\n*required*. `base` is relative to the sweep file; `samples` is "
@@ -338,10 +347,10 @@ def sweep_section() -> str:
         f"`{sweep_spec.PARAM_PREFIX}<path>`.\n\n",
         "| distribution | arguments |\n| --- | --- |\n",
         *(f"| `{kind}` | {cell(_DISTRIBUTION_ARGS.get(kind, ''))} |\n" for kind in kinds),
-        "\n", prose(sweep_spec.Param.__doc__), "\n"])
+        "\n", prose(sweep_params.Param.__doc__), "\n"])
 
 
-#: how each distribution's arguments read (``sweep_spec.parse_param`` checks them)
+#: how each distribution's arguments read (``sweep_params.parse_param`` checks them)
 _DISTRIBUTION_ARGS = {
     "uniform": "[lo, hi], lo < hi",
     "loguniform": "[lo, hi], 0 < lo < hi",

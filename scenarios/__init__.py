@@ -4,14 +4,14 @@ from pathlib import Path
 
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.spec.controller_params import AvoidParams, LaneKeepParams, SeedParams
-from scenarios.spec.scenario_spec import (
-    ControllerSpec,
+from scenarios.spec.controller_spec import ControllerSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import (
     EgoSpec,
     LidarSpec,
     ObstacleSpec,
     RoadSpec,
     ScenarioMeta,
-    ScenarioSpec,
     TrafficSpec,
     VehicleSpec,
 )

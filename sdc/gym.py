@@ -34,6 +34,8 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
+from analysis.measures.row_columns import RowCol
+from analysis.measures.trace_columns import TraceCol
 from scenarios import CATALOG_DIR
 from scenarios.common.seeding import draw_seeds
 from scenarios.scene.road_geometry import RoadGeometry
@@ -93,8 +95,8 @@ class ObstacleAvoidanceEnv(gymnasium.Env):
 
     def _info(self, termination: str | None = None) -> dict:
         sim = self._sim
-        return {"t_s": sim.k * sim.step_s, "seed": sim.spec.scenario.seed,
-                "termination": termination, "collision_with": sim.hit or "none"}
+        return {TraceCol.t_s: sim.k * sim.step_s, RowCol.seed: sim.spec.scenario.seed,
+                RowCol.termination: termination, RowCol.collision_with: sim.hit or "none"}
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -178,7 +180,7 @@ def _sdc_frame(sim: Simulation, road: RoadGeometry) -> np.ndarray:
         road_lines,
         standing_people_xy,
     )
-    from scenarios.spec.scenario_spec import beam_angles_rad
+    from scenarios.spec.scenario_tables import beam_angles_rad
 
     spec, state, snapshot, lane = sim.spec, sim.state, sim.snapshot, sim.lane
     angles = beam_angles_rad(spec.lidar.beams, spec.lidar.fov_deg)

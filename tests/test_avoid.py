@@ -11,7 +11,8 @@ import pytest
 from scenarios import CATALOG_DIR, ScenarioSpec, SpecError, load_spec
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.controller_params import AvoidParams
-from scenarios.spec.scenario_spec import ControllerSpec, beam_angles_rad
+from scenarios.spec.controller_spec import ControllerSpec
+from scenarios.spec.scenario_tables import beam_angles_rad
 from sdc.car.avoid.controller import (
     AVOID_LEFT,
     AVOID_RETURN,

@@ -9,7 +9,8 @@ from __future__ import annotations
 import pytest
 
 from scenarios import CATALOG_DIR
-from scenarios.spec.sweep_spec import expand, load_sweep
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.run.episode import run_episode
 
 

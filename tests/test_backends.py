@@ -11,7 +11,8 @@ import pytest
 
 from scenarios.common.errors import SpecError
 from scenarios.spec.backends import BACKENDS
-from scenarios.spec.scenario_spec import ScenarioMeta, ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import ScenarioMeta
 
 ROOT = Path(__file__).resolve().parents[1]
 #: a comparison with a backend's name: `backend == "sumo"`, `"highway" != ...backend`

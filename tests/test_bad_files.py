@@ -22,7 +22,8 @@ from hypothesis import strategies as st
 from analysis.measures.trace_file import Trace
 from scenarios import CATALOG_DIR
 from scenarios.common.errors import SdcError
-from scenarios.spec.scenario_spec import MAX_STEPS, ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import MAX_STEPS
 from scenarios.spec.toml_io import dumps_plain, load_spec
 from scenarios.world_backends import make_road
 from sdc.cli import main

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from scenarios.common.cache_dir import network_cache_dir, sdc_cache_dir
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from scenarios.sumo_net.road_source import road_source
 
 

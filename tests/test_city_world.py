@@ -21,6 +21,7 @@ from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.routes_xml import TRAFFIC_WIDTH_M, lanes_blocked
 from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo_net.build import sumo_binary
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.geometry import box_gap_m, boxes_overlap
 from sdc.run.episode import run_episode
@@ -144,7 +145,7 @@ def straddle(spec: ScenarioSpec, reach_m: float, side: int = 1, speed_mps: float
                          X5_WIDTH_M])
 
     seen = Straddled(0, np.inf, 0, 0)
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(box_at(), speed_mps)
         for _ in range(steps):
             s_m, t_s = s_m + speed_mps * step_s, t_s + step_s
@@ -310,7 +311,7 @@ def test_sumo_has_a_leader_for_the_car_behind_the_part_that_blocks_its_lane(less
     road = make_road(spec)
     d_m = road.lane_center_d_m(0) + 1.4 + 0.6 - X5_WIDTH_M / 2
     s_m, checked = 200.0, 0
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(np.array([*road.xy_at(s_m, d_m), 0.0, X5_LENGTH_M, X5_WIDTH_M]), 8.0)
         for _ in range(300):
             s_m += 0.8
@@ -427,7 +428,7 @@ def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
             box = obstacle_boxes(spec, road)[0]
             ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
             front_xy = box[:2] + box[3] / 2 * np.array([np.cos(box[2]), np.sin(box[2])])
-            with SumoWorld(spec, road) as world:
+            with SumoWorld(spec, road, source=road_source(spec.road)) as world:
                 world.start(ego, 0.0)
                 assert np.hypot(*(np.array(libsumo.vehicle.getPosition("obstacle.0"))
                                   - front_xy)) < 0.05, (kind, front_m)
@@ -453,7 +454,7 @@ def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(tmp_path
         spec = grid_spec(net, 30.0 + k * 7.123457, "car", seed=3, lateral_offset_m=1.0)
         road = make_road(spec)
         ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
-        with SumoWorld(spec, road) as world:
+        with SumoWorld(spec, road, source=road_source(spec.road)) as world:
             world.start(ego, 0.0)
             world.step(ego, 0.0)
             assert {"obstacle.0", "obstacle.0.1"} <= set(libsumo.vehicle.getIDList()), k
@@ -487,7 +488,7 @@ def test_an_obstacle_over_a_two_way_streets_centre_line_stands_in_the_opposite_l
                 box = obstacle_boxes(spec, road)[0]
                 ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)),
                                 4.85, 1.93])
-                with SumoWorld(spec, road) as world:
+                with SumoWorld(spec, road, source=road_source(spec.road)) as world:
                     world.start(ego, 0.0)
                     for k in range(400):
                         traffic = world.step(ego, 0.0).traffic_boxes

@@ -4,7 +4,8 @@ import numpy as np
 
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.controller_params import LaneKeepParams
-from scenarios.spec.scenario_spec import ControllerSpec, beam_angles_rad
+from scenarios.spec.controller_spec import ControllerSpec
+from scenarios.spec.scenario_tables import beam_angles_rad
 from sdc.car.controller_api import Observation
 from sdc.car.controller_plugins import make_controller
 from sdc.car.controllers import (
@@ -83,7 +84,7 @@ def test_one_line_of_the_registry_makes_a_built_in_whole():
     plug-in machinery builds the class from it, with nothing listed anywhere else."""
     import dataclasses
 
-    from scenarios.spec import controller_params, scenario_spec
+    from scenarios.spec import controller_params, controller_spec
     from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, controller_kind
     from sdc.car.controller_plugins import controller_class
 
@@ -94,7 +95,7 @@ def test_one_line_of_the_registry_makes_a_built_in_whole():
         assert controller_kind(name) == "builtin"
         cls = controller_class(name)
         assert f"{cls.__module__}:{cls.__name__}" == builtin.controller
-        spec = scenario_spec.ControllerSpec.from_plain({"name": name})
+        spec = controller_spec.ControllerSpec.from_plain({"name": name})
         assert isinstance(spec.params, params)  # validated, defaults filled
         fields = {f.name for f in dataclasses.fields(params)}
         assert set(spec.plain_params()) <= fields  # round trip: every value, None left out

@@ -18,7 +18,7 @@ from xml.etree import ElementTree
 
 import pytest
 
-from scenarios.spec import controller_params, scenario_spec, sweep_spec
+from scenarios.spec import controller_params, controller_spec, sweep_spec
 from scenarios.sumo_net.build import sumo_binary
 from sdc.cli import main as cli_main
 from sdc.run import result_row
@@ -90,7 +90,7 @@ def test_the_reference_lists_every_spec_field_api_field_and_command_option(site)
     listed = {r[0] for r in _cells(spec_page)}
     generator = _generator()
     classes = [cls for _, cls, _, _ in generator.scenario_tables()
-               if cls is not scenario_spec.ControllerSpec]
+               if cls is not controller_spec.ControllerSpec]
     classes += [*controller_params.CONTROLLER_PARAMS.values(), sweep_spec._SweepTable]
     for cls in classes:
         for field in dataclasses.fields(cls):

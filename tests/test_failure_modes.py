@@ -9,7 +9,7 @@ import pytest
 
 from analysis.rare.failure_modes import OTHER, failure_modes, mode_line, region_words
 from analysis.rare.rare_bank import SEED_MODES_EMULATED, mode_count, problem
-from scenarios.spec.sweep_spec import Param
+from scenarios.spec.sweep_params import Param
 
 PARAMS = [Param("a", "uniform", (0.0, 10.0)), Param("k", "choice", ("x", "y"))]
 

@@ -15,6 +15,7 @@ from scenarios import ScenarioSpec
 from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo_net.build import sumo_binary
 from scenarios.sumo_net.grade_separation import LEVEL_REACH_M
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 
 NODES = """<nodes>
@@ -82,7 +83,7 @@ def test_the_ego_at_a_bridge_never_meets_nor_sees_the_traffic_crossing_it(tmp_pa
     xy = road.xy_at(s_m, 0.0)
     box = np.array([xy[0], xy[1], float(road.heading_at(s_m)), 4.85, 1.93])
     across_on_b = seen_on_a = 0
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(box, 0.0)
         vehicle = world._sumo.vehicle
         for _ in range(600):

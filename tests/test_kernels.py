@@ -12,7 +12,7 @@ from test_road import polyline_st
 
 from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.scene.road_kernels import place_numpy
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from sdc.car import geometry_kernels as kernels
 
 try:

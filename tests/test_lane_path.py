@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from scenarios.scene.road_geometry import CurveRoad, RoadGeometry
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from sdc.car.lane_path import LanePath
 from sdc.car.sensors import PATH_TOLERANCE_M, LaneReading, LaneSensor, simplified_polyline
 

@@ -16,12 +16,8 @@ from scenarios.spec.toml_io import load_spec
 from scenarios.sumo_net.drivable_area import DrivableArea
 from scenarios.sumo_net.net_xml import STRAIGHT, U_TURN, read_net
 from scenarios.sumo_net.road_source import road_source
-from scenarios.sumo_net.route_road import (
-    ROUTE,
-    draw_route,
-    network_area,
-    scenario_stream,
-)
+from scenarios.sumo_net.route_drawing import ROUTE, draw_route, scenario_stream
+from scenarios.sumo_net.route_road import network_area
 from scenarios.world_backends import make_road
 from sdc.car.collision import ROAD_EDGE, collision_with
 from sdc.car.geometry_kernels import Contacts

@@ -22,6 +22,7 @@ from scenarios.scene.snapshot import Snapshot, passenger_classes
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.routes_xml import TRAFFIC_WIDTH_M, obstacle_lanes
 from scenarios.sumo.sumo_world import SumoWorld
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.collision import FRONT, RAN_INTO, REAR, SIDE, WAS_HIT, describe, hit_part
 from sdc.car.geometry import box_gap_m, boxes_overlap
@@ -80,7 +81,7 @@ def test_sumo_sees_the_ego_inside_its_lane_and_a_stand_in_where_it_blocks(lesson
     reach_m = abs(d_m - road.lane_center_d_m(lane)) + X5_WIDTH_M / 2 - 3.5 / 2
     side = 1 if d_m > road.lane_center_d_m(lane) else -1
     blocks = traffic_model.blocks_neighbour(reach_m, 3.5, TRAFFIC_WIDTH_M) and 0 <= lane + side < 2
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(held_box(road, 300.0, d_m), 5.0)
         world.step(held_box(road, 300.5, d_m), 5.0)
         assert libsumo.vehicle.getLaneID("ego") == f"road_{lane}"
@@ -212,7 +213,7 @@ def drive_held(spec, d_m: float, speed_mps: float, steps: int):
     road = make_road(spec)
     s_m = spec.ego.start_m
     lane_d_m = road.lane_center_d_m(spec.ego.lane)
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(held_box(road, s_m, lane_d_m + d_m), speed_mps)
         for _ in range(steps):
             s_m += speed_mps * spec.scenario.step_s
@@ -309,7 +310,7 @@ def test_no_traffic_vehicle_moves_sideways_faster_than_a_lane_change_allows(less
     last: dict[str, float] = {}
     fastest_mps, changes = 0.0, 0
     s_m = spec.ego.start_m
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(held_box(road, s_m, road.lane_center_d_m(2)), 10.0)
         vehicle = world._sumo.vehicle
         for _ in range(round(60 / spec.scenario.step_s)):
@@ -375,7 +376,7 @@ def test_after_a_warm_up_no_car_is_left_behind_the_ego_that_cannot_stop_for_it(l
 def test_sumo_knows_the_egos_size_and_brakes(lesson_plain):
     spec = two_lanes(lesson_plain, seed=1, duration_s=1.0)
     road = make_road(spec)
-    with SumoWorld(spec, road) as world:
+    with SumoWorld(spec, road, source=road_source(spec.road)) as world:
         world.start(held_box(road, 50.0, road.lane_center_d_m(0)), 0.0)
         vehicle = world._sumo.vehicle
         assert vehicle.getLength("ego") == pytest.approx(X5_LENGTH_M)
@@ -392,7 +393,8 @@ def test_the_traffic_family_leaves_a_way_past_its_obstacle():
     driver in the ego's place gets past the stopped car every time, without a
     collision and without stopping: it changes lanes early, while moving."""
     from scenarios import CATALOG_DIR
-    from scenarios.spec.sweep_spec import expand, load_sweep
+    from scenarios.spec.sweep_plan import expand
+    from scenarios.spec.sweep_spec import load_sweep
 
     runs = [r for r in expand(load_sweep(CATALOG_DIR / "sweeps" / "avoid-roads-traffic.toml"))
             if r.spec.controller.label == "avoid"]

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from analysis.rare.failure_estimate import mc_equivalent_runs
 from analysis.rare.rare_bank import BANK, EMULATED, problem, run_bank
-from analysis.rare.rare_events import mc_equivalent_runs
 
 SEEDS = range(40)
 

@@ -22,7 +22,7 @@ from click.testing import CliRunner
 
 from analysis.measures.commands import replay_command
 from analysis.measures.run_score import run_score
-from analysis.rare.rare_events import estimate_from_rows
+from analysis.rare.failure_estimate import estimate_from_rows
 from analysis.report.rare_report import estimate_lines
 from scenarios import CATALOG_DIR
 from scenarios.spec.sweep_spec import load_sweep

@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from analysis.rare.failure_estimate import estimate_from_rows
+from analysis.rare.multilevel_is import MultilevelIS
 from analysis.rare.proposals import (
     gaussian_proposal,
     nominal_log_density,
@@ -15,7 +17,7 @@ from analysis.rare.proposals import (
     unit_points,
     weights_from_log_densities,
 )
-from analysis.rare.rare_events import EstimationLoop, MultilevelIS, estimate, estimate_from_rows
+from analysis.rare.rare_events import EstimationLoop, estimate
 
 REPEATS = 120
 

@@ -83,7 +83,7 @@ def test_a_broken_gzipped_network_is_bad_input_naming_the_file(tmp_path):
 
 @pytest.mark.parametrize("radius_m", [3.0, 5.0, 12.0, 40.0])
 def test_the_tightest_radius_of_an_arc_is_its_radius(radius_m):
-    from scenarios.sumo_net.route_road import tightest_radius_m
+    from scenarios.sumo_net.route_drawing import tightest_radius_m
 
     angle = np.linspace(0.0, np.pi / 2, 200)
     arc = np.column_stack([radius_m * np.sin(angle), radius_m * (1 - np.cos(angle))])
@@ -92,7 +92,7 @@ def test_the_tightest_radius_of_an_arc_is_its_radius(radius_m):
 
 
 def test_a_kink_is_a_turn_as_tight_as_its_angle_over_the_window():
-    from scenarios.sumo_net.route_road import tightest_radius_m
+    from scenarios.sumo_net.route_drawing import tightest_radius_m
 
     corner = np.array([[0.0, 0.0], [50.0, 0.0], [50.0, 50.0]])
     assert tightest_radius_m(corner, 3.0) == pytest.approx(3.0 / (np.pi / 2), rel=0.01)
@@ -103,7 +103,7 @@ def turn_radii(net, lane, min_radius_m):
     """Each turn out of ``lane`` onto passenger lanes (no U-turn) with its tightest
     radius, measured as the route drawing measures it."""
     from scenarios.sumo_net.net_xml import U_TURN
-    from scenarios.sumo_net.route_road import (
+    from scenarios.sumo_net.route_drawing import (
         TURN_REACH_M,
         TURN_WINDOW_M,
         tightest_radius_m,
@@ -124,7 +124,7 @@ def test_routes_on_real_networks_take_only_turns_and_lanes_a_car_can(name):
     """Drawn routes use lanes open to passenger cars only, and every turn on them is
     no tighter than the X5's turning circle."""
     from scenarios.spec.bodies import VEHICLE_MODELS
-    from scenarios.sumo_net.route_road import ROUTE, draw_route, scenario_stream
+    from scenarios.sumo_net.route_drawing import ROUTE, draw_route, scenario_stream
 
     net = read_net(GAME_DIR / name)
     min_radius_m = VEHICLE_MODELS["x5-road"].min_turn_radius_m
@@ -144,7 +144,7 @@ def test_routes_on_real_networks_take_only_turns_and_lanes_a_car_can(name):
 def test_turns_tighter_than_the_car_can_drive_are_left_out(name):
     """The OSM networks hold junction paths tighter than an X5's turning circle
     (hairpins, kinked junction lanes); the route drawing leaves out exactly those."""
-    from scenarios.sumo_net.route_road import drivable_turns
+    from scenarios.sumo_net.route_drawing import drivable_turns
 
     net = read_net(GAME_DIR / name)
     tight = 0
@@ -223,7 +223,7 @@ def test_road_edges_lie_where_the_lanes_end(name, allowed):
 
 def test_a_pinned_route_is_driven_as_given():
     """The edges of a drawn route, pinned, give the same lanes back."""
-    from scenarios.sumo_net.route_road import ROUTE, draw_route, pinned_route, scenario_stream
+    from scenarios.sumo_net.route_drawing import ROUTE, draw_route, pinned_route, scenario_stream
 
     net = read_net(GAME_DIR / "A10KW" / "osm.net.xml")
     for seed in range(5):
@@ -244,7 +244,7 @@ def test_a_pinned_route_is_driven_as_given():
 ])
 def test_a_pinned_route_a_car_cannot_drive_is_bad_input_naming_the_edge(edges, message):
     from scenarios.common.errors import SpecError
-    from scenarios.sumo_net.route_road import pinned_route
+    from scenarios.sumo_net.route_drawing import pinned_route
 
     net = read_net(GAME_DIR / "A10KW" / "osm.net.xml")
     with pytest.raises(SpecError, match=message.replace("(", r"\(")) as raised:
@@ -285,7 +285,7 @@ def test_a_route_whose_start_bends_are_too_tight_for_the_start_speed_is_not_draw
     """A 15 m loop 10 m ahead of the start, grip 8.8 m/s^2 and brakes of 8 m/s^2: the
     car brakes to v^2 - 2 * 8 * 10 by the loop, which takes sqrt(8.8 * 15) = 11.5 m/s:
     from up to 17.1 m/s."""
-    from scenarios.sumo_net.route_road import takes_its_start
+    from scenarios.sumo_net.route_drawing import takes_its_start
 
     route = loop_route(15.0)
     arrives_mps = np.sqrt(max(speed_mps**2 - 2 * 8.0 * 10.0, 0.0))
@@ -298,7 +298,7 @@ def test_routes_drawn_on_the_motorway_start_where_the_car_can_take_the_bends():
     pace any route will do."""
     from scenarios import ScenarioSpec
     from scenarios.spec.toml_io import read_toml
-    from scenarios.sumo_net.route_road import takes_its_start
+    from scenarios.sumo_net.route_drawing import takes_its_start
     from scenarios.world_backends import make_road
 
     plain = read_toml(Path(__file__).parents[1] / "scenarios/catalog/real-scenarios.toml")

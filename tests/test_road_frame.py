@@ -10,7 +10,7 @@ import pytest
 
 from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.scene.snapshot import NO_BOXES, Snapshot, passenger_classes
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from sdc.car.geometry_kernels import contacts_numpy
 from sdc.car.road_frame import RoadFrame
 

@@ -4,6 +4,7 @@ the road's own asks a road its kind: a built road's shape is its geometry's clas
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import re
 from pathlib import Path
@@ -70,8 +71,9 @@ def test_each_kind_has_one_source_and_one_warm_state_identity(kind, cls, tmp_pat
         assert sha256_hex(shipped.data) == source.identity_sha256(tmp_path)
     assert (shipped.edges_key is None) == (kind == "straight")
     # the driver's catalog and a run agree on the warm state
-    assert FileCatalog(tmp_path).warm_key(spec) == warm_state_key(spec, tmp_path)
-    assert warm_state_key(spec, tmp_path) == warm_key(spec, source.identity_sha256(tmp_path))
+    assert FileCatalog(tmp_path).warm_key(spec) == warm_state_key(spec, source, tmp_path)
+    assert warm_state_key(spec, source, tmp_path) == warm_key(spec,
+                                                              source.identity_sha256(tmp_path))
 
 
 def test_a_warm_up_counts_from_its_road_s_clock():
@@ -100,8 +102,8 @@ def test_has_traffic_is_each_kinds_own_demand():
 
 #: where a road's kind may be named: the spec that defines the kinds (and its file
 #: reader: a configuration's step length), and the one dispatch
-KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/spec/toml_io.py",
-              "scenarios/sumo_net/road_source.py"}
+KIND_HOMES = {"scenarios/spec/scenario_spec.py", "scenarios/spec/scenario_tables.py",
+              "scenarios/spec/toml_io.py", "scenarios/sumo_net/road_source.py"}
 
 
 def test_no_module_outside_the_roads_own_asks_a_road_its_kind():
@@ -143,3 +145,26 @@ def test_a_network_roads_network_is_its_sources_and_a_bad_file_names_its_field(t
     with pytest.raises(SpecError, match="no such file") as raised:
         road_source(missing).network()
     assert raised.value.field == "road.net_file"
+
+
+#: the modules a run goes through once it has its road source: it is handed to them
+#: (obtained once where the run starts: ``sdc/run/episode.py``, ``sdc/run/shared_world.py``,
+#: the warm-up child's ``main``), never asked for again. The door (``world_backends.py``)
+#: obtains one in one place only, for a caller that hands it a spec alone.
+PER_RUN_SOURCE_CALLS = {"scenarios/world_backends.py": 1, "scenarios/sumo/sumo_world.py": 0,
+                        "scenarios/sumo/routes_xml.py": 0, "scenarios/sumo/warm_state.py": 0,
+                        "scenarios/sumo/warm_up.py": 0, "scenarios/sumo/warm_up_child.py": 1}
+
+
+def _road_source_calls(path: Path) -> list[int]:
+    """The lines where ``path`` calls ``road_source(...)`` (by name or attribute)."""
+    return [node.lineno for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.Call)
+            and (getattr(node.func, "id", None) == "road_source"
+                 or getattr(node.func, "attr", None) == "road_source")]
+
+
+def test_a_run_obtains_its_road_source_once_and_hands_it_down():
+    found = {name: lines for name, most in PER_RUN_SOURCE_CALLS.items()
+             if len(lines := _road_source_calls(ROOT / name)) > most}
+    assert not found, f"road_source(...) called again on a run's way (file: lines): {found}"

@@ -20,7 +20,7 @@ from analysis.measures.run_outcome import (
     time_lost_s,
 )
 from scenarios import CATALOG_DIR, ScenarioSpec, load_spec
-from scenarios.spec.sweep_spec import set_path
+from scenarios.spec.sweep_params import set_path
 from sdc.run.episode import run_episode
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "cautious.py"

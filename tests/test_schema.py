@@ -1,9 +1,11 @@
 """One home for the names sdc writes and analysis reads: the result row's columns
 (analysis/measures/row_columns.py), the trace's columns and metadata keys
 (analysis/measures/trace_columns.py) and the sweep manifest's keys
-(analysis/measures/sweep_manifest.py). The writers write exactly those names, every name
-spelled through a home exists there, and no module of analysis reads a column by a
-string of its own."""
+(analysis/measures/sweep_manifest.py), with the sweep directory's file names
+(``SweepDir``). The writers write exactly those names, every name spelled through a home
+exists there, no module of analysis or sdc reads a column or names a sweep
+directory's file by a string of its own, and none of sdc writes a row's column by one
+(a dict literal's key)."""
 
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ from analysis.measures.row_columns import ADAPTIVE_NAMES, ROW_NAMES, RowCol
 from analysis.measures.sweep_manifest import (
     READ_KEYS,
     RESUME_KEYS,
+    SweepDir,
     SweepFileKey,
     SweepManifest,
 )
@@ -40,11 +43,11 @@ HOMES = {"RowCol": RowCol, "TraceCol": TraceCol, "TraceMeta": TraceMeta,
          "VehicleMeta": VehicleMeta, "SweepFileKey": SweepFileKey}
 #: the homes themselves: where the names are spelled as strings
 HOME_FILES = {"analysis/measures/row_columns.py", "analysis/measures/trace_columns.py"}
-#: what is held to reading columns through the homes: all of analysis, and sdc's
-#: writers of the row, the trace and the manifest
-POLICED = (*sorted((ROOT / "analysis").rglob("*.py")),
-           ROOT / "sdc/run/result_row.py", ROOT / "sdc/run/trace_recorder.py",
-           ROOT / "sdc/batch/sweeps/manifest.py")
+#: the homes whose names are not their attributes' (``SweepDir.results`` is
+#: ``results.parquet``): every name spelled through them exists there too
+NAMED_HOMES = {**HOMES, "SweepDir": SweepDir}
+#: what is held to reading columns through the homes: all of analysis and all of sdc
+POLICED = (*sorted((ROOT / "analysis").rglob("*.py")), *sorted((ROOT / "sdc").rglob("*.py")))
 
 
 def names_of(home: type) -> dict[str, str]:
@@ -95,8 +98,8 @@ def home_reads(path: Path) -> list[str]:
     found = []
     for node in ast.walk(ast.parse(path.read_text())):
         if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
-                and node.value.id in HOMES and not node.attr.startswith("_")
-                and node.attr not in names_of(HOMES[node.value.id])):
+                and node.value.id in NAMED_HOMES and not node.attr.startswith("_")
+                and node.attr not in names_of(NAMED_HOMES[node.value.id])):
             found.append(f"{path.relative_to(ROOT)}:{node.lineno}: "
                          f"{node.value.id}.{node.attr}")
     return found
@@ -132,6 +135,9 @@ NOT_COLUMNS = {
     ("frame", "t_s"): "sdc settle's series of the traffic (its own time column)",
     ("plain", "t_s"): "an overlap, plain (analysis.measures.overlap_detail.Overlap)",
     ("sections", "traffic"): "the sweep report's section of that name",
+    ("options", "controller"): "sdc search's and estimate's --controller option",
+    ("options", "score"): "sdc search's and estimate's --score option",
+    ("statuses", "error"): "rows by status: the status error",
 }
 
 
@@ -196,10 +202,83 @@ def test_the_policing_finds_what_it_polices(tmp_path):
         "rows 'collision'", "rows 'sample'", "trace.floats 't_s'", "meta 'vehicle'"]
 
 
+#: the row's columns: a dict literal of sdc with one of them for a key writes a row
+ROW_COLUMN_NAMES = {*ROW_NAMES, *ADAPTIVE_NAMES}
+#: the dict literals of sdc that are no rows though a key is a column's name, by where
+#: they are and those keys (in the dict's order) -> what they are
+NOT_ROWS = {
+    ("sdc/batch/sweeps/adaptive_runner.py", ("batch", "phase", "weight")):
+        "adaptive_row's keyword arguments, by its parameters' names (it keys them by RowCol)",
+    ("sdc/batch/sweeps/adaptive_runner.py", ("controller", "score")):
+        "what a search or estimate saves of itself (search.json, estimate.json)",
+}
+
+
+def row_dict_strings(path: Path, root: Path = ROOT) -> list[str]:
+    """Where ``path`` writes a row's column by a string: a dict literal's key that is a
+    column's name (``{"run_id": ...}``), unless the dict is no row (:data:`NOT_ROWS`)."""
+    where = str(path.relative_to(root))
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Dict):
+            keys = [k for k in node.keys if isinstance(k, ast.Constant)
+                    and isinstance(k.value, str) and k.value in ROW_COLUMN_NAMES]
+            if keys and (where, tuple(k.value for k in keys)) not in NOT_ROWS:
+                found += [f"{where}:{k.lineno}: {k.value!r}" for k in keys]
+    return found
+
+
+def test_no_module_of_sdc_writes_a_row_column_by_a_string():
+    """A row sdc writes as a dict literal keys it by ``RowCol`` (``{RowCol.run_id: ...}``)."""
+    found = [line for p in sorted((ROOT / "sdc").rglob("*.py")) for line in row_dict_strings(p)]
+    assert not found, found
+
+
+def test_the_row_dict_policing_finds_what_it_polices(tmp_path):
+    probe = tmp_path / "probe.py"
+    probe.write_text('{"run_id": 1, "status": "ok"}\n{RowCol.run_id: 1, RowCol.status: "ok"}\n'
+                     '{"mode": 1, "world_rows": []}\nrow = {**base, "batch": 2}\n'
+                     '{1: "run_id"}\n')
+    found = sorted(row_dict_strings(probe, tmp_path), key=lambda line: int(line.split(":")[1]))
+    assert [line.split(": ", 1)[1] for line in found] == ["'run_id'", "'status'", "'batch'"]
+
+
+def sweep_file_strings(path: Path, root: Path = ROOT) -> list[str]:
+    """Where ``path`` names a file or folder of a sweep directory by a string
+    (``out_dir / "traces"``, ``"results.parquet"``); a subscript's key is an option's
+    (``options["traces"]``), not a file's."""
+    names = set(names_of(SweepDir).values())
+    tree = ast.parse(path.read_text())
+    keys = {id(node.slice) for node in ast.walk(tree) if isinstance(node, ast.Subscript)}
+    return [f"{path.relative_to(root)}:{node.lineno}: {node.value!r}"
+            for node in ast.walk(tree) if isinstance(node, ast.Constant)
+            and node.value in names and id(node) not in keys]
+
+
+#: the home of the sweep directory's file names, where they are spelled as strings
+SWEEP_DIR_HOME = "analysis/measures/sweep_manifest.py"
+
+
+def test_no_module_names_a_sweep_file_by_a_string():
+    """All of analysis and all of sdc name a sweep directory's files through ``SweepDir``."""
+    found = [line for p in POLICED if str(p.relative_to(ROOT)) != SWEEP_DIR_HOME
+             for line in sweep_file_strings(p)]
+    assert not found, found
+
+
+def test_the_sweep_file_policing_finds_what_it_polices(tmp_path):
+    probe = tmp_path / "probe.py"
+    probe.write_text('out_dir / "traces"\nf"{out_dir / \'results.parquet\'}"\n'
+                     'Store(parts="plan-parts")\noptions["traces"]\nout_dir / SweepDir.plan\n')
+    found = sorted(sweep_file_strings(probe, tmp_path), key=lambda line: int(line.split(":")[1]))
+    assert [line.split(": ", 1)[1] for line in found] == [
+        "'traces'", "'results.parquet'", "'plan-parts'"]
+
+
 def test_the_homes_import_nothing_of_sdc_or_analysis():
     """The lowest layer both sides read: a home imports no other module of ours."""
     for module in (row_columns, trace_columns):
         tree = ast.parse(Path(module.__file__).read_text())
         imported = [n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
         assert imported == ["__future__"], (module.__name__, imported)
-    assert sweep_manifest.MANIFEST_FILE == "manifest.json"
+    assert sweep_manifest.MANIFEST_FILE == SweepDir.manifest == "manifest.json"

@@ -12,7 +12,9 @@ from analysis.measures.commands import replay_command
 from analysis.rare.grid_probability import box_probability, grid_probability
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.sweep_spec import expand, load_sweep, set_path
+from scenarios.spec.sweep_params import set_path
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import load_sweep
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-modes.toml"
 TRUTH = json.loads((CATALOG_DIR / "sweeps" / "seed-modes.truth.json").read_text())

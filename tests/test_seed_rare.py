@@ -10,7 +10,9 @@ import pytest
 from analysis.rare.grid_probability import threshold_probability
 from scenarios import CATALOG_DIR
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.sweep_spec import expand, load_sweep, set_path
+from scenarios.spec.sweep_params import set_path
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import load_sweep
 
 FAMILY = CATALOG_DIR / "sweeps" / "seed-rare.toml"
 TRUTH = json.loads((CATALOG_DIR / "sweeps" / "seed-rare.truth.json").read_text())

@@ -23,6 +23,7 @@ from scenarios.scene.snapshot import OTHER_EGO, OTHER_OBSTACLE, TRAFFIC, Snapsho
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.spec.toml_io import load_spec, read_toml
 from scenarios.sumo_net.build import sumo_binary
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.collision import ROAD_EDGE, VEHICLE, describe
 from sdc.car.geometry_kernels import Contacts
@@ -331,7 +332,7 @@ def test_every_ego_of_a_world_has_its_own_stand_in_and_nobody_sees_it():
         return {0: (a_box, 5.0), 1: (np.array([*road.xy_at(s_b, d_b_m), 0.0, 4.85, 1.93]), 5.0)}
 
     behind = 0
-    with SumoWorld(a, road, others=((b, road),)) as world:
+    with SumoWorld(a, road, others=((b, road),), source=road_source(a.road)) as world:
         snapshots = world.start_all(boxes(0))
         for k in range(1, 400):
             pushed = boxes(k)

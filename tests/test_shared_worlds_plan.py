@@ -20,9 +20,10 @@ import pytest
 
 from scenarios import CATALOG_DIR
 from scenarios.common.errors import SpecError
-from scenarios.spec.shared_worlds import WorldSeat, group_worlds, traffic_seed, world_fields
-from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256
+from scenarios.spec.sweep_plan import expand, plan_sha256
+from scenarios.spec.sweep_spec import SweepSpec, load_sweep
 from scenarios.spec.toml_io import load_spec
+from scenarios.spec.world_seating import WorldSeat, group_worlds, traffic_seed, world_fields
 
 DATA = Path(__file__).parent / "data"
 QUICK_TOWN = DATA / "grid-town-quick.toml"

@@ -28,6 +28,7 @@ from analysis.measures.safety import lane_scale
 from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.sumo_world import SumoWorld
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.controllers import LaneKeepController
 from sdc.car.vehicle import Command
@@ -86,7 +87,8 @@ def run_with_ssm(spec: ScenarioSpec, accel_mps2: float, tmp_path, leader=None):
                "--device.ssm.measures", "TTC DRAC", "--device.ssm.thresholds", "1000 0",
                "--device.ssm.trajectories", "true", "--device.ssm.range", "200")
     controller = LaneKeepAt(accel_mps2)
-    with SumoWorld(spec, make_road(spec), None, False, options) as world:
+    with SumoWorld(spec, make_road(spec), None, False, options,
+                   source=road_source(spec.road)) as world:
         sim = Simulation(spec, world, controller=controller)
         loop = WorldLoop(world, [sim])
         loop.start()

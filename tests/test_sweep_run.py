@@ -21,7 +21,8 @@ from analysis.measures.commands import program_words
 from analysis.measures.sweep_manifest import SweepManifest
 from scenarios import CATALOG_DIR
 from scenarios.scene import traffic_model
-from scenarios.spec.sweep_spec import expand, load_sweep
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import load_sweep
 from sdc.batch.executors.local_executor import LocalExecutor
 from sdc.batch.executors.ray_executor import RayExecutor
 from sdc.batch.sweeps.progress import QuietReporter

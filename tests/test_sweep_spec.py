@@ -9,7 +9,8 @@ from click.testing import CliRunner
 
 from scenarios import CATALOG_DIR
 from scenarios.common.errors import SpecError
-from scenarios.spec.sweep_spec import SweepSpec, expand, load_sweep, plan_sha256, sample_values
+from scenarios.spec.sweep_plan import expand, plan_sha256, sample_values
+from scenarios.spec.sweep_spec import SweepSpec, load_sweep
 from scenarios.spec.toml_io import dumps_plain
 from sdc.cli import main
 
@@ -343,12 +344,13 @@ def test_a_sweep_too_big_to_plan_is_refused_before_anything_is_planned(tmp_path,
     """10,000,000 samples x 2 controllers: exit 2 as the file is read, naming the field,
     the limit and what to do instead; nothing is planned (a plan of that size held
     the terminal silent for minutes, then ran out of memory)."""
+    import scenarios.spec.sweep_plan as sweep_plan
     import scenarios.spec.sweep_spec as sweep_spec
 
     def no_plan(*args, **kwargs):
         raise AssertionError("planned a sweep it should have refused")
 
-    monkeypatch.setattr(sweep_spec, "expand", no_plan)
+    monkeypatch.setattr(sweep_plan, "expand", no_plan)
     path = write_sweep(tmp_path, 'samples = 10_000_000\ncontrollers = ["seed", "avoid"]\n')
     result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run"])
     assert result.exit_code == 2, result.output

@@ -9,6 +9,7 @@ import pytest
 from analysis.measures.trace_file import read_trace
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.sumo_world import SumoWorld
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
@@ -46,7 +47,7 @@ def truck_ahead(tmp_path, lesson_plain: dict, stop_front_m: float, length_m: flo
 def run_into(spec: ScenarioSpec, options: tuple[str, ...]):
     road = make_road(spec)
     controller = make_controller(spec.controller)
-    with SumoWorld(spec, road, sumo_options=options) as world:
+    with SumoWorld(spec, road, sumo_options=options, source=road_source(spec.road)) as world:
         sim = Simulation(spec, world, controller=controller)
         termination = run_alone(world, sim)
     return sim.finish(termination, None), road

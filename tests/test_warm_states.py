@@ -22,10 +22,12 @@ from scenarios import CATALOG_DIR
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.file_read import file_sha256
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.sweep_spec import expand, load_sweep, warm_seeds
+from scenarios.spec.sweep_plan import expand
+from scenarios.spec.sweep_spec import load_sweep, warm_seeds
 from scenarios.spec.toml_io import load_spec
 from scenarios.sumo.sumo_world import SumoWorld
 from scenarios.sumo.warm_state import WARM_FORMAT, WarmState, cached_path, warm_key
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.batch.executors.local_executor import LocalExecutor
 from sdc.batch.sweeps.progress import QuietReporter
@@ -119,13 +121,14 @@ def test_a_warm_state_made_for_other_traffic_is_refused(tmp_path, monkeypatch):
     run_episode(town(warm_seed=1))
     other = cached_path(warm_key(town(warm_seed=1), file_sha256(TOWN_NET)))
     spec = town(warm_seed=2)
-    world = SumoWorld(spec, make_road(spec), warm_state=other)
+    world = SumoWorld(spec, make_road(spec), warm_state=other, source=road_source(spec.road))
     with pytest.raises(SdcError, match="made for other traffic"):
         world.warm_state()
     broken = tmp_path / "broken.zip"
     broken.write_bytes(b"not a zip")
     with pytest.raises(SdcError, match="broken.zip: cannot be read"):
-        SumoWorld(spec, make_road(spec), warm_state=broken).warm_state()
+        SumoWorld(spec, make_road(spec), warm_state=broken,
+                  source=road_source(spec.road)).warm_state()
 
 
 SWEEP = """[sweep]
@@ -345,9 +348,10 @@ def test_a_warm_state_is_the_same_whatever_ran_before_it_in_the_process(tmp_path
     run held 670 draws where a fresh process holds 354, and runs from it drew other
     numbers. Computed apart (scenarios/sumo/warm_up_process.py), it is the same."""
     fresh_cache(tmp_path / "first", monkeypatch)
-    alone = SumoWorld(highway(seed=2), make_road(highway(seed=2))).warm_state()
+    spec = highway(seed=2)
+    alone = SumoWorld(spec, make_road(spec), source=road_source(spec.road)).warm_state()
     fresh_cache(tmp_path / "after", monkeypatch)
     run_episode(highway(seed=1))  # its flows draw from the same generator
-    after = SumoWorld(highway(seed=2), make_road(highway(seed=2))).warm_state()
+    after = SumoWorld(spec, make_road(spec), source=road_source(spec.road)).warm_state()
     assert 'routeHandler="' in "".join(_state_text(alone))
     assert _state_text(after) == _state_text(alone)

@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 from analysis.measures.numbers import time_text
+from analysis.measures.sweep_manifest import SweepDir
 
 #: the console script pyproject.toml installs
 SCRIPT = "sdc"
@@ -103,7 +104,7 @@ def export_command(sweep_dir: Path, run_id: str) -> str:
 
 def kept_trace_path(sweep_dir: Path, run_id: str) -> Path:
     """Where a sweep keeps the trace of ``run_id`` (``--traces failures`` or ``all``)."""
-    return Path(sweep_dir) / "traces" / f"{run_id}.parquet"
+    return Path(sweep_dir) / SweepDir.traces / f"{run_id}.parquet"
 
 
 def kept_trace(sweep_dir: Path, run_id: str) -> bool:

@@ -4,7 +4,8 @@ analysis reads (docs/architecture.md, "The result row").
 Every reader and writer spells a column by its name here, ``row[RowCol.outcome]``,
 ``results[RowCol.status]``, never by a string: a column renamed here breaks every
 module that reads it (``tests/test_schema.py`` holds every ``RowCol.<name>`` to this
-class, and refuses a column's name spelled as a string anywhere else in ``analysis``).
+class, and refuses a column's name spelled as a string anywhere else in ``analysis`` or
+``sdc``: read by it, and in ``sdc`` written by it as a dict literal's key).
 What each column holds, its Arrow type and its part of the row, and the rows
 themselves: :mod:`sdc.run.result_row`, whose ``COLUMNS`` and ``ADAPTIVE_COLUMNS``
 list exactly :data:`ROW_NAMES` and :data:`ADAPTIVE_NAMES`, in this order. A sweep's

@@ -13,7 +13,8 @@ read, in its order, and the file written is byte for byte what a plain dict made
 This module is the one home of the manifest's keys: the records' fields, the keys a
 reader requires (:data:`READ_KEYS`, :data:`RESUME_KEYS`, spelled through
 :meth:`Record.key`, so a renamed field breaks them at import) and the keys of the sweep
-file's plain form the manifest is read by (:class:`SweepFileKey`).
+file's plain form the manifest is read by (:class:`SweepFileKey`); and of the names of the
+sweep directory's files and folders (:class:`SweepDir`).
 """
 
 from __future__ import annotations
@@ -22,8 +23,25 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
+
+class SweepDir:
+    """A sweep directory's files and folders, by name (``DIR/<name>``): the one home of
+    the names the sweep runner writes and ``sdc replay``, ``sdc export`` and the report
+    read. A search's or estimate's own file: ``analysis.rare.adaptive_summary.summary_path``."""
+
+    manifest = "manifest.json"  # what the sweep is and how far it got (SweepManifest)
+    plan = "plan.parquet"  # the planned runs, each with its spec
+    plan_parts = "plan-parts"  # a search's or estimate's plan as it grows, batch by batch
+    results = "results.parquet"  # one row per run, once consolidated
+    parts = "parts"  # the rows as runs finish, before they are consolidated
+    traces = "traces"  # the kept traces, <run_id>.parquet (--traces failures or all)
+
+
 #: the sweep directory's file
-MANIFEST_FILE = "manifest.json"
+MANIFEST_FILE = SweepDir.manifest
+#: the plan's column that holds each run's spec, as JSON (its others are the result
+#: row's, by their names: ``analysis.measures.row_columns.RowCol``)
+PLAN_SPEC_COLUMN = "spec_json"
 
 
 class SweepFileKey:

@@ -4,8 +4,8 @@ writes (``sdc.run.trace_recorder``, the episode's metadata) and analysis reads
 
 A column renamed here breaks every module that reads it (``tests/test_schema.py``
 holds every ``TraceCol.<name>`` to this class, and refuses a column's name spelled as
-a string anywhere else in ``analysis``). What the columns hold, their Arrow types, the
-hash and the file: :mod:`analysis.measures.trace_file`.
+a string anywhere else in ``analysis`` or ``sdc``). What the columns hold, their Arrow
+types, the hash and the file: :mod:`analysis.measures.trace_file`.
 """
 
 from __future__ import annotations

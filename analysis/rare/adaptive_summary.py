@@ -19,10 +19,10 @@ from analysis.measures.failure_event import FAILURE
 from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import OUTCOMES, STATUSES, STUCK
 from analysis.measures.sweep_manifest import SweepManifest
+from analysis.rare.failure_estimate import Estimate, estimate_from_rows
 from analysis.rare.failure_modes import failure_modes, weighed_rows
-from analysis.rare.rare_events import Estimate, estimate_from_rows
 from scenarios.common.file_read import read_json
-from scenarios.spec.sweep_spec import Param, parse_param
+from scenarios.spec.sweep_params import Param, parse_param
 
 
 def sweep_params(manifest: SweepManifest) -> list[Param]:

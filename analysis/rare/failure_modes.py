@@ -7,7 +7,7 @@ same way (``collision_with``; error or timeout for a run with no outcome; or
 connected failure region of the other parameters.
 
 The space is the samplers' (:mod:`analysis.rare.rare_events`): each parameter at
-``Phi^-1`` of its quantile (:meth:`scenarios.spec.sweep_spec.Param.quantile_of`),
+``Phi^-1`` of its quantile (:meth:`scenarios.spec.sweep_params.Param.quantile_of`),
 where the nominal density is ``N(0, I)`` and one unit is one standard
 deviation of the nominal, whatever the parameter's unit.
 
@@ -54,7 +54,8 @@ from analysis.measures.numbers import number_text
 from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import collided
 from scenarios.common.plain_json import json_plain
-from scenarios.spec.sweep_spec import PARAM_PREFIX, Param
+from scenarios.spec.sweep_params import Param
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 
 #: linked when the distance is at most this times the sum of the two clearances
 LINK_SLACK = 1.25

@@ -41,7 +41,7 @@ from analysis.rare.proposals import (
     standard_normal,
     wide_normal,
 )
-from analysis.rare.rare_events import check_budget, check_dims, check_kernels, checked_batch
+from analysis.rare.sampler_checks import check_budget, check_dims, check_kernels, checked_batch
 
 #: a run this close to the origin has no direction (it lies in no cone)
 _TINY_NORM = 1e-12
@@ -144,7 +144,7 @@ class ModeSearch:
       0.05-0.15 alike. 0.3 gives each of three modes some 55-75 failures in
       1000 runs.
     * ``explore_share`` (0.1) and ``explore_scale`` (2.0): the wide part, as
-      the estimator's (:class:`~analysis.rare.rare_events.MultilevelIS`).
+      the estimator's (:class:`~analysis.rare.multilevel_is.MultilevelIS`).
     * ``shrinkage`` (0.4), ``bandwidth_scale`` (1.0): the kernels', as in
       :func:`~analysis.rare.proposals.kernel_mixture_fit` (0.4 is the estimator's).
     * ``revisit_kernels`` (30): at most this many failures (the heaviest) per

@@ -32,7 +32,8 @@ from analysis.measures.failure_event import FAILURE
 from analysis.measures.row_columns import RowCol
 from scenarios import CATALOG_DIR
 from scenarios.common.file_read import read_json
-from scenarios.spec.sweep_spec import PARAM_PREFIX, Param
+from scenarios.spec.sweep_params import Param
+from scenarios.spec.sweep_spec import PARAM_PREFIX
 
 ScoreFn = Callable[[np.ndarray], np.ndarray]
 RegionFn = Callable[[np.ndarray], np.ndarray]
@@ -284,7 +285,8 @@ def run_bank(case: Problem, seeds: range, target_rhw: float = 0.3, max_runs: int
              **options) -> BankResult:
     """:func:`analysis.rare.rare_events.estimate` on ``case`` once per seed (``options`` go to
     it), summed up against the truth."""
-    from analysis.rare.rare_events import Z_95, estimate
+    from analysis.rare.failure_estimate import Z_95
+    from analysis.rare.rare_events import estimate
 
     found = [estimate(case.score, case.dims, target_rhw, max_runs, np.random.default_rng(seed),
                       **options)[0] for seed in seeds]

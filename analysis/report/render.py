@@ -34,7 +34,8 @@ from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.signals import GREEN, NO_LIGHT, NO_SIGNAL, RED, YELLOW, link_signal
 from scenarios.scene.snapshot import obstacle_boxes
 from scenarios.spec.bodies import are_people
-from scenarios.spec.scenario_spec import ScenarioSpec, beam_angles_rad
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import beam_angles_rad
 
 VIEW_BEHIND_M, VIEW_AHEAD_M, VIEW_SIDE_M = 20.0, 45.0, 12.0
 #: a person's marker, drawn over its box whatever the frame's scale: colour, area [pt^2]

@@ -12,7 +12,7 @@ from xml.etree import ElementTree
 import pandas as pd
 
 from analysis.measures.row_columns import RowCol
-from analysis.measures.sweep_manifest import MANIFEST_FILE, READ_KEYS, SweepManifest
+from analysis.measures.sweep_manifest import MANIFEST_FILE, READ_KEYS, SweepDir, SweepManifest
 from analysis.report.page_parts import row_outcome
 from analysis.stats.gate import Gate
 from scenarios.common.errors import SpecError
@@ -56,7 +56,7 @@ def load_results(sweep_dir: Path) -> tuple[pd.DataFrame, SweepManifest]:
         raise ReportError("DIR", f"{sweep_dir} is not a sweep directory (no manifest.json)")
     manifest = require_keys(read_json(manifest_path, "the sweep manifest"), READ_KEYS,
                             manifest_path, "the sweep manifest")
-    files = [sweep_dir / "results.parquet"] + sorted((sweep_dir / "parts").glob("*.parquet"))
+    files = [sweep_dir / SweepDir.results] + sorted((sweep_dir / SweepDir.parts).glob("*.parquet"))
     frames = [read_parquet(f, "the results file", required=RESULT_COLUMNS).to_pandas()
               for f in files if f.exists()]
     if not frames:

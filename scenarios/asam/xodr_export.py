@@ -35,7 +35,7 @@ import numpy as np
 from scenarios.asam.xodr_roads import read_xodr
 from scenarios.common.errors import SdcError
 from scenarios.common.file_read import read_bytes, unzipped
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from scenarios.sumo_net.build import process_problem, sumo_binary
 from scenarios.sumo_net.net_xml import parse_net
 from scenarios.sumo_net.road_source import road_source

@@ -40,10 +40,11 @@ from scenarios.asam.xosc_scenario import (
 )
 from scenarios.common.errors import SpecError
 from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
-from scenarios.spec.scenario_spec import ScenarioSpec, VehicleSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import VehicleSpec
 from scenarios.sumo_net.net_xml import STRAIGHT, NetFile, NetLane
 from scenarios.sumo_net.road_source import road_source
-from scenarios.sumo_net.route_road import drivable_turns, pinned_route
+from scenarios.sumo_net.route_drawing import drivable_turns, pinned_route
 
 #: the ego's size off sdc's car's by more than this is said in the notes [m]
 SIZE_NOTE_M = 0.25

@@ -23,7 +23,8 @@ from scenarios.common.errors import SpecError
 from scenarios.common.file_read import file_sha256
 from scenarios.spec.controller_ref import controller_label
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.sweep_spec import GivenSamples, Param, SweepSpec, check_runs
+from scenarios.spec.sweep_params import Param
+from scenarios.spec.sweep_spec import GivenSamples, SweepSpec, check_runs
 
 SAMPLER = "given"
 

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from scenarios.scene.polyline_frame import PolylineFrame
-from scenarios.spec.scenario_spec import RoadSpec
+from scenarios.spec.scenario_tables import RoadSpec
 
 #: largest gap between a curve's polyline chord and its arc [m]
 CHORD_TOLERANCE_M = 0.001

@@ -31,7 +31,7 @@ from scenarios.scene.snapshot import (
     within_m,
 )
 from scenarios.spec.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
-from scenarios.spec.shared_worlds import traffic_seed
+from scenarios.spec.world_seating import traffic_seed
 
 #: a scripted car's body: SUMO's default passenger car [m]
 CAR_SIZE_M = (5.0, 1.8)

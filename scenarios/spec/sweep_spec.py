@@ -14,34 +14,19 @@ specs and seeds in any process.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import itertools
-import json
 import math
-import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from statistics import NormalDist
 from typing import Any, Literal
 
-import numpy as np
-
 from scenarios.common.errors import OptionError, SpecError
-from scenarios.common.seeding import (
-    POINTS_STREAM,
-    RUN_SEEDS_STREAM,
-    SEED_LIMIT,
-    draw_seeds,
-    stream_rng,
-    warm_rng,
-)
+from scenarios.common.seeding import SEED_LIMIT, draw_seeds, warm_rng
 from scenarios.spec.backends import BACKENDS
-from scenarios.spec.controller_params import CONTROLLER_PARAMS
 from scenarios.spec.controller_ref import controller_label, resolve_file
 from scenarios.spec.overrides import Override, blame
-from scenarios.spec.scenario_spec import SCENARIO_TABLES, ControllerSpec, ScenarioSpec
-from scenarios.spec.shared_worlds import WorldSeat, group_worlds
-from scenarios.spec.spec_fields import Spec, build, num, parse_path
+from scenarios.spec.scenario_spec import SCENARIO_TABLES, ScenarioSpec
+from scenarios.spec.spec_fields import Spec, build, num
+from scenarios.spec.sweep_params import Param, check_path, parse_param
 from scenarios.spec.toml_io import load_spec, read_toml
 
 #: a swept parameter's result column: p.<path>, e.g. p.ego.speed_mps
@@ -53,175 +38,6 @@ MAX_RUNS = 100_000
 #: the most egos one world holds ([sweep] egos_per_world): the largest K whose
 #: verdicts were measured to agree with one ego a world (docs/how-to/shared-worlds.md)
 MAX_EGOS_PER_WORLD = 16
-#: how often planning says how far it got [runs]
-PLAN_PROGRESS_RUNS = 1000
-
-
-def _field_names(obj: Any) -> set[str]:
-    if isinstance(obj, ControllerSpec):  # any built-in's parameters, a plug-in's own, the name
-        own = set(obj.params) if isinstance(obj.params, dict) else set()
-        return {"name"} | own | {f.name for p in CONTROLLER_PARAMS.values()
-                                 for f in dataclasses.fields(p)}
-    return {f.name for f in dataclasses.fields(obj)}
-
-
-def _field_value(obj: Any, name: str) -> Any:
-    if isinstance(obj, ControllerSpec) and name != "name":
-        params = obj.params
-        return params.get(name) if isinstance(params, dict) else getattr(params, name, None)
-    return getattr(obj, name, None)
-
-
-def check_path(spec: ScenarioSpec, path: str) -> Any:
-    """The value ``path`` names in ``spec``; ``ValueError`` unless it names a single one."""
-    obj: Any = spec
-    segments = parse_path(path)
-    for depth, (name, index) in enumerate(segments):
-        where = ".".join(f"{n}" if i is None else f"{n}[{i}]" for n, i in segments[:depth])
-        if not dataclasses.is_dataclass(obj) or name not in _field_names(obj):
-            known = ", ".join(sorted(_field_names(obj))) if dataclasses.is_dataclass(obj) else ""
-            raise ValueError(f"no field {name!r} in {where or 'the scenario'}"
-                             + (f" (known: {known})" if known else ""))
-        obj = _field_value(obj, name)
-        if index is not None:
-            if not isinstance(obj, tuple):
-                raise ValueError(f"{name} is not a list")
-            if index >= len(obj):
-                raise ValueError(f"{name}[{index}] does not exist: the base has {len(obj)}")
-            obj = obj[index]
-    if dataclasses.is_dataclass(obj) or isinstance(obj, tuple):
-        raise ValueError("names a table; address one of its fields")
-    return obj
-
-
-def set_path(plain: dict, path: str, value: Any) -> None:
-    """Set the value at ``path`` in a scenario's plain mapping (in place)."""
-    *parents, (leaf, leaf_index) = parse_path(path)
-    node: Any = plain
-    for name, index in parents:
-        node = node.setdefault(name, {})
-        if index is not None:
-            node = node[index]
-    if leaf_index is None:
-        node[leaf] = value
-    else:
-        node[leaf][leaf_index] = value
-
-
-@dataclasses.dataclass(frozen=True)
-class Param:
-    """One swept parameter: a path and a distribution with its arguments."""
-
-    path: str
-    kind: Literal["uniform", "loguniform", "normal", "int_range", "choice"]
-    args: tuple
-
-    def at(self, u: float) -> Any:
-        """The parameter's value at quantile ``u`` in [0, 1) (the inverse CDF)."""
-        a = self.args
-        if self.kind == "uniform":
-            return float(a[0] + u * (a[1] - a[0]))
-        if self.kind == "loguniform":
-            return float(math.exp(math.log(a[0]) + u * (math.log(a[1]) - math.log(a[0]))))
-        if self.kind == "normal":
-            return float(NormalDist(a[0], a[1]).inv_cdf(min(max(u, 1e-12), 1 - 1e-12)))
-        if self.kind == "int_range":  # any size of range (len() stops at 2**63)
-            count = a[1] - a[0] + 1
-            return a[0] + min(int(u * count), count - 1)
-        return a[min(int(u * len(a)), len(a) - 1)]
-
-    def quantile_of(self, value: Any) -> float:
-        """The quantile in [0, 1] where :meth:`at` gives ``value`` (a discrete value: the
-        middle of its share), to place values of different units on one scale."""
-        a = self.args
-        if self.kind == "uniform":
-            return (value - a[0]) / (a[1] - a[0])
-        if self.kind == "loguniform":
-            return math.log(value / a[0]) / math.log(a[1] / a[0])
-        if self.kind == "normal":
-            return NormalDist(a[0], a[1]).cdf(value)
-        if self.kind == "int_range":
-            return (value - a[0] + 0.5) / (a[1] - a[0] + 1)
-        return (a.index(value) + 0.5) / len(a)
-
-    @property
-    def continuous(self) -> bool:
-        return self.kind in ("uniform", "loguniform", "normal")
-
-    def grid_size(self, levels: int) -> int:
-        """How many values :meth:`grid` takes (without making them)."""
-        if self.kind == "int_range":
-            return self.args[1] - self.args[0] + 1
-        return levels if self.kind in ("uniform", "loguniform") else len(self.args)
-
-    def grid(self, levels: int) -> list:
-        """The values a grid sweep takes: every choice or integer, else ``levels`` points."""
-        a = self.args
-        if self.kind == "uniform":
-            return [float(v) for v in np.linspace(a[0], a[1], levels)]
-        if self.kind == "loguniform":
-            return [float(v) for v in np.geomspace(a[0], a[1], levels)]
-        if self.kind == "int_range":
-            return list(range(a[0], a[1] + 1))
-        return list(a)
-
-    @property
-    def value_type(self) -> type:
-        """``float``, ``int``, ``bool`` or ``str``: the type of every value it yields."""
-        if self.kind in ("uniform", "loguniform", "normal"):
-            return float
-        if self.kind == "int_range":
-            return int
-        return type(self.args[0])
-
-
-def _number(value: Any) -> bool:
-    """A finite number; an integer within TOML's (and the result columns') 64 bits."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return False
-    return -(2**63) <= value < 2**63 if isinstance(value, int) else math.isfinite(value)
-
-
-def parse_param(path: str, table: Any, field: str) -> Param:
-    if not isinstance(table, dict) or len(table) != 1:
-        raise SpecError(field, "must be a table with one distribution, like { uniform = [lo, hi] }")
-    ((kind, args),) = table.items()
-    field = f"{field}.{kind}"
-    if kind not in ("uniform", "loguniform", "normal", "int_range", "choice"):
-        raise SpecError(field, "unknown distribution (known: choice, int_range, loguniform, "
-                               "normal, uniform)")
-    if not isinstance(args, list):
-        raise SpecError(field, f"must be a list, got {type(args).__name__}")
-    if kind == "choice":
-        if not args:
-            raise SpecError(field, "is empty: give at least one value")
-        if all(_number(v) for v in args):
-            kinds = {float} if any(isinstance(v, float) for v in args) else {int}
-            args = [float(v) if float in kinds else v for v in args]
-        kinds = {type(v) for v in args}
-        if len(kinds) != 1 or not kinds <= {bool, int, float, str}:
-            raise SpecError(field, "values must all be numbers, all strings or all booleans")
-        if kinds == {int} and not all(_number(v) for v in args):
-            raise SpecError(field, "integers must fit in 64 bits")
-        return Param(path, kind, tuple(args))
-    if len(args) != 2 or not all(_number(v) for v in args):
-        raise SpecError(field, f"must be two numbers, got {args!r}")
-    lo, hi = args
-    if kind == "normal":
-        if hi <= 0:
-            raise SpecError(field, f"standard deviation must be > 0, got {hi!r}")
-        return Param(path, kind, (float(lo), float(hi)))
-    if kind == "int_range":
-        if not all(isinstance(v, int) for v in args):
-            raise SpecError(field, f"bounds must be integers, got {args!r}")
-        if lo > hi:
-            raise SpecError(field, f"inverted range: {lo} > {hi}")
-        return Param(path, kind, (lo, hi))
-    if lo >= hi:
-        raise SpecError(field, f"inverted range: {lo} >= {hi}")
-    if kind == "loguniform" and lo <= 0:
-        raise SpecError(field, f"lower bound must be > 0, got {lo!r}")
-    return Param(path, kind, (float(lo), float(hi)))
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -234,7 +50,7 @@ class _SweepTable(Spec):
     levels: int | None = num(None, ge=2, le=1000)
     warm_states: int | None = num(None, ge=1, le=MAX_RUNS)
     #: runs that share one SUMO world (its traffic simulated once), each with its own
-    #: ego (scenarios/spec/shared_worlds.py); 1: every run in a world of its own
+    #: ego (scenarios/spec/world_seating.py); 1: every run in a world of its own
     egos_per_world: int = num(1, ge=1, le=MAX_EGOS_PER_WORLD)
     controllers: tuple = ("seed",)
     params: tuple = ()
@@ -278,7 +94,7 @@ class SweepSpec:
     #: how many distinct warm states of the traffic the samples draw from (None: each
     #: sample warms up its own, from its seed)
     warm_states: int | None = None
-    #: runs that share one world (scenarios/spec/shared_worlds.py); 1: none share
+    #: runs that share one world (scenarios/spec/world_seating.py); 1: none share
     egos_per_world: int = 1
 
     #: the ``--set`` options it was read with (``PATH=VALUE``, as given), its
@@ -512,154 +328,3 @@ def _check_base_overrides(sweep: SweepSpec, overrides: list[Override]) -> None:
             why = "the warm-ups' seeds are drawn from sweep.seed (sweep.warm_states)"
         if why is not None:
             raise override.error(f"the sweep's plan sets {override.path}: {why}")
-
-
-@dataclasses.dataclass(frozen=True)
-class PlannedRun:
-    """One run of a sweep. ``spec`` is None when the sample makes an invalid scenario;
-    ``error`` then says why, with the sample's values."""
-
-    index: int  # position in the plan
-    run_id: str
-    sample: int
-    controller: str  # its label (scenarios.spec.controller_ref.controller_label)
-    seed: int
-    backend: str
-    params: dict[str, Any]
-    spec: ScenarioSpec | None
-    error: str | None
-    world: WorldSeat | None = None  # its seat in a shared world ([sweep] egos_per_world)
-
-
-def _unit_points(sweep: SweepSpec, rng: np.random.Generator) -> np.ndarray:
-    n, d = sweep.samples, len(sweep.params)
-    if d == 0:
-        return np.zeros((n, 0))
-    if sweep.sampler == "random":
-        return rng.random((n, d))
-    from scipy.stats import qmc  # only the quasi-random samplers need scipy
-
-    if sweep.sampler == "sobol":
-        with warnings.catch_warnings():  # balance properties want 2**k points; any n works
-            warnings.simplefilter("ignore", UserWarning)
-            return qmc.Sobol(d, scramble=True, rng=rng).random(n)
-    return qmc.LatinHypercube(d, rng=rng).random(n)
-
-
-def sample_values(sweep: SweepSpec) -> list[dict[str, Any]]:
-    """Each sample's parameter values, in plan order."""
-    if sweep.given is not None:
-        return [dict(values) for values in sweep.given.values]
-    point_rng = stream_rng(sweep.seed, POINTS_STREAM)
-    if sweep.sampler == "grid":
-        axes = [p.grid(sweep.levels) for p in sweep.params]
-        return [{p.path: v for p, v in zip(sweep.params, combo, strict=True)}
-                for combo in itertools.product(*axes)]
-    return [{p.path: p.at(float(u)) for p, u in zip(sweep.params, row, strict=True)}
-            for row in _unit_points(sweep, point_rng)]
-
-
-def expand(sweep: SweepSpec, progress: Callable[[int, int], None] | None = None
-           ) -> list[PlannedRun]:
-    """The plan: every sample under every controller, each sample with its own seed;
-    ``progress(runs planned, runs in all)`` is called as it goes (every
-    :data:`PLAN_PROGRESS_RUNS` runs, and at the end).
-
-    A sample's seed is ``scenario.seed`` for all its controllers (a paired
-    comparison), unless ``scenario.seed`` is itself a swept parameter.
-    """
-    samples = sample_values(sweep)
-    return plan_samples(sweep, samples,
-                        draw_seeds(stream_rng(sweep.seed, RUN_SEEDS_STREAM), len(samples)),
-                        progress=progress)
-
-
-def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[int], *,
-                 first_sample: int = 0, index_width: int | None = None,
-                 controllers: tuple[str, ...] | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> list[PlannedRun]:
-    """The runs of ``samples`` (parameter values, one dict each) under ``controllers``
-    (default: the sweep's), sample ``i`` numbered ``first_sample + i`` and seeded
-    ``seeds[i]``. Run IDs are ``<sample, zero-padded to index_width>-<controller>``;
-    ``progress``: as for :func:`expand`."""
-    controllers = sweep.controllers if controllers is None else controllers
-    last = first_sample + len(samples) - 1
-    width = index_width or max(5, len(str(last)))
-    base_plain = sweep.base.to_plain()
-    warm = warm_seeds(sweep)
-    plan = []
-    total = len(samples) * len(controllers)
-    for i, (values, seed) in enumerate(zip(samples, seeds, strict=True), start=first_sample):
-        if progress is not None and len(plan) % PLAN_PROGRESS_RUNS < len(controllers):
-            progress(len(plan), total)
-        shown = ", ".join(f"{k}={v!r}" for k, v in values.items())
-        spec, error = None, None
-        if sweep.given is not None:
-            try:
-                plain = sweep.given.scenario_of(values).to_plain()
-            except SpecError as e:
-                plain, error = json.loads(json.dumps(base_plain)), (
-                    f"invalid scenario from sample {i} ({shown}): {e}")
-        else:
-            plain = json.loads(json.dumps(base_plain))  # a deep copy of plain data
-        set_path(plain, "scenario.seed", int(seed))
-        if warm is not None:  # the sample's warm state: one of the sweep's, by its seed
-            set_path(plain, "traffic.warm_seed", warm[int(values.get("scenario.seed", seed))
-                                                      % len(warm)])
-        controller_values = {}  # each controller takes those it has (ControllerSpec.renamed)
-        for path, value in values.items() if sweep.given is None else ():
-            if path.startswith("controller.") and path != "controller.name":
-                controller_values[path.removeprefix("controller.")] = value
-            else:
-                set_path(plain, path, value)
-        try:
-            spec = None if error else ScenarioSpec.from_plain(plain)
-        except SpecError as e:
-            error = f"invalid scenario from sample {i} ({shown}): {e}"
-        for controller in controllers:
-            label = controller_label(controller)
-            run_spec, run_error = None, error
-            if spec is not None:
-                try:
-                    run_spec = dataclasses.replace(
-                        spec, controller=spec.controller.renamed(controller, controller_values))
-                except SpecError as e:
-                    run_error = f"invalid scenario from sample {i} ({shown}): {e}"
-            plan.append(PlannedRun(
-                index=first_sample * len(controllers) + len(plan),
-                run_id=f"{i:0{width}d}-{label}", sample=i, controller=label,
-                seed=int(plain["scenario"]["seed"]),
-                backend=str(plain["scenario"].get("backend", "sumo")), params=values,
-                spec=run_spec, error=run_error,
-            ))
-    if progress is not None:
-        progress(len(plan), total)
-    return _seated(plan, sweep.egos_per_world, width)
-
-
-def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[PlannedRun]:
-    """``plan`` with its runs seated in shared worlds (:func:`group_worlds`), each
-    run's spec taking its world's traffic seed; unchanged for one ego a world. Only
-    SUMO holds several egos, and only a network road places them apart: a run swept
-    onto another backend or a built road keeps a world of its own."""
-    if egos_per_world == 1:
-        return plan
-    grouped = group_worlds([(k, f"{run.sample:0{width}d}", run.controller, run.spec)
-                            for k, run in enumerate(plan)
-                            if run.spec is not None
-                            and run.spec.scenario.world_backend.holds_several_egos
-                            and run.spec.road.on_network],
-                           egos_per_world)
-    return [run if k not in grouped else
-            dataclasses.replace(run, spec=grouped[k][1], world=grouped[k][0])
-            for k, run in enumerate(plan)]
-
-
-def plan_sha256(plan: list[PlannedRun]) -> str:
-    """A digest of everything that decides the runs' results."""
-    digest = hashlib.sha256()
-    for run in plan:
-        body = run.spec.to_plain() if run.spec else run.error
-        seat = [] if run.world is None else [run.world.world_id, run.world.slot]
-        digest.update(json.dumps([run.run_id, run.params, body, *seat], sort_keys=True).encode())
-    return digest.hexdigest()

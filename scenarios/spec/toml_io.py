@@ -13,7 +13,8 @@ from scenarios.common.errors import FileError, SpecError
 from scenarios.common.file_read import read_text
 from scenarios.spec.controller_ref import resolve_file
 from scenarios.spec.overrides import apply_overrides, blame
-from scenarios.spec.scenario_spec import SUMO_HOME_PREFIX, ScenarioMeta, ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import SUMO_HOME_PREFIX, ScenarioMeta
 from scenarios.spec.spec_fields import build
 
 

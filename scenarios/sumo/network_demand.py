@@ -15,7 +15,7 @@ from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.routes_xml import TRAFFIC_PREFIX
 from scenarios.sumo_net.random_trips import RandomTrips
 from scenarios.sumo_net.road_source import RoadSource
-from scenarios.sumo_net.route_road import DEMAND, scenario_stream
+from scenarios.sumo_net.route_drawing import DEMAND, scenario_stream
 
 
 class NetworkDemand:

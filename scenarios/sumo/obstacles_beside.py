@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from scenarios.spec.scenario_spec import ObstacleSpec
+from scenarios.spec.scenario_tables import ObstacleSpec
 from scenarios.sumo.ego_slot import EgoSlot
 from scenarios.sumo.routes_xml import OBSTACLE_TYPE_PREFIX, lanes_blocked
 from scenarios.sumo.start_zone import clear_lane

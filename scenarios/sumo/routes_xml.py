@@ -22,7 +22,6 @@ from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
 from scenarios.scene.snapshot import obstacle_boxes
 from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.spec.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
-from scenarios.sumo_net.road_source import road_source
 
 EGO_ID = "ego"
 EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
@@ -90,10 +89,11 @@ def _trips(trips: list[tuple[str, str]], depart_s: float = 0.0) -> list[str]:
     ]
 
 
-def _traffic_type(spec: ScenarioSpec, road: RoadGeometry) -> str:
+def _traffic_type(spec: ScenarioSpec, flows: bool) -> str:
+    """The traffic's vType (``flows``: its road source's flag, flows on a built road)."""
     traffic = spec.traffic
     factor = (traffic.speed_mean_mps / spec.road.speed_limit_mps
-              if road_source(spec.road).flows else 1.0)  # a network: its own limits
+              if flows else 1.0)  # a network: its own limits
     lo, hi = SPEED_FACTOR_BOUNDS
     return (f'  <vType id="traffic" length="{TRAFFIC_LENGTH_M}" width="{TRAFFIC_WIDTH_M}" '
             f'speedFactor="normc({factor:.6f},{traffic.speed_dev * factor:.6f},{lo},{hi})"/>')
@@ -155,10 +155,10 @@ def across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, fl
     return d_m - half_m, d_m + half_m
 
 
-def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, depart: str = "0",
-               checks: str = "all") -> list[str]:
+def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, flows: bool,
+               depart: str = "0", checks: str = "all") -> list[str]:
     """The obstacles as vehicles stopped for good where they stand, entering at
-    ``depart`` with SUMO's insertion ``checks``. On a built-in road an obstacle that
+    ``depart`` with SUMO's insertion ``checks``. On a built-in road (``flows``) an obstacle that
     blocks a neighbouring lane stands there too, as a second vehicle
     (``obstacle.<i>.<lane>``)."""
     lines = []
@@ -168,7 +168,7 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, depart: 
         length_m = obstacle.size_m[0]
         s_m = road.place_s_m(obstacle.position_m, length_m)
         # on a network, a second body beside it waits for SUMO's types (obstacles_beside.py)
-        lanes = obstacle_lanes(road, box) if road_source(spec.road).flows else [obstacle.lane]
+        lanes = obstacle_lanes(road, box) if flows else [obstacle.lane]
         for k, spec_lane in enumerate(lanes):
             edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
             vid = (f"{names.obstacle_prefix}{i}" if k == 0
@@ -194,7 +194,7 @@ def _routes(lines: list[str]) -> str:
 Egos = Sequence[tuple[ScenarioSpec, RoadGeometry]]
 
 
-def _egos_lines(egos: Egos, depart: str = "0", checks: str = "all") -> list[str]:
+def _egos_lines(egos: Egos, flows: bool, depart: str = "0", checks: str = "all") -> list[str]:
     """Each ego's vType and route and its obstacles, the obstacles' types after the
     first ego's type."""
     lines = []
@@ -202,35 +202,35 @@ def _egos_lines(egos: Egos, depart: str = "0", checks: str = "all") -> list[str]
         names = ego_names(slot)
         lines += [_ego_type(spec, names), *(_obstacle_types(egos) if slot == 0 else []),
                   _ego_route(spec, road, names),
-                  *_obstacles(spec, road, names, depart=depart, checks=checks)]
+                  *_obstacles(spec, road, names, flows, depart=depart, checks=checks)]
     return lines
 
 
-def routes_xml(egos: Egos, trips: list[tuple[str, str]] = ()) -> str:
+def routes_xml(egos: Egos, flows: bool, trips: list[tuple[str, str]] = ()) -> str:
     """The ``.rou.xml`` text of a world without a warm state: vehicle types, each ego's
     route, obstacles as stopped vehicles, and the background traffic of the first
     ego's spec (flows until the last run's end, or on a network the ``trips`` (from
-    edge, to edge) leaving at 0 s)."""
-    spec, road = egos[0]
-    flows = road_source(spec.road).flows
+    edge, to edge) leaving at 0 s). ``flows``: the world's road source's flag."""
+    spec, _ = egos[0]
     end_s = spec.traffic.warm_up_s + max(s.scenario.duration_s for s, _ in egos)
     enter_s = spec.scenario.step_s  # after the egos, which enter in the first step
-    return _routes([_traffic_type(spec, road), *_egos_lines(egos),
+    return _routes([_traffic_type(spec, flows), *_egos_lines(egos, flows),
                     *(_flows(spec, EGO_ROUTE, end_s, enter_s) if flows
                       else _trips(trips, enter_s))])
 
 
-def warm_up_routes_xml(spec: ScenarioSpec, road: RoadGeometry,
+def warm_up_routes_xml(spec: ScenarioSpec, flows: bool,
                        trips: list[tuple[str, str]] = ()) -> str:
-    """The ``.rou.xml`` text of a warm-up: the background traffic alone."""
-    if not road_source(spec.road).flows:
-        return _routes([_traffic_type(spec, road), *_trips(trips)])
-    return _routes([_traffic_type(spec, road), f'  <route id="traffic" edges="{EDGE_ID}"/>',
+    """The ``.rou.xml`` text of a warm-up: the background traffic alone (``flows``:
+    its road source's flag)."""
+    if not flows:
+        return _routes([_traffic_type(spec, flows), *_trips(trips)])
+    return _routes([_traffic_type(spec, flows), f'  <route id="traffic" edges="{EDGE_ID}"/>',
                     *_flows(spec, "traffic", WARM_FLOW_END_S)])
 
 
-def warm_run_routes_xml(egos: Egos) -> str:
+def warm_run_routes_xml(egos: Egos, flows: bool) -> str:
     """The ``.rou.xml`` text loaded beside a warm state: each ego's types and route,
     and the obstacles entering as the run begins, wherever the traffic stands
     (the traffic on their spots is taken off first)."""
-    return _routes(_egos_lines(egos, depart="begin", checks="none"))
+    return _routes(_egos_lines(egos, flows, depart="begin", checks="none"))

@@ -25,7 +25,7 @@ from scenarios.common.errors import SdcError
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import Pose, Snapshot
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.shared_worlds import world_fields
+from scenarios.spec.world_seating import world_fields
 from scenarios.sumo.ego_pose import ego_pose, place_stand_ins
 from scenarios.sumo.ego_slot import EgoSlot
 from scenarios.sumo.lane_laying import held_bodies
@@ -39,7 +39,7 @@ from scenarios.sumo.vehicle_types import VehicleTypes
 from scenarios.sumo.warm_state import WarmState, uses_warm_state, warm_seed, warm_state_key
 from scenarios.sumo.warm_up import compute_warm_state, find_warm_state
 from scenarios.sumo_net.build import sumo_binary
-from scenarios.sumo_net.road_source import road_source
+from scenarios.sumo_net.road_source import RoadSource
 
 
 class SumoWorld:
@@ -62,11 +62,14 @@ class SumoWorld:
     def __init__(self, spec: ScenarioSpec, road: RoadGeometry, cache_dir: Path | None = None,
                  gui: bool = False, sumo_options: tuple[str, ...] = (),
                  warm_state: Path | None = None,
-                 others: tuple[tuple[ScenarioSpec, RoadGeometry], ...] = ()):
+                 others: tuple[tuple[ScenarioSpec, RoadGeometry], ...] = (), *,
+                 source: RoadSource):
         """``sumo_options``: more of SUMO's command-line options, after ours (its
         outputs and devices, for example ``--device.ssm.*``). ``warm_state``: the
         file of the spec's warm state when the caller has it (a job's copy); without
-        it, a run with a warm-up finds it in the cache or computes it there."""
+        it, a run with a warm-up finds it in the cache or computes it there.
+        ``source``: the world's road source (the one of ``spec.road``, which every ego
+        of the world shares), obtained once where the run starts."""
         self.spec = spec
         self.gui = gui
         self.sumo_options = tuple(sumo_options)
@@ -89,7 +92,7 @@ class SumoWorld:
         #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
         self.keep_ids = False
         self.last_ids: dict[int, list[str]] = {}
-        self._source = road_source(spec.road)
+        self._source = source
         # a sumo_config road's configuration (its files are written into the scratch
         # folder), its enter_s checked before any SUMO
         self._process = SumoProcess(spec, self._source, self._source.configuration(spec),
@@ -124,7 +127,8 @@ class SumoWorld:
         pushed the same egos, it is the same world, step for step."""
         return SumoWorld(self.spec, self.road, self.cache_dir, sumo_options=self.sumo_options,
                          warm_state=self.warm_state_path,
-                         others=tuple((s.spec, s.road) for s in self._slots[1:]))
+                         others=tuple((s.spec, s.road) for s in self._slots[1:]),
+                         source=self._source)
 
     def _egos(self) -> list[tuple[ScenarioSpec, RoadGeometry]]:
         return [(slot.spec, slot.road) for slot in self._slots]
@@ -135,7 +139,7 @@ class SumoWorld:
 
     def warm_key(self) -> str:
         """The key of the spec's warm state (``scenarios/sumo/warm_state.py``)."""
-        return warm_state_key(self.spec, self.cache_dir)
+        return warm_state_key(self.spec, self._source, self.cache_dir)
 
     def warm_state(self, on_sample: Callable[[float], None] | None = None) -> WarmState:
         """The spec's warm state: the one given, else the cached one, else computed
@@ -180,7 +184,7 @@ class SumoWorld:
             state = self.warm_state()
             state_file = process.scratch() / "warm-state.xml.gz"
             state_file.write_bytes(state.sumo_state)
-            process.start(sim, command, warm_run_routes_xml(self._egos()),
+            process.start(sim, command, warm_run_routes_xml(self._egos(), self._source.flows),
                           "--load-state", str(state_file), *self.sumo_options, fresh=False)
             self._demand = NetworkDemand.drawn(spec, self.road, self._source, warm_seed(spec))
             self._demand.restore(state.demand)  # it goes on where the warm-up left it
@@ -190,8 +194,8 @@ class SumoWorld:
             seed = warm_seed(spec)  # the traffic's: the scenario's, unless given
             self._demand = NetworkDemand.drawn(spec, self.road, self._source, seed)
             trips = self._demand.first(spec.traffic.vehicles)
-            process.start(sim, command, routes_xml(self._egos(), trips), *self.sumo_options,
-                          seed=seed)
+            process.start(sim, command, routes_xml(self._egos(), self._source.flows, trips),
+                          *self.sumo_options, seed=seed)
         self._reader = TrafficReader(sim, self._slots, self._types, self.is_traffic)
         for slot in self._slots:
             ego, names = slot.spec.ego, slot.names

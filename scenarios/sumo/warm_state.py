@@ -32,12 +32,16 @@ import json
 import zipfile
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from scenarios.common.cache_dir import sdc_cache_dir
 from scenarios.common.errors import SdcError
 from scenarios.scene import traffic_model
 from scenarios.spec.scenario_spec import ScenarioSpec
-from scenarios.spec.shared_worlds import traffic_seed
+from scenarios.spec.world_seating import traffic_seed
+
+if TYPE_CHECKING:  # a name only: the roads' import loads the kernels (SDC_KERNELS)
+    from scenarios.sumo_net.road_source import RoadSource
 
 #: bumped whenever what a state holds or how a warm-up runs changes (2: its persons)
 WARM_FORMAT = 2
@@ -57,7 +61,7 @@ _ZIP_TIME = (2020, 1, 1, 0, 0, 0)  # fixed, so equal states make equal files
 
 def warm_seed(spec: ScenarioSpec) -> int:
     """The seed of ``spec``'s warm-up: its traffic's seed, ``traffic.warm_seed`` or the
-    scenario's (:func:`scenarios.spec.shared_worlds.traffic_seed`)."""
+    scenario's (:func:`scenarios.spec.world_seating.traffic_seed`)."""
     return traffic_seed(spec)
 
 
@@ -82,11 +86,10 @@ def warm_key(spec: ScenarioSpec, net_sha256: str) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
-def warm_state_key(spec: ScenarioSpec, cache_dir: Path | None = None) -> str:
-    """The key of ``spec``'s warm state: :func:`warm_key` on its road's identity."""
-    from scenarios.sumo_net.road_source import road_source  # its road's network: not at import
-
-    return warm_key(spec, road_source(spec.road).identity_sha256(cache_dir))
+def warm_state_key(spec: ScenarioSpec, source: RoadSource, cache_dir: Path | None = None) -> str:
+    """The key of ``spec``'s warm state: :func:`warm_key` on the identity of its road
+    (``source``: its run's road source, handed down from where the run started)."""
+    return warm_key(spec, source.identity_sha256(cache_dir))
 
 
 #: a warm state as a result row names it: its key's first hex digits

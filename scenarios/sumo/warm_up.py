@@ -57,7 +57,8 @@ def compute_warm_state(process: SumoProcess, sim, road: RoadGeometry, key: str,
     spec = process.spec
     demand = NetworkDemand.drawn(spec, road, process.source, warm_seed(spec))
     trips = demand.first(spec.traffic.vehicles)
-    own = None if process.config is not None else warm_up_routes_xml(spec, road, trips)
+    own = (None if process.config is not None
+           else warm_up_routes_xml(spec, process.source.flows, trips))
     process.start(sim, ["sumo"], own, *SAVE_OPTIONS, seed=warm_seed(spec))
     try:
         steps = process.source.warm_up_steps(spec)

@@ -21,8 +21,8 @@ from scenarios.sumo_net.road_source import road_source
 def main(argv: list[str]) -> None:
     spec = ScenarioSpec.from_plain(json.loads(Path(argv[0]).read_text()))
     key, cache_dir = argv[1], (Path(argv[2]) if len(argv) > 2 else None)
-    road = road_source(spec.road).geometry(spec, cache_dir)
-    with SumoWorld(spec, road, cache_dir) as world:
+    source = road_source(spec.road)  # this process's one: its world is handed it
+    with SumoWorld(spec, source.geometry(spec, cache_dir), cache_dir, source=source) as world:
         state = world.compute_warm_state(
             key, lambda t_s: print(f"{PROGRESS_PREFIX}{t_s!r}", flush=True))
     path = cached_path(key)

@@ -18,7 +18,7 @@ from pathlib import Path
 from scenarios.common.cache_dir import network_cache_dir
 from scenarios.common.errors import SdcError
 from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
-from scenarios.spec.scenario_spec import SUMO_HOME_PREFIX, RoadSpec
+from scenarios.spec.scenario_tables import SUMO_HOME_PREFIX, RoadSpec
 
 
 def sumo_binary(name: str) -> str:

@@ -32,7 +32,8 @@ from typing import Protocol
 from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.file_read import file_sha256, read_bytes, sha256_hex
 from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
-from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec, TrafficSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import RoadSpec, TrafficSpec
 from scenarios.sumo_net.build import build_network, input_path, sumo_load_error
 from scenarios.sumo_net.net_xml import NetFile, parse_net, read_net
 from scenarios.sumo_net.opendrive_net import opendrive_network

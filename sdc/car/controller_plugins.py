@@ -19,7 +19,7 @@ from typing import Any
 
 from scenarios.common.errors import SpecError
 from scenarios.spec.controller_ref import BUILTIN_CONTROLLERS, ENTRY_POINT_GROUP, controller_kind
-from scenarios.spec.scenario_spec import ControllerSpec
+from scenarios.spec.controller_spec import ControllerSpec
 from sdc.car.controller_api import Controller
 
 

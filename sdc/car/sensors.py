@@ -12,7 +12,7 @@ import numpy as np
 
 from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import NO_BOXES
-from scenarios.spec.scenario_spec import LidarSpec, beam_angles_rad
+from scenarios.spec.scenario_tables import LidarSpec, beam_angles_rad
 from sdc.car.geometry_kernels import lidar_ranges_m
 
 

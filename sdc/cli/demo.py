@@ -56,7 +56,7 @@ def demo(out_dir: Path, samples: int | None, workers: int) -> None:
 def _other_demo(out_dir: Path, spec) -> bool:
     """Does ``out_dir`` hold a demo sweep (ours to replace) with another plan than
     ``spec``'s? A half-done demo of the same plan is resumed instead."""
-    from scenarios.spec.sweep_spec import expand, plan_sha256
+    from scenarios.spec.sweep_plan import expand, plan_sha256
     from sdc.batch.sweeps.manifest import read_manifest
 
     manifest = read_manifest(out_dir) if out_dir.is_dir() else None

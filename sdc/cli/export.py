@@ -14,6 +14,8 @@ import click
 import numpy as np
 
 from analysis.measures.commands import exported_name
+from analysis.measures.row_columns import RowCol
+from analysis.measures.trace_columns import TraceCol, TraceMeta, VehicleMeta
 from scenarios.common.errors import SdcError
 from sdc.cli.common import bad_input, exit_interrupted
 
@@ -73,20 +75,21 @@ def export_run(sweep_dir: Path, run_id: str, out: Path) -> list[str]:
 
     recorded = load_recorded_run(Path(sweep_dir), run_id)
     if recorded.trace_path is None:
-        status = recorded.row["status"] if recorded.row else "not run yet"
+        status = recorded.row[RowCol.status] if recorded.row else "not run yet"
         raise SdcError(f"--run: {run_id} of {sweep_dir} has no trace ({status}; DIR/traces/"
                        f"{run_id}.parquet is missing: the sweep keeps the traces of runs "
                        "that did not complete, or of all with --traces all)")
     trace, metadata = read_trace(recorded.trace_path)
     if len(trace) == 0:
         raise SdcError(f"--run: the trace of {run_id} holds no steps")
-    spec = ScenarioSpec.from_plain(metadata["spec"])
-    vehicle = metadata["vehicle"]
+    spec = ScenarioSpec.from_plain(metadata[TraceMeta.spec])
+    vehicle = metadata[TraceMeta.vehicle]
     f = trace.floats
-    ego = MovingBody(EGO, "ego", vehicle["length_m"], vehicle["width_m"], f["t_s"],
-                     np.column_stack([f["x_m"], f["y_m"]]), f["yaw_rad"],
-                     vehicle["center_ahead_of_rear_axle_m"])
-    model = VEHICLE_MODELS.get(vehicle.get("model"))
+    ego = MovingBody(EGO, "ego", vehicle[VehicleMeta.length_m], vehicle[VehicleMeta.width_m],
+                     f[TraceCol.t_s], np.column_stack([f[TraceCol.x_m], f[TraceCol.y_m]]),
+                     f[TraceCol.yaw_rad],
+                     vehicle[VehicleMeta.center_ahead_of_rear_axle_m])
+    model = VEHICLE_MODELS.get(vehicle.get(VehicleMeta.model))
     xodr = out.with_suffix(".xodr")
     shift = export_road(spec.road, xodr)
     lines = []
@@ -99,7 +102,8 @@ def export_run(sweep_dir: Path, run_id: str, out: Path) -> list[str]:
                      f"{xodr}: the road and the paths may not share a frame")
     step_s = spec.scenario.step_s
     write_xosc(out, road_file=xodr.name, ego=ego, bodies=body_paths(trace),
-               obstacles=standing_bodies(metadata, spec), end_s=float(f["t_s"][-1]), step_s=step_s,
+               obstacles=standing_bodies(metadata, spec), end_s=float(f[TraceCol.t_s][-1]),
+               step_s=step_s,
                description=f"sdc run {run_id} of {Path(sweep_dir).name}: "
                            f"{spec.scenario.name}, controller {spec.controller.label}",
                wheelbase_m=model.wheelbase_m if model else None)

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import click
 
+from analysis.measures.row_columns import RowCol
+from analysis.measures.trace_columns import TraceCol
 from scenarios.common.errors import SdcError
 from sdc.cli.common import (
     EXIT_RUN_ERROR,
@@ -104,7 +106,7 @@ def replay(target: Path, run_id: str | None, verify: bool, out: Path | None, eve
             if run_id or verify or gui:
                 bad_input("--run, --verify and --gui need a sweep DIR, not a trace file")
             trace, metadata = read_trace(target)
-            check_at(at_s, float(trace.floats["t_s"][-1]))
+            check_at(at_s, float(trace.floats[TraceCol.t_s][-1]))
             _render(trace, metadata, out or target.with_suffix(".html"), every, at_s)
             return
         if run_id is None:
@@ -132,14 +134,14 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
     recorded_trace = read_trace(recorded.trace_path)[0] if recorded.trace_path else None
     for line in version_warnings(recorded.manifest):
         click.echo(line, err=True)
-    if recorded.row is not None and recorded.row["status"] == "ok":
-        check_at(at_s, recorded.row["sim_time_s"])
+    if recorded.row is not None and recorded.row[RowCol.status] == "ok":
+        check_at(at_s, recorded.row[RowCol.sim_time_s])
     warm_up_first(recorded.spec)
     if recorded.world is not None:
         episode = _replay_in_world(recorded, gui)
         if episode is None:
             return None
-    elif recorded.row is not None and recorded.row["status"] != "ok":
+    elif recorded.row is not None and recorded.row[RowCol.status] != "ok":
         return _replay_failed_run(recorded, out, every, gui, at_s)
     else:
         episode = run_episode(recorded.spec, run_id=run_id, gui=gui)
@@ -150,7 +152,7 @@ def _replay_run(sweep_dir: Path, run_id: str, out: Path | None, every: int, gui:
                                        run_id)
     click.echo(verdict)
     if out is not None:
-        check_at(at_s, float(episode.trace.floats["t_s"][-1]))
+        check_at(at_s, float(episode.trace.floats[TraceCol.t_s][-1]))
         _render(episode.trace, episode.metadata, out, every, at_s)
     return diverged
 
@@ -169,8 +171,8 @@ def _replay_in_world(recorded, gui: bool):
     outcome = replay_in_world(specs, run_ids, recorded.run_id)
     if isinstance(outcome, Failed):
         row = recorded.row
-        click.echo(f"replay: {outcome.error}" + (f" (in the sweep: {row['status']}: "
-                                                 f"{row['error']})" if row else ""))
+        click.echo(f"replay: {outcome.error}" + (f" (in the sweep: {row[RowCol.status]}: "
+                                                 f"{row[RowCol.error]})" if row else ""))
         return None
     return outcome
 
@@ -186,10 +188,10 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
 
     row = recorded.row
     params = params_text(row, [k for k in row if k.startswith(PARAM_PREFIX)])
-    click.echo(f"{recorded.run_id}: {row['status']} in the sweep: {row['error']} "
-               f"(controller {row['controller']}, seed {row['seed']}"
+    click.echo(f"{recorded.run_id}: {row[RowCol.status]} in the sweep: {row[RowCol.error]} "
+               f"(controller {row[RowCol.controller]}, seed {row[RowCol.seed]}"
                + (f"; {params}" if params else "") + ")")
-    limit_s = row["wall_time_s"] if row["status"] == "timeout" else None
+    limit_s = row[RowCol.wall_time_s] if row[RowCol.status] == "timeout" else None
     replayed = run_as_far_as_it_goes(recorded.spec, run_id=recorded.run_id, gui=gui,
                                      wall_limit_s=limit_s)
     if not isinstance(replayed, Stopped):
@@ -206,6 +208,6 @@ def _replay_failed_run(recorded, out: Path | None, every: int, gui: bool,
     if replayed.episode is None:
         click.echo(f"nothing drawn to {out}: the run stopped before its first step")
         return None
-    check_at(at_s, float(replayed.episode.trace.floats["t_s"][-1]))
+    check_at(at_s, float(replayed.episode.trace.floats[TraceCol.t_s][-1]))
     _render(replayed.episode.trace, replayed.episode.metadata, out, every, at_s)
     return False

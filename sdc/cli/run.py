@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from analysis.measures.numbers import params_text
+from analysis.measures.row_columns import RowCol
 from analysis.measures.stood_for import stood_for_text
 from analysis.measures.world_audit import ROLE_TEXT
 from scenarios.common.errors import SdcError, SpecError
@@ -62,66 +63,70 @@ def overlap_lines(row: dict, draw=None) -> list[str]:
     """The first overlap of bodies other than the ego counted in world_overlaps and the
     first in sumo_overlaps, in words; ``draw(t_s)``: the command that draws one."""
     return [f"  overlap:   the first counted in {count}, {row[column]}"
-            + (f"; draw it: {draw(row[column + '_s'])}" if draw else "")
-            for column, count in (("first_overlap", "world_overlaps"),
-                                  ("first_sumo_overlap", "sumo_overlaps")) if row.get(column)]
+            + (f"; draw it: {draw(row[column_s])}" if draw else "")
+            for column, column_s, count in (
+                (RowCol.first_overlap, RowCol.first_overlap_s, RowCol.world_overlaps),
+                (RowCol.first_sumo_overlap, RowCol.first_sumo_overlap_s, RowCol.sumo_overlaps))
+            if row.get(column)]
 
 
 def stood_lines(row: dict) -> list[str]:
     """Where a run that ended standing stood, and for what (none: it ended moving)."""
-    if not row.get("stood_for"):
+    if not row.get(RowCol.stood_for):
         return []
-    cycle = row.get("stood_for_cycle_s")
+    cycle = row.get(RowCol.stood_for_cycle_s)
     short = (f" (less than the light's {cycle:.0f} s cycle: too short to tell)"
-             if row["outcome"] == "unfinished" and cycle is not None else "")
-    return [f"  stood:     for the last {row['stood_at_end_s']:.1f} s, "
+             if row[RowCol.outcome] == "unfinished" and cycle is not None else "")
+    return [f"  stood:     for the last {row[RowCol.stood_at_end_s]:.1f} s, "
             f"{stood_for_text(row)}{short}"]
 
 
 def summary_lines(name: str, row: dict, draw=None) -> list[str]:
     """A run's row in lines; ``draw``: as :func:`overlap_lines` takes it."""
-    if row["status"] != "ok":
-        return [f"{name}: run failed: {row['error']}"]
-    what = row["collision_with"]
-    if row.get("collision_vclass") and row["collision_vclass"] != what:
-        what += f" ({row['collision_vclass']})"
-    outcome = row["outcome"] + (
-        f": COLLISION with {what} at {row['collision_time_s']:.2f} s "
-        f"({row['collision_part']}; {ROLE_TEXT.get(row['collision_role'], '?')})"
-        if row["collision"] else " (no collision)")
-    if row.get("world_overlaps"):
+    if row[RowCol.status] != "ok":
+        return [f"{name}: run failed: {row[RowCol.error]}"]
+    what = row[RowCol.collision_with]
+    if row.get(RowCol.collision_vclass) and row[RowCol.collision_vclass] != what:
+        what += f" ({row[RowCol.collision_vclass]})"
+    outcome = row[RowCol.outcome] + (
+        f": COLLISION with {what} at {row[RowCol.collision_time_s]:.2f} s "
+        f"({row[RowCol.collision_part]}; {ROLE_TEXT.get(row[RowCol.collision_role], '?')})"
+        if row[RowCol.collision] else " (no collision)")
+    if row.get(RowCol.world_overlaps):
         outcome += (f"; WARNING: bodies other than the ego overlapped in "
-                    f"{row['world_overlaps']} steps (world_overlaps)")
-    if row.get("sumo_overlaps"):
+                    f"{row[RowCol.world_overlaps]} steps (world_overlaps)")
+    if row.get(RowCol.sumo_overlaps):
         outcome += (f"; SUMO's own model held bodies inside each other in "
-                    f"{row['sumo_overlaps']} steps (sumo_overlaps; SUMO's world, not sdc's)")
-    if row.get("red_light_violations"):
-        outcome += f"; crossed {row['red_light_violations']} red light(s)"
+                    f"{row[RowCol.sumo_overlaps]} steps (sumo_overlaps; SUMO's world, not sdc's)")
+    if row.get(RowCol.red_light_violations):
+        outcome += f"; crossed {row[RowCol.red_light_violations]} red light(s)"
     maneuver = "not started"
-    if row["maneuver_started"]:
-        returned = (f"returned to lane after {row['return_time_s']:.2f} s"
-                    if row["returned_to_lane"] else "did not return to lane")
-        maneuver = f"started at {_fmt(row['detection_range_m'], ' m')}, {returned}"
+    if row[RowCol.maneuver_started]:
+        returned = (f"returned to lane after {row[RowCol.return_time_s]:.2f} s"
+                    if row[RowCol.returned_to_lane] else "did not return to lane")
+        maneuver = f"started at {_fmt(row[RowCol.detection_range_m], ' m')}, {returned}"
     params = [k for k in row if k.startswith(PARAM_PREFIX)]
     return [
-        f"{name}  controller={row['controller']}  seed={row['seed']}  backend={row['backend']}",
+        f"{name}  controller={row[RowCol.controller]}  seed={row[RowCol.seed]}  "
+        f"backend={row[RowCol.backend]}",
         *([f"  set:       {params_text(row, params)}"] if params else []),
-        f"  outcome:   {outcome}; ended by {row['termination']} after "
-        f"{row['sim_time_s']:.2f} s ({row['steps']} steps, {row['wall_time_s']:.2f} s wall, "
-        f"{row['network_vehicles']} vehicles in the network"
-        + (f", warm state {row['warm_state']}" if row.get("warm_state") else "") + ")",
+        f"  outcome:   {outcome}; ended by {row[RowCol.termination]} after "
+        f"{row[RowCol.sim_time_s]:.2f} s ({row[RowCol.steps]} steps, "
+        f"{row[RowCol.wall_time_s]:.2f} s wall, "
+        f"{row[RowCol.network_vehicles]} vehicles in the network"
+        + (f", warm state {row[RowCol.warm_state]}" if row.get(RowCol.warm_state) else "") + ")",
         *overlap_lines(row, draw),
         *stood_lines(row),
-        f"  progress:  {_fmt(row['progress_m'], ' m', 1)} along the route, time lost "
-        f"{_fmt(row['time_lost_s'], ' s', 1)} (against driving on at the start speed)",
+        f"  progress:  {_fmt(row[RowCol.progress_m], ' m', 1)} along the route, time lost "
+        f"{_fmt(row[RowCol.time_lost_s], ' s', 1)} (against driving on at the start speed)",
         f"  maneuver:  {maneuver}",
-        f"  max |lane offset| {_fmt(row['max_abs_lane_offset_m'], ' m')}, "
-        f"min gap to obstacle {_fmt(row['min_gap_obstacle_m'], ' m')}, "
-        f"min TTC {_fmt(row['min_ttc_s'], ' s')}, "
-        f"closest to road edge {_fmt(row['min_road_edge_gap_m'], ' m')}",
-        f"  max DRAC {_fmt(row['max_drac_mps2'], ' m/s^2')}, "
-        f"min headway {_fmt(row['min_headway_s'], ' s')}",
-        f"  trace sha256 {row['trace_sha256']}",
+        f"  max |lane offset| {_fmt(row[RowCol.max_abs_lane_offset_m], ' m')}, "
+        f"min gap to obstacle {_fmt(row[RowCol.min_gap_obstacle_m], ' m')}, "
+        f"min TTC {_fmt(row[RowCol.min_ttc_s], ' s')}, "
+        f"closest to road edge {_fmt(row[RowCol.min_road_edge_gap_m], ' m')}",
+        f"  max DRAC {_fmt(row[RowCol.max_drac_mps2], ' m/s^2')}, "
+        f"min headway {_fmt(row[RowCol.min_headway_s], ' s')}",
+        f"  trace sha256 {row[RowCol.trace_sha256]}",
     ]
 
 
@@ -218,12 +223,12 @@ def run(spec_file: Path, seed: int | None, controller: str | None, backend: str 
     else:
         for line in summary_lines(spec.scenario.name, shown):
             click.echo(line)
-        if trace is not None and row["status"] == "ok":
+        if trace is not None and row[RowCol.status] == "ok":
             click.echo(f"  trace written to {trace}")
-    if row["status"] != "ok":
+    if row[RowCol.status] != "ok":
         from sdc.run.result_row import raised_at
 
-        where = raised_at(row["traceback"])
-        click.echo(f"error: {row['error']}" + (f" (raised at {where})" if where else ""),
+        where = raised_at(row[RowCol.traceback])
+        click.echo(f"error: {row[RowCol.error]}" + (f" (raised at {where})" if where else ""),
                    err=True)
         sys.exit(EXIT_RUN_ERROR)

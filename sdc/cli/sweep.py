@@ -7,6 +7,8 @@ from pathlib import Path
 import click
 
 from analysis.measures.commands import resume_command
+from analysis.measures.row_columns import RowCol
+from analysis.measures.sweep_manifest import SweepDir
 from scenarios.common.errors import SdcError
 from scenarios.sumo.warm_state import uses_warm_state
 from sdc.cli.common import (
@@ -38,7 +40,7 @@ def _plan_lines(sweep, plan) -> list[str]:
         lines.append(f"the runs share {len(worlds)} worlds (sweep.egos_per_world = "
                      f"{sweep.egos_per_world}; the placement rule may seat fewer together)")
     paths = list(sweep.param_types)
-    lines.append("  ".join(["run_id", "seed"] + paths))
+    lines.append("  ".join([RowCol.run_id, RowCol.seed] + paths))
     for run in plan:
         values = [f"{v:.6g}" if isinstance(v, float) else str(v) for v in run.params.values()]
         line = "  ".join([run.run_id, str(run.seed)] + values)
@@ -115,7 +117,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     workers, local or on any Ray node, never open the driver's paths.
     """
     from analysis.measures.run_outcome import outcomes_text
-    from scenarios.spec.sweep_spec import expand
+    from scenarios.spec.sweep_plan import expand
     from sdc.batch.sweeps.sweep_runner import run_sweep
 
     check_executor_options(options)
@@ -141,7 +143,7 @@ def sweep(sweep_file: Path, out_dir: Path | None, batch_runs: int | None, resume
     click.echo(f"{outcome.runs} runs: {counts['ok']} ok, {counts['error']} error, "
                f"{counts['timeout']} timeout, {counts['missing']} not run; "
                f"{outcomes_text(outcome.outcomes)} ({outcome.wall_time_s:.1f} s)")
-    click.echo(f"results: {outcome.out_dir / 'results.parquet'}")
+    click.echo(f"results: {outcome.out_dir / SweepDir.results}")
     if outcome.interrupted or counts["missing"]:
         hint = resume_command(sweep_file, out_dir, samples=samples, overrides=overrides,
                               controllers=controllers, ego=ego, traces=options["traces"],

@@ -22,8 +22,10 @@ import numpy as np
 from analysis.measures import run_outcome
 from analysis.measures.metrics import trace_metrics
 from analysis.measures.overlap_detail import METADATA_KEY as OVERLAPS_KEY
+from analysis.measures.row_columns import RowCol
 from analysis.measures.safety import lane_scale, road_edge_gaps_m, stop_gap_m, stop_possible
 from analysis.measures.stood_for import Standing, standing_at_end
+from analysis.measures.trace_columns import TraceCol, TraceMeta, VehicleMeta
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlap_steps
 from scenarios.scene.road_geometry import RoadGeometry
@@ -31,6 +33,7 @@ from scenarios.scene.snapshot import Pose, Snapshot
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
 from scenarios.sumo.warm_state import warm_state_id
+from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import World, make_road, make_world
 from sdc.car.collision import Collision, collision_with, describe
 from sdc.car.controller_api import Crosswalk, LanesBeside, Observation, StopLine
@@ -276,11 +279,11 @@ class Simulation:
     def _standing(self) -> Standing | None:
         """What the car stood for at the last step (None: it was moving)."""
         trace, snapshot = self.trace(), self.snapshot
-        if run_outcome.rest_step(trace.floats["speed_mps"]) == len(trace):
+        if run_outcome.rest_step(trace.floats[TraceCol.speed_mps]) == len(trace):
             return None
         return standing_at_end(self.road, self.box, snapshot.traffic_boxes,
                                snapshot.traffic_classes, snapshot.obstacle_boxes,
-                               self.obstacle_classes, trace.signals, trace.floats["t_s"],
+                               self.obstacle_classes, trace.signals, trace.floats[TraceCol.t_s],
                                self.world.signal_cycles_s)
 
     def finish(self, termination: str, run_id: str | None = None,
@@ -291,7 +294,7 @@ class Simulation:
         judged them (a shared world's runs, judged together)."""
         spec, model, road = self.spec, self.model, self.road
         trace = self.trace()
-        t_end = float(trace.floats["t_s"][-1])
+        t_end = float(trace.floats[TraceCol.t_s][-1])
         edge_gaps_m = road_edge_gaps_m(
             trace.body_boxes(model.center_ahead_of_rear_axle_m, model.length_m, model.width_m),
             road)
@@ -299,8 +302,9 @@ class Simulation:
         gap_m = stop_gap_m(spec, road, model)
         floats, obstacles = trace.floats, self.snapshot.obstacle_boxes
         passed = run_outcome.passed_every_obstacle(
-            floats["s_m"], model.length_m, road.to_frenet(obstacles[:, :2])[0], obstacles[:, 3])
-        progress_m = run_outcome.progress_m(floats["s_m"], lane_scale(spec, road))
+            floats[TraceCol.s_m], model.length_m, road.to_frenet(obstacles[:, :2])[0],
+            obstacles[:, 3])
+        progress_m = run_outcome.progress_m(floats[TraceCol.s_m], lane_scale(spec, road))
         standing = self._standing()
         judged = self._whose_overlaps() if overlaps is None else overlaps
         firsts = [o for o in (judged.first_ours, judged.first_sumo) if o is not None]
@@ -326,12 +330,13 @@ class Simulation:
             first_sumo_overlap_s=judged.first_sumo and judged.first_sumo.t_s,
             first_sumo_overlap=judged.first_sumo and judged.first_sumo.text(),
             red_light_violations=self.stop_lines.red_light_violations,
-            outcome=run_outcome.run_outcome(hit is not None, passed, floats["t_s"],
-                                            floats["speed_mps"], standing),
+            outcome=run_outcome.run_outcome(hit is not None, passed, floats[TraceCol.t_s],
+                                            floats[TraceCol.speed_mps], standing),
             progress_m=round(progress_m, 6),
             time_lost_s=run_outcome.time_lost_s(t_end, progress_m, spec.ego.speed_mps),
-            collision_speed_mps=float(floats["speed_mps"][-1]) if hit else None,
-            stood_at_end_s=run_outcome.still_at_end_s(floats["t_s"], floats["speed_mps"]),
+            collision_speed_mps=float(floats[TraceCol.speed_mps][-1]) if hit else None,
+            stood_at_end_s=run_outcome.still_at_end_s(floats[TraceCol.t_s],
+                                                      floats[TraceCol.speed_mps]),
             stood_for=standing.what if standing else None,
             stood_for_gap_m=standing.gap_m if standing else None,
             stood_for_cycle_s=standing.cycle_s if standing else None,
@@ -349,15 +354,16 @@ class Simulation:
             trace_sha256=trace.sha256(),
         )
         metadata = {
-            "spec": spec.to_plain(),
-            "road": road.to_plain(),
-            "obstacle_boxes": self.snapshot.obstacle_boxes.round(6).tolist(),
-            "vehicle": {"model": model.name, "length_m": model.length_m,
-                        "width_m": model.width_m,
-                        "center_ahead_of_rear_axle_m": model.center_ahead_of_rear_axle_m},
-            "run": {k: row[k] for k in ("seed", "controller", "backend", "termination",
-                                        "collision_with", "outcome", "stood_for",
-                                        "trace_sha256")},
+            TraceMeta.spec: spec.to_plain(),
+            TraceMeta.road: road.to_plain(),
+            TraceMeta.obstacle_boxes: self.snapshot.obstacle_boxes.round(6).tolist(),
+            TraceMeta.vehicle: {
+                VehicleMeta.model: model.name, VehicleMeta.length_m: model.length_m,
+                VehicleMeta.width_m: model.width_m,
+                VehicleMeta.center_ahead_of_rear_axle_m: model.center_ahead_of_rear_axle_m},
+            TraceMeta.run: {k: row[k] for k in (
+                RowCol.seed, RowCol.controller, RowCol.backend, RowCol.termination,
+                RowCol.collision_with, RowCol.outcome, RowCol.stood_for, RowCol.trace_sha256)},
         }
         if firsts:  # named for a drawing (analysis.measures.overlap_detail)
             metadata[OVERLAPS_KEY] = [o.to_plain() for o in firsts]
@@ -372,8 +378,9 @@ def run_episode(spec: ScenarioSpec, *, run_id: str | None = None,
     sumo-gui (same results, at the speed of the step length). ``warm_state``: the file
     of its warm state when the caller has one (same results as one found or computed)."""
     controller = make_controller(spec.controller)
-    road = make_road(spec, cache_dir)
-    with make_world(spec, road, cache_dir, gui, warm_state) as world:
+    source = road_source(spec.road)  # the run's one: handed to its road and its world
+    road = make_road(spec, cache_dir, source)
+    with make_world(spec, road, cache_dir, gui, warm_state, source) as world:
         sim = Simulation(spec, world, controller=controller)
         termination = run_alone(world, sim)
     return sim.finish(termination, run_id)
@@ -422,7 +429,9 @@ def run_as_far_as_it_goes(spec: ScenarioSpec, *, run_id: str | None = None, gui:
     try:
         with _wall_limit(wall_limit_s):
             controller = make_controller(spec.controller)
-            with make_world(spec, make_road(spec), gui=gui) as world:
+            source = road_source(spec.road)  # the run's one
+            with make_world(spec, make_road(spec, source=source), gui=gui,
+                            source=source) as world:
                 sim = Simulation(spec, world, controller=controller)
                 termination = run_alone(world, sim)
             return sim.finish(termination, run_id)

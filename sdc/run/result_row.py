@@ -310,7 +310,7 @@ class SweepColumns:
     run_index: int
     sample: int
     params: Mapping[str, Any]  # swept path -> value; the columns p.<path>
-    world_id: str | None = None  # its shared world (scenarios/spec/shared_worlds.py)
+    world_id: str | None = None  # its shared world (scenarios/spec/world_seating.py)
     world_slot: int | None = None
 
     def values(self) -> dict[str, Any]:

@@ -1,6 +1,6 @@
 """Several runs in one SUMO world: the traffic simulated once, an ego for each run.
 
-The runs of a world share what :func:`scenarios.spec.shared_worlds.world_fields` names
+The runs of a world share what :func:`scenarios.spec.world_seating.world_fields` names
 (the road, the traffic and its seed, the step): the first run's traffic is the
 world's. Each ego has its own start, route, obstacles, controller, sensors and
 checks, and ends on its own (collision, duration, route end); its bodies then leave
@@ -31,6 +31,7 @@ from scenarios.scene.road_geometry import RoadGeometry
 from scenarios.scene.snapshot import obstacle_boxes, sensing_radius_m
 from scenarios.spec.bodies import VEHICLE_MODELS
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.sumo_net.road_source import RoadSource, road_source
 from scenarios.world_backends import make_road, make_shared_world
 from sdc.car.controller_plugins import make_controller
 from sdc.car.vehicle import Vehicle
@@ -72,12 +73,12 @@ def placed_apart(egos: list[tuple[ScenarioSpec, RoadGeometry]]) -> list[list[int
 
 
 def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str], *,
-              cache_dir: Path | None = None, warm_state: Path | None = None
-              ) -> list[Episode | Failed]:
+              cache_dir: Path | None = None, warm_state: Path | None = None,
+              source: RoadSource | None = None) -> list[Episode | Failed]:
     """Run ``egos`` (each a spec and its road; the first's traffic is the world's) in
     one SUMO world, stepped together; each run's :class:`Episode` named by
     ``run_ids``, or how it failed. A failure of the world itself fails every run still
-    in it."""
+    in it. ``source``: the road source the egos share, when the caller has it."""
     controllers: list = []
     for spec, _ in egos:
         try:
@@ -88,7 +89,7 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
                                      if isinstance(c, Failed)}
     sims: list[Simulation] = []
     try:
-        world = make_shared_world(egos, cache_dir, warm_state)
+        world = make_shared_world(egos, cache_dir, warm_state, source)
         sims = [Simulation(spec, world, road=road, controller=controller)
                 for (spec, road), controller in zip(egos, controllers, strict=True)]
         for sim in sims:
@@ -138,9 +139,11 @@ def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
     run's outcome, as :func:`run_world` (its row's ``world_egos`` says how many egos
     shared its world)."""
     egos, out = [], {}
+    # the group's one road source: its runs share their road (world_fields)
+    source = road_source(specs[0].road) if specs else None
     for i, spec in enumerate(specs):
         try:
-            egos.append((spec, make_road(spec, cache_dir)))
+            egos.append((spec, make_road(spec, cache_dir, source)))
         except Exception as e:  # noqa: BLE001 - a road it cannot have: its row says why
             out[i] = Failed.of(e)
             egos.append(None)
@@ -148,7 +151,7 @@ def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
     for world in placed_apart([egos[i] for i in placeable]):
         members = [placeable[j] for j in world]
         results = run_world([egos[i] for i in members], [run_ids[i] for i in members],
-                            cache_dir=cache_dir, warm_state=warm_state)
+                            cache_dir=cache_dir, warm_state=warm_state, source=source)
         out.update(zip(members, results, strict=True))
     return [out[i] for i in range(len(specs))]
 

@@ -29,6 +29,7 @@ from typing import NamedTuple
 import numpy as np
 
 from analysis.measures.overlap_detail import Overlap, deepest, describe, overlaps_at
+from analysis.measures.trace_columns import TraceCol
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
 from scenarios.sumo.routes_xml import ego_names
@@ -78,9 +79,9 @@ class Verdict(NamedTuple):
 def _pose(run: Judged, k: int) -> tuple[np.ndarray, float]:
     """The ego's box and speed at step ``k`` of its trace."""
     floats = run.trace.floats
-    state = VehicleState(float(floats["x_m"][k]), float(floats["y_m"][k]),
-                         float(floats["yaw_rad"][k]), float(floats["speed_mps"][k]),
-                         float(floats["steer_rad"][k]))
+    state = VehicleState(float(floats[TraceCol.x_m][k]), float(floats[TraceCol.y_m][k]),
+                         float(floats[TraceCol.yaw_rad][k]), float(floats[TraceCol.speed_mps][k]),
+                         float(floats[TraceCol.steer_rad][k]))
     return run.vehicle.body_box(state), state.speed_mps
 
 

@@ -34,8 +34,14 @@ import numpy as np
 import pandas as pd
 
 from analysis.measures.failure_event import FailureEvent
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_score import ScoreKind
-from analysis.measures.sweep_manifest import AdaptiveRecord, SweepManifest
+from analysis.measures.sweep_manifest import (
+    PLAN_SPEC_COLUMN,
+    AdaptiveRecord,
+    SweepDir,
+    SweepManifest,
+)
 from analysis.rare.adaptive_summary import described_modes, stuck_modes, summary_path
 from analysis.rare.failure_modes import OTHER
 from analysis.rare.mode_search import ModeSearch
@@ -46,7 +52,8 @@ from scenarios.common.errors import SdcError, SpecError
 from scenarios.common.plain_json import json_plain
 from scenarios.common.seeding import RUN_SEEDS_STREAM, SAMPLER_STREAM, draw_seeds, stream_rng
 from scenarios.spec.controller_ref import controller_label
-from scenarios.spec.sweep_spec import PlannedRun, SweepSpec, plan_samples
+from scenarios.spec.sweep_plan import PlannedRun, plan_samples
+from scenarios.spec.sweep_spec import SweepSpec
 from sdc.batch.executors.executor import Executor
 from sdc.batch.sweeps.result_store import ResultStore
 from sdc.batch.sweeps.sweep_runner import (
@@ -156,12 +163,12 @@ class _Runs:
         self.traces, self.settings = traces, settings
         self.event = FailureEvent(settings.score)
         self.store = ResultStore(out_dir, result_schema(sweep.param_types, adaptive=True))
-        self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table="plan",
-                                 parts="plan-parts")
-        self.rows = {r["run_id"]: r for r in self.store.read().to_pylist()}
-        self.planned = {r["run_id"]: r["spec_json"]
-                        for r in self.plans.read().select(["run_id", "spec_json"]).to_pylist()}
-        self.trace_dir = out_dir / "traces"
+        self.plans = ResultStore(out_dir, plan_table_of([], sweep).schema, table=SweepDir.plan,
+                                 parts=SweepDir.plan_parts)
+        self.rows = {r[RowCol.run_id]: r for r in self.store.read().to_pylist()}
+        self.planned = {r[RowCol.run_id]: r[PLAN_SPEC_COLUMN] for r in self.plans.read().select(
+            [RowCol.run_id, PLAN_SPEC_COLUMN]).to_pylist()}
+        self.trace_dir = out_dir / SweepDir.traces
         self._entered = False
         self.manifest = start_session(out_dir, manifest, executor, traces,
                                       max(0, settings.max_runs - len(self.rows)))
@@ -180,7 +187,7 @@ class _Runs:
                 self.plans.add(row)
             self.plans.flush()  # before any of its runs: replay finds every run's spec
             return
-        if stored != table.column("spec_json").to_pylist():
+        if stored != table.column(PLAN_SPEC_COLUMN).to_pylist():
             raise SdcError(f"--resume: batch {batch} drawn again differs from the one in "
                            f"{self.out_dir} (another sdc version or sampler); start a new "
                            "directory")
@@ -210,22 +217,22 @@ class _Runs:
             keys = members_keys(tasks, keys)
             for task_row in self.executor.map(tasks):
                 for row in rows_of(task_row):
-                    if row["run_id"] in self.rows:  # a world's run that had its row
+                    if row[RowCol.run_id] in self.rows:  # a world's run that had its row
                         continue
                     row = with_warm_state(row, keys)
                     score = self.event.run_score(row)
-                    self._add(adaptive_row(row, **adaptive[row["run_id"]], score=score))
+                    self._add(adaptive_row(row, **adaptive[row[RowCol.run_id]], score=score))
         return [self.rows[r.run_id] for r in plan]
 
     def _add(self, row: dict) -> None:
         self.store.add(row)
-        self.rows[row["run_id"]] = row
+        self.rows[row[RowCol.run_id]] = row
         self.reporter.advance(row)
 
 
 def _scores(rows: list[dict]) -> np.ndarray:
     """What the sampler is told of the rows' scores (a sample with no run: +inf)."""
-    return np.array([FailureEvent.told(r["score"]) for r in rows])
+    return np.array([FailureEvent.told(r[RowCol.score]) for r in rows])
 
 
 def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter,
@@ -247,8 +254,9 @@ def run_adaptive(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: 
     seed_rng = stream_rng(sweep.seed, RUN_SEEDS_STREAM)
     width = max(5, len(str(settings.max_runs - 1)))
     reporter.start(total=settings.max_runs, done=len(runs.rows),
-                   outcomes=Counter(r["outcome"] for r in runs.rows.values() if r["outcome"]),
-                   failed=sum(r["status"] != "ok" for r in runs.rows.values()))
+                   outcomes=Counter(r[RowCol.outcome] for r in runs.rows.values()
+                                    if r[RowCol.outcome]),
+                   failed=sum(r[RowCol.status] != "ok" for r in runs.rows.values()))
     state, drawn, batch = "running", 0, 0
     try:
         while (z := loop.ask()) is not None:
@@ -279,7 +287,7 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
                    loop: EstimationLoop | ModeSearch, rows: dict[str, dict], state: str) -> dict:
     """Write ``estimate.json`` or ``search.json``; ``state``: running, finished, interrupted
     (``failure_modes`` is None while running)."""
-    ordered = sorted(rows.values(), key=lambda r: r["run_index"])
+    ordered = sorted(rows.values(), key=lambda r: r[RowCol.run_index])
     modes = stuck = None  # grouping every failure is for the end, not for each batch
     if state != "running":  # a search has no estimation rows, hence no max_weight
         max_weight = loop.max_weight if isinstance(loop, EstimationLoop) else math.inf
@@ -293,16 +301,16 @@ def _write_summary(out_dir: Path, sweep: SweepSpec, settings: AdaptiveSettings,
         "runs": len(rows),
         "adaptation_runs": loop.adaptation_runs,
         "adaptation_levels": [float(g) for g in loop.levels],
-        "no_outcome_runs": sum(r["status"] != "ok" and r["score"] is not None
+        "no_outcome_runs": sum(r[RowCol.status] != "ok" and r[RowCol.score] is not None
                                for r in rows.values()),
-        "invalid_samples": sum(r["score"] is None for r in rows.values()),
+        "invalid_samples": sum(r[RowCol.score] is None for r in rows.values()),
         "failure_modes": modes,
         "modes_found": None if modes is None else sum(m["outcome"] != OTHER for m in modes),
         "stuck_modes": stuck,
     }
     if isinstance(loop, ModeSearch):
         event = FailureEvent(settings.score)
-        failed = [r["run_id"] for r in ordered if event.failed(r["score"])]
+        failed = [r[RowCol.run_id] for r in ordered if event.failed(r[RowCol.score])]
         stopped = "failures found" if loop.found_enough else "budget"
         summary.update(stopped=stopped if state == "finished" else None,
                        failures=len(failed), first_failure_run=loop.first_failure_run,

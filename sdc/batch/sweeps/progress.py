@@ -20,6 +20,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import outcomes_text
 
 #: plans that take under a few seconds to build show no bar [runs]
@@ -79,9 +80,9 @@ class RichReporter:
         return outcomes_text(self._outcomes) + f", {self._failed} failed"
 
     def advance(self, row: dict) -> None:
-        if row.get("outcome"):
-            self._outcomes[row["outcome"]] += 1
-        self._failed += row["status"] != "ok"
+        if row.get(RowCol.outcome):
+            self._outcomes[row[RowCol.outcome]] += 1
+        self._failed += row[RowCol.status] != "ok"
         self._session += 1
         rate = self._session / max(time.monotonic() - self._t0, 1e-9)
         self._progress.update(self._task, advance=1, tally=self._tally(),
@@ -157,9 +158,9 @@ class LineReporter:
                 f"{outcomes_text(self._outcomes)}, {self._failed} failed")
 
     def advance(self, row: dict) -> None:
-        if row.get("outcome"):
-            self._outcomes[row["outcome"]] += 1
-        self._failed += row["status"] != "ok"
+        if row.get(RowCol.outcome):
+            self._outcomes[row[RowCol.outcome]] += 1
+        self._failed += row[RowCol.status] != "ok"
         self._done += 1
         self._session += 1
         self._line("runs", self._runs_text())

@@ -17,16 +17,20 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 
-from analysis.measures.sweep_manifest import SweepManifest
+from analysis.measures.commands import kept_trace_path
+from analysis.measures.row_columns import RowCol
+from analysis.measures.sweep_manifest import PLAN_SPEC_COLUMN, SweepDir, SweepManifest
+from analysis.measures.trace_columns import TraceCol
 from analysis.measures.trace_file import FLOAT_COLUMNS, Trace
 from scenarios.common.errors import FileError, SdcError, SpecError
 from scenarios.common.file_read import read_parquet
 from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.sweeps.manifest import controller_changes, package_versions, read_manifest
 
-_PLAN_COLUMNS = ("run_id", "spec_json", "error")
-_WORLD_COLUMNS = ("world_id", "world_slot")  # in the plans of sweeps with shared worlds
-_RESULT_COLUMNS = ("run_id", "status", "error", "trace_sha256")  # what a replay compares
+_PLAN_COLUMNS = (RowCol.run_id, PLAN_SPEC_COLUMN, RowCol.error)
+_WORLD_COLUMNS = (RowCol.world_id, RowCol.world_slot)  # in the plans of sweeps with shared worlds
+#: what a replay compares
+_RESULT_COLUMNS = (RowCol.run_id, RowCol.status, RowCol.error, RowCol.trace_sha256)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,36 +61,38 @@ def load_recorded_run(sweep_dir: Path, run_id: str) -> RecordedRun:
     """The spec, result row and trace of ``run_id`` in a sweep directory."""
     sweep_dir = Path(sweep_dir)
     manifest = read_manifest(sweep_dir) if sweep_dir.is_dir() else None
-    plan_path = sweep_dir / "plan.parquet"
+    plan_path = sweep_dir / SweepDir.plan
     # a search or estimate that is running (or was killed) holds its plan in parts
     plan_files = [plan_path] if plan_path.exists() else []
-    plan_files += sorted((sweep_dir / "plan-parts").glob("part-*.parquet"))
+    plan_files += sorted((sweep_dir / SweepDir.plan_parts).glob("part-*.parquet"))
     if manifest is None or not plan_files:
-        raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no manifest.json)")
+        raise SdcError(f"DIR: {sweep_dir} is not a sweep directory (no {SweepDir.manifest})")
     tables = [read_parquet(f, "the plan file", required=_PLAN_COLUMNS) for f in plan_files]
     columns = list(_PLAN_COLUMNS) + [c for c in _WORLD_COLUMNS
                                      if all(c in t.column_names for t in tables)]
     plan = pa.concat_tables(t.select(columns) for t in tables).to_pandas()
-    match = plan[plan.run_id == run_id]
+    match = plan[plan[RowCol.run_id] == run_id]
     if match.empty:
-        shown = ", ".join(map(str, plan.run_id.head(4)))
+        shown = ", ".join(map(str, plan[RowCol.run_id].head(4)))
         raise SdcError(f"--run: no run {run_id!r} in {sweep_dir} (runs: {shown}, ...)")
     planned = match.iloc[0]
-    if planned.spec_json is None:
-        raise SdcError(f"--run: {run_id} has no scenario to replay: {planned.error}")
-    spec = _planned_spec(planned.spec_json, plan_path, run_id)
-    results = sweep_dir / "results.parquet"
+    if planned[PLAN_SPEC_COLUMN] is None:
+        raise SdcError(f"--run: {run_id} has no scenario to replay: {planned[RowCol.error]}")
+    spec = _planned_spec(planned[PLAN_SPEC_COLUMN], plan_path, run_id)
+    results = sweep_dir / SweepDir.results
     row = None
     if results.exists():
         table = read_parquet(results, "the results file", required=_RESULT_COLUMNS)
-        rows = table.filter(pc.field("run_id") == run_id).to_pylist()
+        rows = table.filter(pc.field(RowCol.run_id) == run_id).to_pylist()
         row = rows[0] if rows else None
-    trace = sweep_dir / "traces" / f"{run_id}.parquet"
+    trace = kept_trace_path(sweep_dir, run_id)
     world = None
-    if "world_id" in plan.columns and isinstance(planned.world_id, str):  # null: NaN
-        runs = plan[plan.world_id == planned.world_id].sort_values("world_slot")
-        world = (list(runs.run_id), [_planned_spec(j, plan_path, r)
-                                     for r, j in zip(runs.run_id, runs.spec_json, strict=True)])
+    if RowCol.world_id in plan.columns and isinstance(planned[RowCol.world_id], str):  # null: NaN
+        runs = plan[plan[RowCol.world_id] == planned[RowCol.world_id]].sort_values(
+            RowCol.world_slot)
+        world = (list(runs[RowCol.run_id]),
+                 [_planned_spec(j, plan_path, r) for r, j in
+                  zip(runs[RowCol.run_id], runs[PLAN_SPEC_COLUMN], strict=True)])
     return RecordedRun(run_id, spec, row, trace if trace.exists() else None, manifest, world)
 
 
@@ -126,7 +132,7 @@ def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
         k = _first_float_mismatch(a, b)
         if k is not None:
             found.append(Divergence(k, name, float(a[k]), float(b[k])))
-    for name in ("phase", "traffic_class"):
+    for name in (TraceCol.phase, TraceCol.traffic_class):
         rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
         k = next((k for k in range(n) if rows_a[k] != rows_b[k]), None)
         if k is not None:
@@ -134,9 +140,9 @@ def first_divergence(recorded: Trace, replayed: Trace) -> Divergence | None:
     k = next((k for k in range(n)
               if not np.array_equal(recorded.bodies(k), replayed.bodies(k))), None)
     if k is not None:
-        found.append(Divergence(k, "traffic_body", str(recorded.bodies(k)),
+        found.append(Divergence(k, TraceCol.traffic_body, str(recorded.bodies(k)),
                                 str(replayed.bodies(k))))
-    for name in ("lidar", "traffic"):
+    for name in (TraceCol.lidar, TraceCol.traffic):
         rows_a, rows_b = getattr(recorded, name), getattr(replayed, name)
         for k in range(n):
             a, b = np.asarray(rows_a[k]), np.asarray(rows_b[k])
@@ -166,19 +172,19 @@ def replay_verdict(row: dict | None, recorded_trace: Trace | None, replayed: Tra
     replayed_sha = replayed.sha256()
     if row is None:
         return True, f"not comparable: {sweep_dir} has no result for {run_id} yet"
-    if row["status"] != "ok":
-        return True, (f"not comparable: the recorded run ended with status {row['status']}: "
-                      f"{row['error']}")
+    if row[RowCol.status] != "ok":
+        return True, (f"not comparable: the recorded run ended with status {row[RowCol.status]}: "
+                      f"{row[RowCol.error]}")
     if recorded_trace is not None:  # the recorded steps: compare step by step
         divergence = first_divergence(recorded_trace, replayed)
         if divergence is not None:
             return True, f"DIVERGED: {divergence.describe()}"
-        if row["trace_sha256"] != replayed_sha:
+        if row[RowCol.trace_sha256] != replayed_sha:
             return True, (f"DIVERGED: the replay equals the recorded trace file, but its "
                           f"sha256 {replayed_sha} is not the result row's "
-                          f"{row['trace_sha256']}")
-    elif row["trace_sha256"] != replayed_sha:
+                          f"{row[RowCol.trace_sha256]}")
+    elif row[RowCol.trace_sha256] != replayed_sha:
         return True, (f"DIVERGED: trace sha256 {replayed_sha} != recorded "
-                      f"{row['trace_sha256']} (the sweep kept no trace of this run to find "
+                      f"{row[RowCol.trace_sha256]} (the sweep kept no trace of this run to find "
                       "the step; sweep with --traces all)")
     return False, f"identical: trace sha256 {replayed_sha}"

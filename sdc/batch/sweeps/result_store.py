@@ -15,6 +15,8 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.measures.row_columns import RowCol
+from analysis.measures.sweep_manifest import SweepDir
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import FileError
 from scenarios.common.file_read import read_parquet
@@ -32,16 +34,18 @@ class ResultStore:
 
     ``schema`` is :func:`sdc.run.result_row.result_schema`'s; a row whose keys are
     not exactly its columns raises :class:`sdc.run.result_row.RowKeyError`.
-    ``table`` and ``parts`` name the files (``DIR/<table>.parquet``, ``DIR/<parts>/``):
-    an adaptive sweep's plan grows the same way (``plan``, ``plan-parts``).
+    ``table`` and ``parts`` name the files (``DIR/<table>``, ``DIR/<parts>/``; the sweep
+    directory's names: ``SweepDir``): an adaptive sweep's plan grows the same way
+    (``SweepDir.plan``, ``SweepDir.plan_parts``).
     """
 
     def __init__(self, out_dir: Path, schema: pa.Schema, *, flush_s: float = 1.0,
-                 flush_rows: int = 500, table: str = "results", parts: str = "parts"):
+                 flush_rows: int = 500, table: str = SweepDir.results,
+                 parts: str = SweepDir.parts):
         self.out_dir = Path(out_dir)
         self.parts_dir = self.out_dir / parts
-        self.results_path = self.out_dir / f"{table}.parquet"
-        self.what = f"the {table} file"
+        self.results_path = self.out_dir / table
+        self.what = f"the {Path(table).stem} file"
         self.schema = schema
         self.flush_s, self.flush_rows = flush_s, flush_rows
         self._buffer: list[dict] = []
@@ -54,7 +58,7 @@ class ResultStore:
         return sorted(self.parts_dir.glob("part-*.parquet"))
 
     def add(self, row: dict) -> None:
-        check_keys(row, self.schema.names, f"result row {row.get('run_id')!r}")
+        check_keys(row, self.schema.names, f"result row {row.get(RowCol.run_id)!r}")
         with self._lock:
             self._buffer.append(row)
             full = len(self._buffer) >= self.flush_rows
@@ -86,8 +90,8 @@ class ResultStore:
         files = ([self.results_path] if self.results_path.exists() else []) + self._part_files()
         tables = [read_parquet(f, self.what, schema=self.schema) for f in files]
         table = pa.concat_tables(tables) if tables else self.schema.empty_table()
-        first = pa.array(_first_of_each(table.column("run_id").to_pylist()), pa.int64())
-        return table.take(first).sort_by("run_index")
+        first = pa.array(_first_of_each(table.column(RowCol.run_id).to_pylist()), pa.int64())
+        return table.take(first).sort_by(RowCol.run_index)
 
     def consolidate(self) -> pa.Table:
         """Write ``results.parquet`` from everything stored and remove the parts."""

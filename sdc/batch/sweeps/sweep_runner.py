@@ -22,13 +22,15 @@ from typing import Protocol
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import COLLIDED, OUTCOMES, STATUSES
-from analysis.measures.sweep_manifest import Session, SweepManifest
+from analysis.measures.sweep_manifest import PLAN_SPEC_COLUMN, Session, SweepDir, SweepManifest
 from analysis.measures.world_sharing import world_sharing
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError
 from scenarios.scene import traffic_model
-from scenarios.spec.sweep_spec import PARAM_PREFIX, PlannedRun, SweepSpec, expand, plan_sha256
+from scenarios.spec.sweep_plan import PlannedRun, expand, plan_sha256
+from scenarios.spec.sweep_spec import PARAM_PREFIX, SweepSpec
 from scenarios.sumo.warm_state import SETTLING_FILE
 from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import prepare_network
@@ -87,12 +89,14 @@ def invalid_row(run: PlannedRun) -> dict:
 
 def plan_table_of(plan: list[PlannedRun], sweep: SweepSpec) -> pa.Table:
     params = result_schema(sweep.param_types)
-    rows = [{"run_id": r.run_id, "controller": r.controller, "seed": r.seed, "error": r.error,
-             "spec_json": json.dumps(r.spec.to_plain()) if r.spec else None,
+    rows = [{RowCol.run_id: r.run_id, RowCol.controller: r.controller, RowCol.seed: r.seed,
+             RowCol.error: r.error,
+             PLAN_SPEC_COLUMN: json.dumps(r.spec.to_plain()) if r.spec else None,
              **sweep_columns(r).values()} for r in plan]
-    fields = [params.field(n) for n in ("run_id", "run_index", "sample", "world_id",
-                                        "world_slot", "controller", "seed", "error")]
-    fields += [pa.field("spec_json", pa.string())]
+    fields = [params.field(n) for n in (RowCol.run_id, RowCol.run_index, RowCol.sample,
+                                        RowCol.world_id, RowCol.world_slot, RowCol.controller,
+                                        RowCol.seed, RowCol.error)]
+    fields += [pa.field(PLAN_SPEC_COLUMN, pa.string())]
     fields += [f for f in params if f.name.startswith(PARAM_PREFIX)]
     return pa.Table.from_pylist(rows, schema=pa.schema(fields))
 
@@ -160,7 +164,7 @@ def open_dir(out_dir: Path, digest: str, resume: bool) -> SweepManifest | None:
 def _unstarted(out_dir: Path) -> bool:
     """Is ``out_dir`` empty, or left by a sweep killed before its manifest (holding only
     its plan, whole or as a temporary file), so a new sweep may take it?"""
-    return all(p.name == "plan.parquet" or p.name.startswith(".plan.parquet.")
+    return all(p.name == SweepDir.plan or p.name.startswith(f".{SweepDir.plan}.")
                for p in out_dir.iterdir())
 
 
@@ -209,7 +213,7 @@ def prepare_dir(out_dir: Path, sweep: SweepSpec, plan: list[PlannedRun],
         return manifest
     plan_table = plan_table_of(plan, sweep)  # before the directory: nothing half-made
     make_dir(out_dir)
-    write_atomic(Path(out_dir) / "plan.parquet", lambda tmp: pq.write_table(plan_table, tmp))
+    write_atomic(Path(out_dir) / SweepDir.plan, lambda tmp: pq.write_table(plan_table, tmp))
     return new_manifest(sweep, digest, len(plan), len({r.sample for r in plan}),
                         tuple(r.spec for r in plan if r.spec is not None))
 
@@ -254,8 +258,8 @@ def record_warm_states(out_dir: Path, manifest: SweepManifest, warm: dict,
 
 def _tally(table: pa.Table) -> tuple[Counter, Counter]:
     """Rows by status, and the ok rows by outcome (completed, collided, ...)."""
-    return (Counter(table.column("status").to_pylist()),
-            Counter(o for o in table.column("outcome").to_pylist() if o is not None))
+    return (Counter(table.column(RowCol.status).to_pylist()),
+            Counter(o for o in table.column(RowCol.outcome).to_pylist() if o is not None))
 
 
 def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Reporter, *,
@@ -271,8 +275,8 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
     manifest = prepare_dir(out_dir, sweep, plan, resume)
     store = ResultStore(out_dir, result_schema(sweep.param_types))
     stored = store.read()
-    done = set(stored.column("run_id").to_pylist())
-    trace_dir = out_dir / "traces"
+    done = set(stored.column(RowCol.run_id).to_pylist())
+    trace_dir = out_dir / SweepDir.traces
     if traces != "none":
         trace_dir.mkdir(exist_ok=True)
     todo = [run for run in plan if run.run_id not in done]
@@ -299,7 +303,7 @@ def run_sweep(sweep: SweepSpec, out_dir: Path, executor: Executor, reporter: Rep
                 keys = members_keys(tasks, keys)
                 for task_row in executor.map(tasks):
                     for row in rows_of(task_row):
-                        if row["run_id"] in done:  # a world's run that had its row
+                        if row[RowCol.run_id] in done:  # a world's run that had its row
                             continue
                         row = with_warm_state(row, keys)
                         store.add(row)

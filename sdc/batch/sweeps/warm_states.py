@@ -18,6 +18,7 @@ import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
+from analysis.measures.row_columns import RowCol
 from scenarios.common.atomic_write import write_atomic
 from scenarios.common.errors import SdcError
 from scenarios.sumo.warm_state import (
@@ -69,10 +70,10 @@ def with_warm_state(row: dict, keys: dict[str, str]) -> dict:
     """``row`` naming its run's warm state (``keys``: by run ID) also when the run did
     not get to start from it (an error, a timeout): the report counts it with the runs
     that share its traffic."""
-    key = keys.get(row["run_id"])
-    if key is None or row.get("warm_state") is not None:
+    key = keys.get(row[RowCol.run_id])
+    if key is None or row.get(RowCol.warm_state) is not None:
         return row
-    return {**row, "warm_state": warm_state_id(key)}
+    return {**row, RowCol.warm_state: warm_state_id(key)}
 
 
 def prepare_warm_states(tasks: list[Task], executor,
@@ -88,9 +89,9 @@ def prepare_warm_states(tasks: list[Task], executor,
         warm_state_dir().mkdir(parents=True, exist_ok=True)
         with _SumoClocks(todo, progress) as clocks:
             for row in executor.map(todo):
-                if row["status"] != "ok":
-                    failed[row["run_id"]] = row.get("error")
-                clocks.done(row["run_id"])
+                if row[RowCol.status] != "ok":
+                    failed[row[RowCol.run_id]] = row.get(RowCol.error)
+                clocks.done(row[RowCol.run_id])
     summary = {"distinct": len(set(keys.values())), "computed": len(todo) - len(failed),
                "failed": failed}
     return summary, keys

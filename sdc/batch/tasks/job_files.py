@@ -22,7 +22,8 @@ from pathlib import Path
 from scenarios.common.errors import SdcError
 from scenarios.common.file_read import read_bytes, sha256_hex
 from scenarios.spec.controller_ref import controller_kind
-from scenarios.spec.scenario_spec import RoadSpec, ScenarioSpec
+from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.scenario_tables import RoadSpec
 from scenarios.sumo.warm_state import cached_path, uses_warm_state, warm_key
 from scenarios.sumo_net.road_source import road_source
 from scenarios.sumo_net.route_road import edges_cache_path

@@ -13,7 +13,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Literal
 
+from analysis.measures.row_columns import RowCol
 from analysis.measures.run_outcome import COMPLETED
+from analysis.measures.trace_columns import TraceMeta
 from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.tasks.job_files import JobFile
 from sdc.batch.tasks.task import OneRowTask
@@ -58,7 +60,7 @@ class RunTask(OneRowTask):
     def delivered(self, episode) -> dict:
         """``episode``'s row as this run's, its trace written when asked to."""
         wanted = self.traces == "all" or (self.traces == "failures"
-                                          and episode.row["outcome"] != COMPLETED)
+                                          and episode.row[RowCol.outcome] != COMPLETED)
         if self.trace_path is not None and wanted:
             if self.recorded_spec is not None:  # the driver's paths, not a worker's copies
                 _record_driver_paths(episode.metadata, self.recorded_spec)
@@ -83,6 +85,6 @@ class RunTask(OneRowTask):
 
 
 def _record_driver_paths(metadata: dict, spec: ScenarioSpec) -> None:
-    metadata["spec"] = spec.to_plain()
-    if "net_file" in metadata["road"] and spec.road.net_file is not None:
-        metadata["road"]["net_file"] = spec.road.net_file
+    metadata[TraceMeta.spec] = spec.to_plain()
+    if "net_file" in metadata[TraceMeta.road] and spec.road.net_file is not None:
+        metadata[TraceMeta.road]["net_file"] = spec.road.net_file

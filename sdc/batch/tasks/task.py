@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Protocol, Self
 
+from analysis.measures.row_columns import RowCol
 from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.tasks.job_files import JobFile
 from sdc.run.result_row import error_row, timeout_row
@@ -92,8 +93,8 @@ def execute(task: Task) -> dict:
 
 def run_identity(run_id: str, spec: ScenarioSpec) -> dict:
     """The columns that name a run in its error and timeout rows."""
-    return {"run_id": run_id, "seed": spec.scenario.seed,
-            "controller": spec.controller.label, "backend": spec.scenario.backend}
+    return {RowCol.run_id: run_id, RowCol.seed: spec.scenario.seed,
+            RowCol.controller: spec.controller.label, RowCol.backend: spec.scenario.backend}
 
 
 class OneRowTask:

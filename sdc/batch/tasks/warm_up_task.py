@@ -8,6 +8,7 @@ import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
+from analysis.measures.row_columns import RowCol
 from scenarios.common.atomic_write import write_atomic
 from scenarios.spec.scenario_spec import ScenarioSpec
 from sdc.batch.tasks.job_files import JobFile
@@ -44,7 +45,7 @@ class WarmUpTask(OneRowTask):
         finally:
             if clock is not None:
                 clock.remove()
-        return {"run_id": self.run_id, "status": "ok"}
+        return {RowCol.run_id: self.run_id, RowCol.status: "ok"}
 
     def on_worker(self, spec: ScenarioSpec, cache_dir: Path,
                   warm_state: Path | None) -> WarmUpTask:
