@@ -37,9 +37,9 @@ A rate is runs over the sweep's wall time, which includes the sweep's own start 
 few seconds): the sweeps of one family run the same samples (:data:`SAMPLES`), so that
 start weighs alike in each.
 
-``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 samples of 5 s runs on
-1 worker, K of 1 and 2, a town of 100 cars warmed up 10 s and Ingolstadt entered at
-30 s (:data:`SMOKE_PARAMS`), bench_perf's smoke size of timed steps.
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 samples of 1 s runs on
+1 worker, K of 1 and 2, a town of 20 cars warmed up 2 s and Ingolstadt entered at
+10 s (:data:`SMOKE_PARAMS`), bench_perf's smoke size of timed steps.
 """
 
 from __future__ import annotations
@@ -71,10 +71,10 @@ SAMPLES = size(16, 2)
 #: the egos per world measured
 EGOS_PER_WORLD = size((1, 4, 8, 16), (1, 2))
 WORKERS = size(2, 1)
-#: the smoke size's runs: shorter, their warm-ups too (the town 100 cars for 10 s)
-SMOKE_PARAMS = {"town": ['"traffic.vehicles" = { choice = [100] }',
-                         '"traffic.warm_up_s" = { choice = [10.0] }'],
-                "real": ['"traffic.enter_s" = { choice = [30.0] }']}
+#: the smoke size's runs: shorter, their warm-ups too (the town 20 cars for 2 s)
+SMOKE_PARAMS = {"town": ['"traffic.vehicles" = { choice = [20] }',
+                         '"traffic.warm_up_s" = { choice = [2.0] }'],
+                "real": ['"traffic.enter_s" = { choice = [10.0] }']}
 
 
 #: each family's base, controller and swept parameters
@@ -93,7 +93,7 @@ def write_sweep(tmp: Path, family: str, samples: int, egos_per_world: int) -> Pa
              f"samples = {samples}", "seed = 11", f'controllers = ["{controller}"]',
              f"egos_per_world = {egos_per_world}", "[sweep.params]", *params]
     if SMOKE:
-        lines += ['"scenario.duration_s" = { choice = [5.0] }', *SMOKE_PARAMS[family]]
+        lines += ['"scenario.duration_s" = { choice = [1.0] }', *SMOKE_PARAMS[family]]
     path = tmp / f"{family}-{egos_per_world}.toml"
     path.write_text("\n".join(lines) + "\n")
     return path

@@ -19,7 +19,7 @@ Prints ``name value`` lines:
   2000 one-step runs over 200 (results stream to disk, so about 1).
 
 ``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): one triple of sweeps of
-4 samples, 2 and 4 runs for the fixed cost, 10 and 20 for the driver's memory.
+2 samples, 2 and 2 runs for the fixed cost, 4 and 8 for the driver's memory.
 """
 
 from __future__ import annotations
@@ -42,10 +42,10 @@ from sdc.batch.sweeps.progress import QuietReporter
 from sdc.batch.sweeps.sweep_runner import run_sweep
 
 # seed-envelope samples: 600 runs a sweep (3 controllers)
-PAIRS, SAMPLES = size(3, 1), size(200, 4)
+PAIRS, SAMPLES = size(3, 1), size(200, 2)
 #: runs of the fixed-cost sweeps (60 s runs, one-step runs), and of the driver's two
-FULL_RUNS, STEP_RUNS = size(6, 2), size(60, 4)
-RSS_SMALL, RSS_LARGE = size(200, 10), size(2000, 20)
+FULL_RUNS, STEP_RUNS = size(6, 2), size(60, 2)
+RSS_SMALL, RSS_LARGE = size(200, 4), size(2000, 8)
 
 
 class Clock(QuietReporter):

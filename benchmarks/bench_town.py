@@ -17,8 +17,8 @@ Prints ``name value`` lines:
 The own-warm-up sweep runs :data:`OWN_SAMPLES` samples, the shared one
 :data:`SHARED_SAMPLES`; a rate is runs over the sweep's wall time.
 
-``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 warm states, 4 shared
-and 2 own samples of 5 s runs on 1 worker, in a town of 100 cars warmed up 10 s
+``SDC_BENCH_SMOKE=1``: the smoke size (benchmarks/smoke.py): 2 warm states, 2 shared
+samples and 1 own of 1 s runs on 1 worker, in a town of 20 cars warmed up 2 s
 (:data:`SMOKE_TOWN`).
 """
 
@@ -39,12 +39,12 @@ from sdc.batch.executors.ray_executor import RayExecutor
 from sdc.batch.sweeps.progress import QuietReporter
 from sdc.batch.sweeps.sweep_runner import run_sweep
 
-WARM_STATES, SHARED_SAMPLES, OWN_SAMPLES = size(8, 2), size(40, 4), size(4, 2)
+WARM_STATES, SHARED_SAMPLES, OWN_SAMPLES = size(8, 2), size(40, 2), size(4, 1)
 WORKERS = size(2, 1)
 #: the smoke size's town: the grid with fewer cars, warmed up briefly, shorter runs
-SMOKE_TOWN = ['"traffic.vehicles" = { choice = [100] }',
-              '"traffic.warm_up_s" = { choice = [10.0] }',
-              '"scenario.duration_s" = { choice = [5.0] }']
+SMOKE_TOWN = ['"traffic.vehicles" = { choice = [20] }',
+              '"traffic.warm_up_s" = { choice = [2.0] }',
+              '"scenario.duration_s" = { choice = [1.0] }']
 
 
 def write_sweep(tmp: Path, samples: int, warm_states: int | None) -> Path:
@@ -71,7 +71,7 @@ def runs_per_hour(sweep_file: Path, out_dir: Path, executor) -> float:
 def main() -> None:
     figures, raw = {}, {}
     raw["grid_town_warm_up_s"] = size(load_spec(CATALOG_DIR / "grid-town.toml").traffic.warm_up_s,
-                                      10.0)
+                                      2.0)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         own = write_sweep(tmp, OWN_SAMPLES, None)
