@@ -59,6 +59,20 @@ def city_config(folder: Path, width_m: float, vtype: str = CAR, edge_m: int = 10
     return folder / "x.sumocfg", route
 
 
+@pytest.fixture(scope="module")
+def city_configs(tmp_path_factory):
+    """:func:`city_config` built once per set of arguments in this module (the tests
+    only read its files): ``city_configs(width_m, ...)``."""
+    built: dict[tuple, tuple[Path, list[str]]] = {}
+
+    def config(width_m: float, vtype: str = CAR, **kwargs) -> tuple[Path, list[str]]:
+        key = (width_m, vtype, *sorted(kwargs.items()))
+        if key not in built:
+            built[key] = city_config(tmp_path_factory.mktemp("city"), width_m, vtype, **kwargs)
+        return built[key]
+    return config
+
+
 def city_spec(lesson_plain: dict, config: Path, route: list[str], *, seed: int,
               obstacles=(), ego_start_m: float = 200.0, duration_s: float = 60.0
               ) -> ScenarioSpec:
@@ -210,8 +224,8 @@ def test_sumo_is_shown_every_body_inside_one_lane_and_a_stand_in_beside(width_m)
     assert traffic_model.inside_lane_m(0.4, 0.0, 1.8, X5_WIDTH_M) == 0.0
 
 
-def test_a_networks_lanes_are_as_wide_as_its_file_says(tmp_path, lesson_plain):
-    config, route = city_config(tmp_path, 2.9)
+def test_a_networks_lanes_are_as_wide_as_its_file_says(city_configs, lesson_plain):
+    config, route = city_configs(2.9)
     road = make_road(city_spec(lesson_plain, config, route, seed=1))
     width_m, (right_m, left_m) = road.lane_widths_m(300.0, 0)
     assert (width_m, right_m, left_m) == (pytest.approx(2.9), None, pytest.approx(2.9))
@@ -273,12 +287,12 @@ def test_the_straddle_test_on_every_lane_width(lesson_plain, width_m):
 @pytest.mark.slow
 @pytest.mark.parametrize("width_m", [2.8, 3.2, 3.75])
 def test_trucks_on_city_lanes_pass_a_straddling_ego_only_with_the_clearance(
-        tmp_path, lesson_plain, width_m):
+        city_configs, lesson_plain, width_m):
     """A network's own flows of 2.5 m trucks in both lanes: the ego 0.1-0.9 m over its
     left lane line (a network's route is its rightmost lane) is shown in the lane it
     reaches into as soon as a truck would pass it with less than 0.3 m."""
     import copy
-    config, route = city_config(tmp_path, width_m, TRUCK)
+    config, route = city_configs(width_m, TRUCK)
     for reach_m in (0.1, 0.3, 0.5, 0.9):
         spec = city_spec(copy.deepcopy(lesson_plain), config, route, seed=1)
         seen = straddle(spec, reach_m, 1, ramp_s=2.0)
@@ -289,11 +303,11 @@ def test_trucks_on_city_lanes_pass_a_straddling_ego_only_with_the_clearance(
 @pytest.mark.slow
 @pytest.mark.parametrize("width_m", [2.8, 3.2])
 def test_traffic_changing_into_the_lane_the_ego_reaches_into_stays_behind_it(
-        tmp_path, lesson_plain, width_m):
+        city_configs, lesson_plain, width_m):
     """Traffic only in the ego's lane: every car in the lane it reaches into changed
     lanes to get there, behind the ego (in SUMO, behind its stand-in), never into it."""
     import copy
-    config, route = city_config(tmp_path, width_m, flow_lanes=(0,))
+    config, route = city_configs(width_m, flow_lanes=(0,))
     for seed, reach_m in ((1, 0.5), (2, 0.8)):
         spec = city_spec(copy.deepcopy(lesson_plain), config, route, seed=seed)
         seen = straddle(spec, reach_m, 1, ramp_s=2.0)
@@ -364,12 +378,12 @@ def test_an_ego_steered_over_a_lane_line_by_its_controller(lesson_plain, width_m
 @pytest.mark.slow
 @pytest.mark.parametrize("width_m", [2.8, 3.0, 3.5])
 def test_an_offset_obstacle_on_a_network_stands_in_every_lane_it_blocks(
-        tmp_path, lesson_plain, width_m):
+        city_configs, lesson_plain, width_m):
     """A car and a truck standing 0.6 or 1.0 m left of their lane's centre on a
     network's street: traffic in the next lane never drives through them and passes
     with 0.3 m at least (before, a network showed SUMO an obstacle in its own lane only)."""
     import copy
-    config, route = city_config(tmp_path, width_m)
+    config, route = city_configs(width_m)
     for kind in ("car", "truck"):
         for offset_m in (0.6, 1.0):
             obstacle = {"kind": kind, "lane": 0, "position_m": 300.0,
@@ -404,8 +418,20 @@ def grid_spec(net: Path, front_m: float, kind: str, seed: int,
         "controller": {"name": "lane-keep"}})
 
 
+@pytest.fixture(scope="module")
+def grid_net(tmp_path_factory) -> Path:
+    """The 4 x 4 netgenerate city of :func:`grid_spec`, built once for the module's
+    tests (they only read it)."""
+    net = tmp_path_factory.mktemp("grid") / "grid.net.xml"
+    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
+                    "--grid.length", "100", "--default.lanenumber", "2",
+                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
+                   check=True, capture_output=True)
+    return net
+
+
 @pytest.mark.slow
-def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
+def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(grid_net):
     """Asked to stand with its front at the end of an edge or past it into the
     junction, an obstacle stands back off the junction, as SUMO's stopped vehicle
     does (SUMO holds stops on lanes only; the part in the junction was shown to
@@ -416,14 +442,9 @@ def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
     from analysis.measures.world_audit import pairs_overlap
     from scenarios.scene.snapshot import obstacle_boxes
 
-    net = tmp_path / "grid.net.xml"
-    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
-                    "--grid.length", "100", "--default.lanenumber", "2",
-                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
-                   check=True, capture_output=True)
     for kind, front_m in (("car", 80.0), ("car", 181.5), ("truck", 180.0)):
         for seed in (3, 4, 6):
-            spec = grid_spec(net, front_m, kind, seed)
+            spec = grid_spec(grid_net, front_m, kind, seed)
             road = make_road(spec)
             box = obstacle_boxes(spec, road)[0]
             ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
@@ -438,20 +459,15 @@ def test_an_obstacle_reaching_a_junction_stands_where_sumo_holds_it(tmp_path):
                     assert not overlaps.any(), (kind, front_m, seed, k)
 
 
-def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(tmp_path):
+def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(grid_net):
     """An obstacle reaching into the next lane is shown there as a second stopped
     vehicle wherever along its edge it stands: at 9 positions with every fraction of a
     metre (its stop was asked at SUMO's position unrounded, its departure rounded to a
     micrometre: half the positions departed past their own stop and SUMO refused it)."""
     import libsumo
 
-    net = tmp_path / "grid.net.xml"
-    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
-                    "--grid.length", "100", "--default.lanenumber", "2",
-                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
-                   check=True, capture_output=True)
     for k in range(9):
-        spec = grid_spec(net, 30.0 + k * 7.123457, "car", seed=3, lateral_offset_m=1.0)
+        spec = grid_spec(grid_net, 30.0 + k * 7.123457, "car", seed=3, lateral_offset_m=1.0)
         road = make_road(spec)
         ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)), 4.85, 1.93])
         with SumoWorld(spec, road, source=road_source(spec.road)) as world:
@@ -462,7 +478,7 @@ def test_an_obstacle_shown_beside_stands_at_any_position_along_its_edge(tmp_path
 
 @pytest.mark.slow
 def test_an_obstacle_over_a_two_way_streets_centre_line_stands_in_the_opposite_lane(
-        tmp_path):
+        grid_net):
     """A car or a truck in the left lane of a two-way street, reaching 1.0 or 1.8 m
     over its centre line into the opposite lane (3.0 m lanes), stands there too, as a
     stopped vehicle of that lane: oncoming traffic came near it and no traffic body
@@ -471,19 +487,14 @@ def test_an_obstacle_over_a_two_way_streets_centre_line_stands_in_the_opposite_l
     from analysis.measures.world_audit import pairs_overlap
     from scenarios.scene.snapshot import obstacle_boxes
 
-    net = tmp_path / "grid.net.xml"
-    subprocess.run([sumo_binary("netgenerate"), "--grid", "--grid.number", "4",
-                    "--grid.length", "100", "--default.lanenumber", "2",
-                    "--default.lanewidth", "3.0", "--no-turnarounds", "true", "-o", str(net)],
-                   check=True, capture_output=True)
     oncoming_near = 0
     for kind, width_m in (("car", 1.8), ("truck", 2.5)):
         for reach_m in (1.0, 1.8):
             for seed in (1, 2):
-                lane_index = make_road(grid_spec(net, 140.0, kind, seed)).pieces[0].lane.index
+                lane_index = make_road(grid_spec(grid_net, 140.0, kind, seed)).pieces[0].lane.index
                 # from the route's lane to the centre line, then the reach
                 offset_m = (1 - lane_index) * 3.0 + 1.5 - width_m / 2 + reach_m
-                spec = grid_spec(net, 140.0, kind, seed, offset_m)
+                spec = grid_spec(grid_net, 140.0, kind, seed, offset_m)
                 road = make_road(spec)
                 box = obstacle_boxes(spec, road)[0]
                 ego = np.array([*road.xy_at(10.0, 0.0), float(road.heading_at(10.0)),
@@ -504,7 +515,7 @@ def test_an_obstacle_over_a_two_way_streets_centre_line_stands_in_the_opposite_l
 @pytest.mark.parametrize(("width_m", "reach_m"), [(2.8, 0.5), (2.8, 0.8), (3.2, 0.5),
                                                   (3.2, 0.8), (3.75, 0.3)])
 def test_an_ego_in_the_lane_beside_its_route_reaching_back_is_one_world(
-        tmp_path, lesson_plain, width_m, reach_m):
+        city_configs, lesson_plain, width_m, reach_m):
     """An ego whose centre is in the lane beside its route's (an avoid pass; its route
     is the street's right lane), whole in that lane at first, then drifting over 3 s
     until it reaches back over the line into its route's lane, standing or at 2 m/s,
@@ -513,7 +524,7 @@ def test_an_ego_in_the_lane_beside_its_route_reaching_back_is_one_world(
     ego as it was and registered the reach only as it entered a lane: traffic drove
     through it on 2.8 and 3.2 m lanes, 55-100 steps a run)."""
     import copy
-    config, route = city_config(tmp_path, width_m)
+    config, route = city_configs(width_m)
     for speed_mps in (0.0, 2.0):
         spec = city_spec(copy.deepcopy(lesson_plain), config, route, seed=3)
         seen = straddle(spec, reach_m, side=-1, speed_mps=speed_mps, ramp_s=3.0,

@@ -149,6 +149,20 @@ def crossing_config(folder: Path, people_first: bool = True) -> Path:
     return folder / "cross.sumocfg"
 
 
+@pytest.fixture(scope="module")
+def crossings(tmp_path_factory):
+    """:func:`crossing_config` built once per ``people_first`` in this module (the
+    tests only read its files): ``crossings(people_first)``."""
+    built: dict[bool, Path] = {}
+
+    def config(people_first: bool = True) -> Path:
+        if people_first not in built:
+            built[people_first] = crossing_config(tmp_path_factory.mktemp("cross") / "cross",
+                                                  people_first)
+        return built[people_first]
+    return config
+
+
 def box_of(x_m: float, y_m: float, angle_deg: float, length_m: float, width_m: float):
     """SUMO's front position and angle as our box (centre half a length behind)."""
     yaw = math.radians(90.0 - angle_deg)
@@ -193,8 +207,8 @@ def check_against_the_oracle(row: dict, first: int | None, last: int) -> None:
 
 @pytest.mark.slow
 def test_every_contact_with_a_person_at_a_crossing_is_a_pedestrian_collision(lesson_plain,
-                                                                           tmp_path):
-    config = crossing_config(tmp_path / "cross")
+                                                                           crossings):
+    config = crossings()
     outcomes = []
     for enter_s in (75.0, 105.0, 135.0):
         for controller in ("lane-keep", "seed"):
@@ -210,11 +224,11 @@ def test_every_contact_with_a_person_at_a_crossing_is_a_pedestrian_collision(les
 
 @pytest.mark.slow
 def test_avoid_gives_way_to_people_crossing_where_lane_keep_runs_into_them(lesson_plain,
-                                                                         tmp_path):
+                                                                         crossings):
     """At 13 m/s through the crossings with people first: the entries at which
     lane-keep hits a person (measured: 6 of 27 entries from 60 to 294 s), and avoid
     hits nobody there, stopping for the people on the crossing."""
-    config = crossing_config(tmp_path / "cross")
+    config = crossings()
     for enter_s in (123.0, 258.0, 267.0):
         for controller in ("lane-keep", "avoid"):
             spec = config_spec(lesson_plain, str(config), enter_s, controller=controller,
@@ -230,11 +244,11 @@ def test_avoid_gives_way_to_people_crossing_where_lane_keep_runs_into_them(lesso
 
 
 @pytest.mark.slow
-def test_people_wait_for_the_ego_where_the_cars_go_first(lesson_plain, tmp_path):
+def test_people_wait_for_the_ego_where_the_cars_go_first(lesson_plain, crossings):
     """SUMO's pedestrians see the ego pushed in with moveToXY as they see its own cars:
     at a crossing where cars go first they wait for it. The same entries with people
     first put lane-keep into them (the test above)."""
-    config = crossing_config(tmp_path / "cross", people_first=False)
+    config = crossings(people_first=False)
     for enter_s in (105.0, 123.0, 150.0, 258.0):
         spec = config_spec(lesson_plain, str(config), enter_s, route_edges=["W2M", "M2E"],
                            start_m=150.0)
@@ -460,8 +474,8 @@ def test_the_report_counts_people_first_and_the_gate_holds_them_to_their_bound(p
 # ---------------------------------------------------------------- avoid and the crossings
 
 
-def test_the_map_gives_the_crossings_a_route_runs_across(lesson_plain, tmp_path):
-    config = crossing_config(tmp_path / "cross")
+def test_the_map_gives_the_crossings_a_route_runs_across(lesson_plain, crossings):
+    config = crossings()
     spec = config_spec(lesson_plain, str(config), 60.0, route_edges=["W2M", "M2E"],
                        start_m=150.0)
     road = make_road(spec, None)

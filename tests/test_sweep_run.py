@@ -73,7 +73,11 @@ MANIFEST_KEYS = ["sweep", "base_scenario", "plan_sha256", "runs", "samples", "ve
 SESSION_KEYS = ["started_at", "ended_at", "executor", "workers", "traces", "runs_to_do"]
 HUNG_RUN = "00000-lane-keep"
 HANG_S = 3600.0  # far past any run timeout below: only a stopped worker ends it
-RUN_TIMEOUT_S = 10.0  # a short lesson run takes well under a second
+#: a short lesson run takes well under a second: on SUMO with traffic, its first in a
+#: worker with a cold cache took at most 1.3 s on a loaded 2-core machine
+RUN_TIMEOUT_S = 5.0
+#: the scripted backend's lesson runs took at most 0.05 s there: the local hung run's
+SCRIPTED_RUN_TIMEOUT_S = 2.5
 
 
 def write(tmp_path: Path, name: str, text: str) -> Path:
@@ -215,15 +219,15 @@ def _hangs(task: RunTask) -> dict:
 def test_a_hung_run_becomes_a_timeout_row_and_the_sweep_goes_on(tmp_path, monkeypatch):
     monkeypatch.setenv("SDC_TEST_PID_DIR", str(tmp_path))
     out = tmp_path / "out"
-    executor = LocalExecutor(1, run_timeout_s=RUN_TIMEOUT_S, task_fn=_hangs)
+    executor = LocalExecutor(1, run_timeout_s=SCRIPTED_RUN_TIMEOUT_S, task_fn=_hangs)
     outcome = run_sweep(load_sweep(write(tmp_path, "hangs", HANGS)), out, executor,
                         QuietReporter(), traces="all")
     assert outcome.counts == {"ok": 2, "error": 0, "timeout": 1, "missing": 0}
     results = pd.read_parquet(out / "results.parquet").set_index("run_id")
     assert results.status.to_dict() == {HUNG_RUN: "timeout", "00001-lane-keep": "ok",
                                         "00002-lane-keep": "ok"}  # on a new worker
-    assert f"run timeout of {RUN_TIMEOUT_S:g} s" in results.error[HUNG_RUN]
-    assert results.wall_time_s[HUNG_RUN] >= RUN_TIMEOUT_S
+    assert f"run timeout of {SCRIPTED_RUN_TIMEOUT_S:g} s" in results.error[HUNG_RUN]
+    assert results.wall_time_s[HUNG_RUN] >= SCRIPTED_RUN_TIMEOUT_S
     assert _gone(int((tmp_path / f"{HUNG_RUN}.pid").read_text()))  # its worker
 
 
@@ -234,7 +238,7 @@ def test_ray_stops_a_hung_run(tmp_path, ray_pids):
              for run in expand(sweep)]
     # a Ray task's clock starts at submission, and a worker's first run on a loaded
     # machine (Ray's own processes included) has taken over 10 s: more room here
-    timeout_s = 3 * RUN_TIMEOUT_S
+    timeout_s = 30.0
     with RayExecutor(2, run_timeout_s=timeout_s, task_fn=_hangs) as executor:
         rows = {row["run_id"]: row for row in executor.map(tasks)}
         hung_pid = int((ray_pids / f"{HUNG_RUN}.pid").read_text())
@@ -268,12 +272,13 @@ def test_a_run_that_never_ends_becomes_a_timeout_row_on_the_command_line(tmp_pat
     assert _gone(held)
 
 
-# 96 short lesson runs: many more than one worker runs while the other starts
+# 48 short lesson runs: many more than one worker runs while the other starts (and
+# than the runs _hold_in_flight's poll may see go by)
 MANY = TINY_SUMO.replace('"scenario.duration_s" = { choice = [12.0] }',
                          '"scenario.duration_s" = { choice = [12.0] }\n'
                          '"obstacles[0].kind" = { choice = ["barrel", "car"] }\n'
-                         '"lidar.noise_std_m" = { choice = [0.0, 0.01, 0.02, 0.03] }')
-MANY_RUNS = 96
+                         '"lidar.noise_std_m" = { choice = [0.0, 0.02] }')
+MANY_RUNS = 48
 FLUSH_S = inspect.signature(ResultStore).parameters["flush_s"].default
 
 

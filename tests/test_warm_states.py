@@ -118,7 +118,8 @@ def test_a_warm_state_is_the_traffic_alone(tmp_path, monkeypatch):
 @pytest.mark.slow
 def test_a_warm_state_made_for_other_traffic_is_refused(tmp_path, monkeypatch):
     fresh_cache(tmp_path / "cache", monkeypatch)
-    run_episode(town(warm_seed=1))
+    made = town(warm_seed=1)  # its warm state computed and cached (no run on it needed)
+    SumoWorld(made, make_road(made), source=road_source(made.road)).warm_state()
     other = cached_path(warm_key(town(warm_seed=1), file_sha256(TOWN_NET)))
     spec = town(warm_seed=2)
     world = SumoWorld(spec, make_road(spec), warm_state=other, source=road_source(spec.road))
