@@ -108,10 +108,10 @@ def fresh_ray():
     ray.shutdown()
 
 
-@pytest.fixture
-def chromium_page():
-    """A page of headless Chromium (Debian's, driven by Playwright) and the list its
-    uncaught script errors land in."""
+@pytest.fixture(scope="module")
+def chromium_browser():
+    """Headless Chromium (Debian's, driven by Playwright), launched once per test module:
+    its page tests each get a page of their own (:func:`chromium_page`)."""
     import shutil
 
     from playwright.sync_api import sync_playwright
@@ -120,8 +120,16 @@ def chromium_page():
         browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
             "--no-sandbox", "--disable-gpu", "--no-first-run",
             "--disable-background-networking", "--disable-component-update"])
-        page = browser.new_page()
-        problems: list[str] = []
-        page.on("pageerror", lambda e: problems.append(str(e)))
-        yield page, problems
+        yield browser
         browser.close()
+
+
+@pytest.fixture
+def chromium_page(chromium_browser):
+    """A fresh page of :func:`chromium_browser` (in a browser context of its own) and the
+    list its uncaught script errors land in."""
+    page = chromium_browser.new_page()
+    problems: list[str] = []
+    page.on("pageerror", lambda e: problems.append(str(e)))
+    yield page, problems
+    page.context.close()

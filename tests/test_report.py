@@ -81,31 +81,6 @@ def rendered(small_sweep, tmp_path_factory):
     return report, sweep, root / "page"
 
 
-@pytest.fixture(scope="module")
-def chromium_browser():
-    """Headless Chromium (Debian's, driven by Playwright), launched once for this module's
-    page tests: each still gets a page of its own, in a new browser context."""
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=[
-            "--no-sandbox", "--disable-gpu", "--no-first-run",
-            "--disable-background-networking", "--disable-component-update"])
-        yield browser
-        browser.close()
-
-
-@pytest.fixture
-def chromium_page(chromium_browser):
-    """As conftest's: a fresh page (its own context) and the list its uncaught script
-    errors land in, of the module's one browser."""
-    page = chromium_browser.new_page()
-    problems: list[str] = []
-    page.on("pageerror", lambda e: problems.append(str(e)))
-    yield page, problems
-    page.context.close()
-
-
 def first_of_each_class(results: pd.DataFrame) -> pd.DataFrame:
     """The runs the report shows: of each controller's class the first three."""
     return ranked_runs(results).groupby(["controller", "rank_class"], sort=False).head(3)
