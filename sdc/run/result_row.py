@@ -66,7 +66,8 @@ COLUMNS: tuple[Column, ...] = (
            "route) and its traffic's, unless traffic.warm_seed gives the traffic its own "
            "(a warm-state pool's, a shared world's)"),
     Column(RowCol.controller, pa.string(), IDENTITY, "the controller's name"),
-    Column(RowCol.backend, pa.string(), IDENTITY, "the world simulator: sumo | highway"),
+    Column(RowCol.backend, pa.string(), IDENTITY,
+           "the world simulator: sumo | highway | scripted (a scripted world, no simulator)"),
     Column(RowCol.status, pa.string(), STATUS, "ok | error | timeout"),
     Column(RowCol.error, pa.string(), STATUS, "why an error or timeout row has no outcome"),
     Column(RowCol.termination, pa.string(), OUTCOME, "what ended the run: "
