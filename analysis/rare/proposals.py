@@ -103,10 +103,11 @@ class KernelMixture:
 def _sum_of_squares(z_columns: list[np.ndarray], c_columns: list[np.ndarray],
                     start: int, rows: int) -> np.ndarray:
     """``np.sum(diff * diff, axis=2)`` of the rows' kernel distances ``diff`` (n, m, d), to
-    the bit: NumPy reduces that short last axis outermost when there is more than one
-    distance, adding the squares one dimension at a time, in order, ``((s0 + s1) + s2)
-    + ...`` (a single distance it sums pairwise, hence the caller's own branch for it;
-    tests/test_rare_events.py holds both to the bit)."""
+    the bit: ``diff`` keeps the layout of the whitened points and centres
+    (``solve(...).T``, column-major), so its last axis has the largest stride and NumPy
+    adds the squares one dimension at a time, in order, ``((s0 + s1) + s2) + ...``; a
+    single distance has no such layout and is summed pairwise, hence the caller's own
+    branch for it (tests/test_rare_events.py holds both to the bit)."""
     total = None
     for z_k, c_k in zip(z_columns, c_columns, strict=True):
         diff = np.subtract(z_k[start:start + rows], c_k)
