@@ -6,10 +6,12 @@ STAMP := $(VENV)/.installed-stamp
 
 .PHONY: demo test test-fast lint bench docs clean system-packages
 
+# uv installs what pip would, in a fifth of pip's time; pip where uv cannot
 $(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/scene/_road_kernels.c scenarios/scene/*.h  # C builds at install (optional)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet uv
+	$(BIN)/uv pip install --quiet --python $(BIN)/python -e '.[dev]' \
+		|| $(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -5,6 +5,7 @@ network's end."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -39,6 +40,21 @@ def test_the_catalog_grid_has_ten_by_ten_junctions_with_two_lanes_each_way(town)
     assert len({lane.edge for lane in normal}) == 2 * 2 * 10 * 9  # both ways, both axes
     assert {lane.index for lane in normal} == {0, 1}
     assert all(turn.via for turns in net.turns.values() for turn in turns)  # through a junction
+
+
+def test_a_process_reads_a_network_once_and_no_run_can_change_it(town, tmp_path):
+    spec, net, area = town
+    again = read_net(spec.road.net_file)
+    assert again is net and network_area(again) is area  # a worker's runs share them
+    with pytest.raises(ValueError, match="read-only"):
+        next(iter(net.lanes.values())).shape_xy[0, 0] = 0.0
+    copy = tmp_path / "grid.net.xml"
+    data = Path(spec.road.net_file).read_bytes()
+    copy.write_bytes(data)
+    first = read_net(copy)
+    copy.write_bytes(data.replace(b"<net ", b"<!-- changed --><net ", 1))
+    changed = read_net(copy)  # the same path, other bytes: read anew
+    assert changed is not first and changed.sha256 != first.sha256
 
 
 def test_our_own_straight_network_has_exactly_the_built_in_roads_edges(tmp_path):

@@ -14,9 +14,10 @@ sumolib's reading of the same networks.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -82,6 +83,9 @@ class NetFile:
     #: the pedestrian crossings over roads: each its centre line from kerb to kerb (P, 2)
     #: and its width [m]
     crosswalks: tuple[tuple[np.ndarray, float], ...] = ()
+    #: what is worked out from this network once (its drivable area, by name): a
+    #: process's runs on one network share their :class:`NetFile` (:func:`parse_net`)
+    derived: dict[str, object] = field(default_factory=dict, compare=False, repr=False)
 
     def trip_edges(self) -> list[tuple[str, float]]:
         """Edges a passenger car may start or end a trip on, with their lengths [m]."""
@@ -96,7 +100,9 @@ class NetFile:
 
 
 def _shape(text: str) -> np.ndarray:
-    return np.array([[float(v) for v in p.split(",")[:2]] for p in text.split()])
+    shape = np.array([[float(v) for v in p.split(",")[:2]] for p in text.split()])
+    shape.flags.writeable = False
+    return shape
 
 
 def _required(element: ET.Element, name: str) -> str:
@@ -121,7 +127,15 @@ def read_net(path: str | Path) -> NetFile:
 
 
 def parse_net(data: bytes, path: Path) -> NetFile:
-    """:func:`read_net` of the bytes ``data`` of the file ``path`` (named in errors)."""
+    """:func:`read_net` of the bytes ``data`` of the file ``path`` (named in errors).
+    The same bytes at the same path are parsed once per process: a worker's runs on
+    one network share what it read (its arrays are read-only, so none can change it
+    under another)."""
+    return _parsed(data, Path(path))
+
+
+@functools.lru_cache(maxsize=4)
+def _parsed(data: bytes, path: Path) -> NetFile:
     try:
         root = ET.fromstring(unzipped(path, data, "the SUMO network"))
     except ET.ParseError as e:

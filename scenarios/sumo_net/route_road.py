@@ -221,7 +221,14 @@ def edges_cache_path(net_sha256: str, cache_dir: Path | None = None) -> Path:
 
 
 def network_area(net: NetFile, cache_dir: Path | None = None) -> DrivableArea:
-    """The network's drivable area; its road edges are cached by the file's hash."""
+    """The network's drivable area, worked out once per :class:`NetFile`; its road
+    edges are cached by the file's hash."""
+    if "area" not in net.derived:
+        net.derived["area"] = _drivable_area(net, cache_dir)
+    return net.derived["area"]
+
+
+def _drivable_area(net: NetFile, cache_dir: Path | None) -> DrivableArea:
     lanes = list(net.lanes.values())
     cached = edges_cache_path(net.sha256, cache_dir)
     edges = np.load(cached) if cached.exists() else None
