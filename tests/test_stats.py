@@ -10,6 +10,7 @@ import pytest
 from scipy import stats
 
 from analysis.stats.rates import (
+    _degrees_of_freedom_factor,
     by_controller,
     clopper_pearson_interval,
     group_values,
@@ -35,6 +36,26 @@ def test_clopper_pearson_equals_scipy_exact(k, n):
     reference = stats.binomtest(k, n).proportion_ci(0.95, method="exact")
     assert clopper_pearson_interval(k, n) == pytest.approx((reference.low, reference.high),
                                                            abs=1e-12)
+
+
+def test_the_quantiles_are_scipy_stats_own_to_the_bit():
+    """rates.py takes its beta and t quantiles from scipy.special (scipy.stats costs a
+    second to import): the same numbers, bit for bit, so no report changed with it;
+    whole and fractional (effective) counts."""
+    rng = np.random.default_rng(7)
+    counts = [*COUNTS, *((k, n) for n in (2, 33, 1500) for k in range(n + 1)),
+              *((f * n, n) for n, f in zip(rng.uniform(1, 5000, 300), rng.uniform(0, 1, 300),
+                                             strict=True))]
+    for k, n in counts:
+        for confidence in (0.9, 0.95, 0.99):
+            alpha = 1 - confidence
+            low = 0.0 if k == 0 else float(stats.beta.ppf(alpha / 2, k, n - k + 1))
+            high = 1.0 if k == n else float(stats.beta.ppf(1 - alpha / 2, k + 1, n - k))
+            assert clopper_pearson_interval(k, n, confidence) == (low, high), (k, n)
+    for n_runs, n_clusters in ((3, 2), (40, 7), (1500, 30), (2000, 1999)):
+        upper = 0.975
+        expected = float(stats.t.ppf(upper, n_runs - 1) / stats.t.ppf(upper, n_clusters - 1)) ** 2
+        assert _degrees_of_freedom_factor(n_runs, n_clusters, 0.95) == expected
 
 
 def test_intervals_of_nothing_are_uninformative():

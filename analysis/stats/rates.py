@@ -22,7 +22,7 @@ from typing import Literal, NamedTuple
 
 import numpy as np
 import pandas as pd
-from scipy import stats
+from scipy import special
 
 from analysis.measures.numbers import number_text
 from analysis.measures.row_columns import RowCol
@@ -60,8 +60,11 @@ def clopper_pearson_interval(k: float, n: float,
     if n == 0:
         return 0.0, 1.0
     alpha = 1 - confidence
-    low = 0.0 if k == 0 else float(stats.beta.ppf(alpha / 2, k, n - k + 1))
-    high = 1.0 if k == n else float(stats.beta.ppf(1 - alpha / 2, k + 1, n - k))
+    # scipy.special's inverse incomplete beta gives scipy.stats.beta.ppf's numbers to
+    # the bit without importing scipy.stats (a second of every report's start);
+    # tests/test_stats.py holds them equal
+    low = 0.0 if k == 0 else float(special.betaincinv(k, n - k + 1, alpha / 2))
+    high = 1.0 if k == n else float(special.betaincinv(k + 1, n - k, 1 - alpha / 2))
     return low, high
 
 
@@ -140,7 +143,8 @@ def _degrees_of_freedom_factor(n_runs: int, n_clusters: int, confidence: float) 
     """``(t_{n-1} / t_{G-1})^2``: how much fewer runs a variance estimated from G
     clusters is worth than one from n independent runs."""
     upper = 0.5 + confidence / 2
-    return float(stats.t.ppf(upper, n_runs - 1) / stats.t.ppf(upper, n_clusters - 1)) ** 2
+    # stdtrit: scipy.stats.t.ppf to the bit (as betaincinv above)
+    return float(special.stdtrit(n_runs - 1, upper) / special.stdtrit(n_clusters - 1, upper)) ** 2
 
 
 def warm_states_of(rows: pd.DataFrame) -> pd.Series | None:
@@ -373,6 +377,8 @@ def paired_test(flags: pd.DataFrame, a: str, b: str) -> PairedTest:
     ca, cb = pairs[a].astype(bool), pairs[b].astype(bool)
     only_a, only_b = int((ca & ~cb).sum()), int((~ca & cb).sum())
     discordant = only_a + only_b
+    from scipy import stats  # here: only a comparison of controllers needs it
+
     p = 1.0 if discordant == 0 else float(stats.binomtest(only_a, discordant, 0.5).pvalue)
     return PairedTest(a, b, len(pairs), int((ca & cb).sum()), int((~ca & ~cb).sum()),
                       only_a, only_b, p)
