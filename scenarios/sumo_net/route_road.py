@@ -12,6 +12,7 @@ built-in roads; road edges come from the whole network
 from __future__ import annotations
 
 import bisect
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -94,9 +95,9 @@ class NetworkRoad(RoadGeometry):
     """The ego's route through a SUMO network, one lane wide, with the network's
     road edges (``edge_segments``, ``edge_gaps_m``)."""
 
-    def __init__(self, net: NetFile, route: list[NetLane], area: DrivableArea):
+    def __init__(self, net: NetFile, route: list[NetLane], cache_dir: Path | None = None):
         super().__init__(_joined([lane.shape_xy for lane in route]), 1, route[0].width_m)
-        self.net, self.area = net, area
+        self.net, self._cache_dir = net, cache_dir
         starts = np.concatenate([[0.0], np.cumsum([lane.length_m for lane in route])[:-1]])
         self.pieces = [RoutePiece(lane, float(s), lane.length_m)
                        for lane, s in zip(route, starts, strict=True)]
@@ -105,6 +106,12 @@ class NetworkRoad(RoadGeometry):
         self._beside = _lanes_beside(net, self.pieces)
         self._crossings = crossing_lanes(net, self.center_xy, {lane.id for lane in route})
         self._crosswalks = route_crosswalks(net, self)
+
+    @functools.cached_property
+    def area(self) -> DrivableArea:
+        """The network's drivable area (:func:`network_area`), worked out when first
+        asked: a warm-up, which drives no ego, never asks (nor imports scipy.spatial)."""
+        return network_area(self.net, self._cache_dir)
 
     def piece_at(self, s_m: float) -> RoutePiece:
         """The route lane holding route position ``s_m``."""
@@ -283,7 +290,7 @@ def network_road(spec: ScenarioSpec, net: NetFile, cache_dir: Path | None = None
                                first_lane_m, fits)
         except SdcError as e:
             raise SpecError("road.length_m", str(e)) from None
-    road = NetworkRoad(net, route, network_area(net, cache_dir))
+    road = NetworkRoad(net, route, cache_dir)
     for i, obstacle in enumerate(spec.obstacles):
         s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
         if road.off_road(road.xy_at(s_m, obstacle.lateral_offset_m)[None]).any():
