@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import json
 import re
@@ -334,10 +335,6 @@ def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_pat
         'choice = [0, 1200]', 'choice = [0]'))
     out = tmp_path / "out"
 
-    def sdc(*args):
-        return subprocess.run([sys.executable, "-m", "sdc", *map(str, args)],
-                              capture_output=True, text=True, timeout=300)
-
     def sdc_here(*args):  # the same command in this process
         result = CliRunner().invoke(main, [str(a) for a in args])
         assert result.exception is None or isinstance(result.exception, SystemExit)
@@ -352,21 +349,29 @@ def test_every_replay_the_report_of_a_hostile_sweep_prints_exits_cleanly(tmp_pat
                                      (out / "report.md").read_text())))
     assert {c.rsplit(" ", 1)[1] for c in commands} == {
         "00000-RaisesFirst", "00000-RaisesAtStep3", "00000-Sleepy", "00000-lane-keep"}
+    # the eight replays are independent processes: run side by side, the Sleepy ones'
+    # waits for the run timeout (2 s each) overlap the others' work
+    jobs = {}  # (command, with a drawing) -> the words run
     for command in commands:
         run_id = command.rsplit(" ", 1)[1]
         for extra in ((), ("--out", tmp_path / f"{run_id}.png")):
-            replay = subprocess.run([*shlex.split(command), *map(str, extra)],
-                                    capture_output=True, text=True, timeout=300)
-            assert "Traceback" not in replay.stdout + replay.stderr, command
-            assert replay.returncode in (0, 1), replay.stderr
-            if run_id == "00000-lane-keep":
-                continue
-            first = replay.stdout.splitlines()[0]
-            assert first.startswith(f"{run_id}: ") and "ego.speed_mps=9" in first
+            jobs[command, bool(extra)] = [*shlex.split(command), *map(str, extra)]
+    with concurrent.futures.ThreadPoolExecutor(len(jobs)) as pool:
+        replays = dict(zip(jobs, pool.map(lambda words: subprocess.run(
+            words, capture_output=True, text=True, timeout=300), jobs.values()), strict=True))
+    for (command, _), replay in replays.items():
+        run_id = command.rsplit(" ", 1)[1]
+        assert "Traceback" not in replay.stdout + replay.stderr, command
+        assert replay.returncode in (0, 1), replay.stderr
+        if run_id == "00000-lane-keep":
+            continue
+        first = replay.stdout.splitlines()[0]
+        assert first.startswith(f"{run_id}: ") and "ego.speed_mps=9" in first
     raises = sdc_here("replay", out, "--run", "00000-RaisesAtStep3", "--out", tmp_path / "r.png")
     assert "ValueError: step three" in raises.stdout and f"{plugin}:" in raises.stdout
     assert raises.exit_code == 0 and (tmp_path / "r.png").stat().st_size > 0  # 2 steps
     first = sdc_here("replay", out, "--run", "00000-RaisesFirst", "--out", tmp_path / "f.png")
     assert first.exit_code == 1 and "before its first step" in first.stdout
-    sleepy = sdc("replay", out, "--run", "00000-Sleepy")
+    # `python -m sdc replay OUT --run 00000-Sleepy`: the command as printed, run above
+    sleepy = replays[next(c for c in commands if c.endswith(" --run 00000-Sleepy")), False]
     assert sleepy.returncode == 1 and "ran past the run timeout of 2" in sleepy.stdout

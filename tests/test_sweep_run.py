@@ -96,6 +96,12 @@ def sweep_cli(*args, **kwargs) -> subprocess.CompletedProcess:
                           text=True, timeout=600, **kwargs)
 
 
+def sweep_here(*args):
+    """:func:`sweep_cli`'s command run in this process (no interpreter to start): its
+    click result (``exit_code``, ``stdout``, ``stderr``)."""
+    return CliRunner().invoke(main, ["sweep", *map(str, args), "--quiet"])
+
+
 def _wait_for(predicate, timeout_s: float):
     """Poll ``predicate`` until it returns something true, and return that."""
     deadline = time.monotonic() + timeout_s
@@ -164,8 +170,8 @@ def test_local_and_ray_executors_give_identical_results(tmp_path, ray_session):
 
 def test_traces_for_failures_only(tmp_path):
     out = tmp_path / "out"
-    result = sweep_cli(write(tmp_path, "tiny", TINY), "--out", out, "--workers", "2")
-    assert result.returncode == 0, result.stderr
+    result = sweep_here(write(tmp_path, "tiny", TINY), "--out", out, "--workers", "2")
+    assert result.exit_code == 0, result.output
     results = pd.read_parquet(out / "results.parquet")
     written = sorted(p.stem for p in (out / "traces").glob("*.parquet"))
     assert written == sorted(results.run_id[results.collision])
@@ -308,7 +314,8 @@ def many_reference(tmp_path_factory) -> Path:
     """The MANY sweep, run through uninterrupted: what each interrupted one must equal."""
     reference = tmp_path_factory.mktemp("many") / "reference"
     path = write(reference.parent, "many", MANY)
-    assert sweep_cli(path, "--out", reference, "--workers", "2").returncode == 0
+    done = sweep_here(path, "--out", reference, "--workers", "2")
+    assert done.exit_code == 0, done.output
     return reference
 
 
@@ -345,17 +352,18 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how,
     kept = _rows_kept(out)
     assert 0 < kept < MANY_RUNS
 
-    again = sweep_cli(path, "--out", out, "--workers", "2")
-    assert again.returncode == 2 and "--resume" in again.stderr  # no silent overwrite
+    again = sweep_here(path, "--out", out, "--workers", "2")
+    assert again.exit_code == 2 and "--resume" in again.stderr  # no silent overwrite
     if how == "ctrl-c":  # the command it printed, as printed
         words = shlex.split(hint)  # the interpreter that ran it, then -m sdc
         assert words[:3] == program_words()
         assert words[3] == "sweep" and words[-1] == "--resume"
         resumed = subprocess.run([*words, "--quiet"], capture_output=True, text=True,
                                  timeout=600)
+        assert resumed.returncode == 0, resumed.stderr
     else:
-        resumed = sweep_cli(path, "--out", out, "--workers", "2", "--resume")
-    assert resumed.returncode == 0, resumed.stderr
+        resumed = sweep_here(path, "--out", out, "--workers", "2", "--resume")
+        assert resumed.exit_code == 0, resumed.output
     manifest = json.loads((out / "manifest.json").read_text())
     assert [s["runs_to_do"] for s in manifest["sessions"]] == [MANY_RUNS, MANY_RUNS - kept]
     pd.testing.assert_frame_equal(comparable(out), comparable(reference))
@@ -363,12 +371,12 @@ def test_an_interrupted_sweep_resumes_to_the_uninterrupted_result(tmp_path, how,
 
 def test_resume_refuses_another_sweep(tmp_path):
     out = tmp_path / "out"
-    assert sweep_cli(write(tmp_path, "hangs", HANGS), "--out", out, "--dry-run").returncode == 0
+    assert sweep_here(write(tmp_path, "hangs", HANGS), "--out", out, "--dry-run").exit_code == 0
     tiny = write(tmp_path, "tiny", TINY.replace('choice = [3.0, 3.74, 9.0]', 'choice = [3.0]'))
-    assert sweep_cli(tiny, "--out", out, "--workers", "1").returncode == 0
+    assert sweep_here(tiny, "--out", out, "--workers", "1").exit_code == 0
     other = write(tmp_path, "other", TINY.replace('choice = [3.0, 3.74, 9.0]', 'choice = [4.0]'))
-    result = sweep_cli(other, "--out", out, "--resume")
-    assert result.returncode == 2
+    result = sweep_here(other, "--out", out, "--resume")
+    assert result.exit_code == 2
     assert "holds a different sweep" in result.stderr
 
 
@@ -433,8 +441,8 @@ def test_a_sweep_made_with_set_resumes_and_replays_with_its_values(tmp_path):
     path = write(tmp_path, "set", SET_SWEEP)
     sets = [word for text in SETS for word in ("--set", text)]
     out = tmp_path / "out"
-    made = sweep_cli(path, "--out", out, "--workers", "1", "--traces", "all", *sets)
-    assert made.returncode == 0, made.stderr
+    made = sweep_here(path, "--out", out, "--workers", "1", "--traces", "all", *sets)
+    assert made.exit_code == 0, made.output
     full = comparable(out)
     assert (full.sim_time_s <= 4.0).all() and len(full) == 2
     manifest = json.loads((out / "manifest.json").read_text())
@@ -445,22 +453,22 @@ def test_a_sweep_made_with_set_resumes_and_replays_with_its_values(tmp_path):
     results = pq.read_table(out / "results.parquet")
     pq.write_table(results.slice(0, 1), out / "results.parquet")
 
-    refused = sweep_cli(path, "--out", out, "--workers", "1", "--resume")
-    assert refused.returncode == 2
+    refused = sweep_here(path, "--out", out, "--workers", "1", "--resume")
+    assert refused.exit_code == 2
     assert ("resume it with the sweep file and options that started it (it was made with "
             "--set scenario.duration_s=4 --set 'obstacles[0].lateral_offset_m=0.5')"
             in refused.stderr)
-    resumed = sweep_cli(path, "--out", out, "--workers", "1", "--traces", "all", "--resume",
-                        *sets)
-    assert resumed.returncode == 0, resumed.stderr
+    resumed = sweep_here(path, "--out", out, "--workers", "1", "--traces", "all", "--resume",
+                         *sets)
+    assert resumed.exit_code == 0, resumed.output
     manifest = json.loads((out / "manifest.json").read_text())
     assert [s["runs_to_do"] for s in manifest["sessions"]] == [2, 1]
     assert manifest["overrides"] == list(SETS)
     pd.testing.assert_frame_equal(comparable(out).sort_values("run_id").reset_index(drop=True),
                                   full.sort_values("run_id").reset_index(drop=True))
-    replayed = subprocess.run([*SDC, "replay", str(out), "--run", "00001-lane-keep", "--verify"],
-                              capture_output=True, text=True, timeout=300)
-    assert replayed.returncode == 0, replayed.stdout + replayed.stderr
+    replayed = CliRunner().invoke(main, ["replay", str(out), "--run", "00001-lane-keep",
+                                         "--verify"])
+    assert replayed.exit_code == 0, replayed.output
     assert "identical" in replayed.stdout
 
 
