@@ -4,25 +4,31 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: demo test test-fast lint bench docs clean system-packages
+.PHONY: demo test test-fast lint bench docs clean system-packages bytecode
 
-# uv installs what pip would, in a fifth of pip's time; pip where uv cannot
+# uv installs what pip would, in a fifth of pip's time; pip where uv cannot. Both
+# compile the packages' bytecode as they install: a machine with PYTHONDONTWRITEBYTECODE
+# set never writes it later, and every process would compile numpy, pandas, Ray... again
 $(STAMP): pyproject.toml setup.py sdc/car/_geometry_kernels.c scenarios/scene/_road_kernels.c scenarios/scene/*.h  # C builds at install (optional)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet uv
-	$(BIN)/uv pip install --quiet --python $(BIN)/python -e '.[dev]' \
+	$(BIN)/uv pip install --quiet --compile-bytecode --python $(BIN)/python -e '.[dev]' \
 		|| $(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-demo: $(STAMP)
+# sdc's own bytecode, fresh before each use (for the same reason; under a second)
+bytecode: $(STAMP)
+	$(BIN)/python -m compileall -q -j 0 sdc scenarios analysis benchmarks
+
+demo: $(STAMP) bytecode
 	$(BIN)/sdc demo
 
-test: $(STAMP) system-packages
+test: $(STAMP) bytecode system-packages
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -n 2 --dist worksteal -q
 
-test-fast: $(STAMP)
+test-fast: $(STAMP) bytecode
 	$(BIN)/python -m pytest -n 2 --dist worksteal -q -m 'not slow'
 
 # the manual: site/index.html, from docs/ and mkdocs.yml; warnings are errors
