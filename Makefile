@@ -23,13 +23,14 @@ bytecode: $(STAMP)
 demo: $(STAMP) bytecode
 	$(BIN)/sdc demo
 
+# pytest's cache (what --lf reads) is not written: it cost the suite about 50 s here
 test: $(STAMP) bytecode system-packages
 	$(BIN)/ruff check .
 	$(BIN)/lint-imports
-	$(BIN)/python -m pytest -n 2 --dist worksteal -q
+	$(BIN)/python -m pytest -n 2 --dist worksteal -q -p no:cacheprovider
 
 test-fast: $(STAMP) bytecode
-	$(BIN)/python -m pytest -n 2 --dist worksteal -q -m 'not slow'
+	$(BIN)/python -m pytest -n 2 --dist worksteal -q -p no:cacheprovider -m 'not slow'
 
 # the manual: site/index.html, from docs/ and mkdocs.yml; warnings are errors
 docs: $(STAMP)
