@@ -9,6 +9,7 @@ no traffic body overlaps the ego or an obstacle, and one passing beside keeps
 
 from __future__ import annotations
 
+import functools
 import subprocess
 from pathlib import Path
 from typing import NamedTuple
@@ -63,13 +64,9 @@ def city_config(folder: Path, width_m: float, vtype: str = CAR, edge_m: int = 10
 def city_configs(tmp_path_factory):
     """:func:`city_config` built once per set of arguments in this module (the tests
     only read its files): ``city_configs(width_m, ...)``."""
-    built: dict[tuple, tuple[Path, list[str]]] = {}
-
+    @functools.cache
     def config(width_m: float, vtype: str = CAR, **kwargs) -> tuple[Path, list[str]]:
-        key = (width_m, vtype, *sorted(kwargs.items()))
-        if key not in built:
-            built[key] = city_config(tmp_path_factory.mktemp("city"), width_m, vtype, **kwargs)
-        return built[key]
+        return city_config(tmp_path_factory.mktemp("city"), width_m, vtype, **kwargs)
     return config
 
 

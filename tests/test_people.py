@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import math
 import subprocess
 from pathlib import Path
@@ -153,13 +154,9 @@ def crossing_config(folder: Path, people_first: bool = True) -> Path:
 def crossings(tmp_path_factory):
     """:func:`crossing_config` built once per ``people_first`` in this module (the
     tests only read its files): ``crossings(people_first)``."""
-    built: dict[bool, Path] = {}
-
+    @functools.cache
     def config(people_first: bool = True) -> Path:
-        if people_first not in built:
-            built[people_first] = crossing_config(tmp_path_factory.mktemp("cross") / "cross",
-                                                  people_first)
-        return built[people_first]
+        return crossing_config(tmp_path_factory.mktemp("cross") / "cross", people_first)
     return config
 
 
