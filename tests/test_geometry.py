@@ -7,9 +7,10 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
+from analysis.measures.world_audit import overlap_depth_m
 from sdc.car.geometry import (
     box_corners,
     box_edges,
@@ -448,15 +449,23 @@ def test_a_box_rotated_beside_the_path_is_not_touching():
     assert first_contact_s(EGO, np.array([8.0, 0.0]), truck[None], ahead_at(0.0))[0] == math.inf
 
 
+#: a sampled overlap no deeper than this is rounding, not contact [m]: two boxes exactly
+#: touching while one slides along the other with a yaw of 1e-19 rad overlap to
+#: boxes_overlap (touching counts, the 1e-19 m rounded away) while the exact first
+#: contact sees the rotated side move away from the other at 1e-19 m/s (never)
+ROUNDING_DEPTH_M = 1e-9
+
+
 def brute_first_contact_s(a, va, b, vb, horizon_s, dt_s) -> float:
-    """The first of the times 0, dt, 2 dt, ... up to horizon at which the boxes overlap.
-    Only ``b`` moves, by the relative velocity: contact depends on nothing else, and
-    moving both boxes by the same amount can round two boxes 1e-15 m apart into touching
-    (boxes at equal velocities that never meet)."""
+    """The first of the times 0, dt, 2 dt, ... up to horizon at which the boxes overlap
+    deeper than rounding (:data:`ROUNDING_DEPTH_M`). Only ``b`` moves, by the relative
+    velocity: contact depends on nothing else, and moving both boxes by the same amount
+    can round two boxes 1e-15 m apart into touching (boxes at equal velocities that
+    never meet)."""
     times = np.arange(0.0, horizon_s, dt_s)
     moved_b = np.repeat(b[None], times.size, axis=0)  # b at every step, each on its own
     moved_b[:, :2] += times[:, None] * (vb - va)
-    overlap = boxes_overlap(a, moved_b)
+    overlap = overlap_depth_m(np.repeat(a[None], times.size, axis=0), moved_b) > ROUNDING_DEPTH_M
     return float(times[overlap.argmax()]) if overlap.any() else math.inf
 
 
@@ -466,6 +475,8 @@ velocity_st = st.tuples(st.floats(-20, 20), st.floats(-20, 20)).map(np.array)
 @settings(max_examples=300, deadline=None)
 @given(a=box_st, b=box_st, va=velocity_st, vb=velocity_st,
        offset=st.tuples(st.floats(-30, 30), st.floats(-30, 30)))
+@example(a=(0.0, 0.0, 0.0, 1.0, 1.0), b=(0.0, 0.0, 9.657658699336352e-20, 1.0, 1.0),
+         va=np.array([0.0, 0.0]), vb=np.array([0.0, 1.0]), offset=(1.0, -2.0))  # sliding
 def test_first_contact_against_a_brute_force_sweep_of_small_time_steps(a, b, va, vb, offset):
     """Oriented boxes of any angle at constant velocities: the exact first contact is
     never after the first small time step at which they overlap, they do not overlap

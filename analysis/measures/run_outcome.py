@@ -18,12 +18,15 @@ Error and timeout rows have no outcome. Over a result table, :func:`collided` an
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from analysis.measures.row_columns import RowCol
 from analysis.measures.stood_for import QUEUE, RED_LIGHT, Standing, waited_for_light
+
+if TYPE_CHECKING:  # the result tables' type; a run's own process never imports pandas
+    import pandas as pd
 
 #: the statuses a run ends with (as the sweep runner writes them); only ``ok`` has an outcome
 STATUSES = ("ok", "error", "timeout")
@@ -56,6 +59,8 @@ def too_short_at_light(rows: pd.DataFrame) -> pd.Series:
     """Per result row: True when the run ended waiting at a red light, or in the queue
     before one, for less than the light's cycle (unfinished: too short to tell)."""
     if RowCol.stood_for_cycle_s not in rows:  # results from before the column
+        import pandas as pd  # here, not above: a run's own process never needs it
+
         return pd.Series(False, index=rows.index)
     return ((rows[RowCol.status] == "ok") & (rows[RowCol.outcome] == UNFINISHED)
             & rows[RowCol.stood_for].isin([RED_LIGHT, QUEUE])

@@ -17,6 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from analysis.measures.arrow_columns import number_lists, numbers, string_lists, strings
 from analysis.measures.trace_columns import (
     BODY_COLUMN,
     CLASS_COLUMN,
@@ -95,15 +96,14 @@ class Trace:
                                 np.full(n, length_m), np.full(n, width_m)])
 
     def to_table(self, metadata: dict) -> pa.Table:
-        columns = {name: pa.array(self.floats[name], pa.float64()) for name in FLOAT_COLUMNS}
-        columns[TraceCol.phase] = pa.array(self.phase, pa.string())
+        columns = {name: numbers(self.floats[name], np.float64) for name in FLOAT_COLUMNS}
+        columns[TraceCol.phase] = strings(self.phase)
         for name, rows in ((TraceCol.lidar, self.lidar), (TraceCol.traffic, self.traffic)):
-            columns[name] = pa.array([np.asarray(r, np.float32) for r in rows],
-                                     pa.list_(pa.float32()))
-        columns[CLASS_COLUMN] = pa.array(self.traffic_class, pa.list_(pa.string()))
-        columns[BODY_COLUMN] = pa.array(self.traffic_body or [[] for _ in self.phase],
-                                        pa.list_(pa.int32()))
-        columns[SIGNAL_COLUMN] = pa.array(self.signals or ["" for _ in self.phase], pa.string())
+            columns[name] = number_lists(rows, np.float32)
+        columns[CLASS_COLUMN] = string_lists(self.traffic_class)
+        columns[BODY_COLUMN] = number_lists(self.traffic_body or [[] for _ in self.phase],
+                                            np.int32)
+        columns[SIGNAL_COLUMN] = strings(self.signals or ["" for _ in self.phase])
         table = pa.table(columns)
         return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
 

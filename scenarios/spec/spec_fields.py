@@ -9,6 +9,7 @@ for bounds. Constructing one checks every field's type and range and raises
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import types
@@ -80,11 +81,17 @@ def _coerce(value: Any, tp) -> Any:
     raise ValueError(f"must be {_type_name(tp)}, got {type(value).__name__}")
 
 
+@functools.cache
+def _field_types(cls: type) -> dict[str, Any]:
+    """A spec class's field types, its string annotations evaluated once a process."""
+    return typing.get_type_hints(cls)
+
+
 class Spec:
     """Mixin for frozen spec dataclasses: checks types and bounds on construction."""
 
     def __post_init__(self):
-        hints = typing.get_type_hints(type(self))
+        hints = _field_types(type(self))
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             try:
