@@ -131,7 +131,7 @@ def world_step_ms(egos: list[tuple], steps: int = bench_perf.TIMED_STEPS) -> flo
     """Median step [ms] of one world holding ``egos``: each senses, decides, is
     recorded, checked and moved, then SUMO steps once (the shared loop, timed)."""
     world = make_shared_world(egos, None, None)
-    sims = [Simulation(spec, world, road=road) for spec, road in egos]
+    sims = [Simulation(spec, world, road=road, slot=i) for i, (spec, road) in enumerate(egos)]
     controllers = [make_controller(spec.controller) for spec, _ in egos]
     with world:
         for sim in sims:

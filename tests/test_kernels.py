@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from test_geometry import box_st, ray_scene
 from test_road import polyline_st
 
+from analysis.measures.world_audit import OVERLAP_TOLERANCE_M, overlapping_pairs
 from scenarios.scene.road_geometry import CurveRoad, RoadGeometry, StraightRoad
 from scenarios.scene.road_kernels import place_numpy
 from scenarios.spec.scenario_tables import RoadSpec
@@ -232,3 +233,63 @@ def test_the_numpy_step_equals_the_compiled_one(radius_m):
     assert min(met["touching"], met["finite"], met["leader"]) > 10
     if radius_m is not None:
         assert met["world"] > 0  # the fallback was exercised
+
+
+@st.composite
+def crowd_st(draw):
+    """Traffic boxes crowded together (some touching, some through each other), then a
+    few obstacles; some of them persons, two traffic boxes maybe pieces of one body."""
+    boxes = np.array(draw(st.lists(box_st, min_size=1, max_size=9)), float)
+    boxes[:, :2] = boxes[0, :2] + (boxes[:, :2] - boxes[0, :2]) * draw(st.sampled_from(
+        [0.05, 0.2, 1.0]))
+    n_traffic = draw(st.integers(0, len(boxes)))
+    kinds = draw(st.lists(st.sampled_from(["passenger", "pedestrian"]), min_size=len(boxes),
+                          max_size=len(boxes)))
+    bodies = list(range(n_traffic))
+    if n_traffic >= 2 and draw(st.booleans()):
+        bodies[1] = 0  # two pieces of one body
+    return boxes, n_traffic, kinds, bodies
+
+
+def gate(boxes, n_traffic, kinds, bodies) -> bool:
+    """The compiled gate, asked as the in-run audit asks it."""
+    people = np.array([kind == "pedestrian" for kind in kinds], float)
+    owners = np.concatenate([bodies, n_traffic + np.arange(len(boxes) - n_traffic)])
+    return compiled.bodies_may_overlap(np.ascontiguousarray(boxes, float), n_traffic, people,
+                                       owners.astype(float), OVERLAP_TOLERANCE_M)
+
+
+def audit_pairs(boxes, n_traffic, kinds, bodies) -> list:
+    """The audit's own question: the overlapping pairs (analysis/measures/world_audit.py)."""
+    return overlapping_pairs(boxes[:n_traffic], boxes[n_traffic:], kinds[:n_traffic],
+                             tuple(kinds[n_traffic:]), np.array(bodies, np.intp))
+
+
+@needs_compiled
+@PROPS
+@given(crowd=crowd_st())
+def test_the_compiled_overlap_gate_never_hides_a_pair(crowd):
+    """The in-run audit's gate (sdc/run/world_witness.py) lets every step through where
+    the audit's own question finds a pair: it errs only to letting one through."""
+    if audit_pairs(*crowd):
+        assert gate(*crowd) is True
+
+
+@needs_compiled
+def test_the_compiled_overlap_gate_shuts_where_no_pair_is():
+    car = [0.0, 0.0, 0.0, 4.5, 1.8]
+    through = [2.0, 0.5, 0.3, 4.5, 1.8]
+    touching = [4.5 + 0.005, 0.0, 0.0, 4.5, 1.8]  # within the audit's tolerance
+    apart = [30.0, 0.0, 0.0, 4.5, 1.8]
+    two = ["passenger", "passenger"]
+    for boxes, n, kinds, bodies, open_ in (
+            ([car, through], 2, two, [0, 1], True),
+            ([car, through], 1, two, [0], True),  # traffic through an obstacle
+            ([car, through], 0, two, [], False),  # two obstacles: the spec's doing
+            ([car, through], 2, ["pedestrian"] * 2, [0, 1], False),  # a crowd
+            ([car, through], 2, two, [0, 0], False),  # pieces of one body
+            ([car, touching], 2, two, [0, 1], False),
+            ([car, apart], 2, two, [0, 1], False)):
+        boxes = np.array(boxes, float)
+        assert gate(boxes, n, kinds, bodies) is open_, (boxes, n, kinds, bodies)
+        assert bool(audit_pairs(boxes, n, kinds, bodies)) is open_

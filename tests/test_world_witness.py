@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,6 +24,8 @@ from sdc.car.vehicle import Vehicle
 from sdc.run.episode import run_episode
 from sdc.run.shared_world import placed_apart, run_world
 from sdc.run.world_witness import Judged, witness_overlaps, witness_world
+
+REPO = Path(__file__).resolve().parent.parent
 
 
 def along_lane(shape_xy, lane_length_m, front_pos_m, lateral_m, length_m, width_m,
@@ -127,12 +132,12 @@ def test_sumos_own_overlaps_on_ingolstadt_are_there_without_the_ego_too(enter_s,
 
 
 @pytest.mark.slow
-def test_a_shared_worlds_runs_are_judged_in_one_replay_of_the_world():
+def test_a_shared_worlds_runs_are_judged_as_one_replay_of_the_world_judges_them():
     """The same Ingolstadt run shares its world with a second ego placed apart (another
-    route): each run's overlaps are judged in one replay of the whole world, every
-    step of both judged; the bicycles waiting inside each other count as SUMO's for
-    the first run, none as ours, and SUMO alone (no ego) holds the same two inside each
-    other at those times."""
+    route): each run's overlaps, judged in the run, are those one replay of the whole
+    world judges, every step of both judged; the bicycles waiting inside each other
+    count as SUMO's for the first run, none as ours, and SUMO alone (no ego) holds the
+    same two inside each other at those times."""
     first = ingolstadt_spec(123.061257, 11.134009)
     first = dataclasses.replace(first, traffic=dataclasses.replace(first.traffic, warm_seed=1))
     second = first.with_seed(2)
@@ -159,6 +164,23 @@ def test_a_shared_worlds_runs_are_judged_in_one_replay_of_the_world():
     for w in sample:
         a, b = alone[w.sumo_time_s, w.first], alone[w.sumo_time_s, w.second]
         assert pairs_overlap(a[None], b[None])[0], w
+
+
+@pytest.mark.slow
+def test_the_audit_in_the_run_judges_every_pair_as_the_replay_does():
+    """The in-run audit and the replay it replaced (benchmarks/audit_in_run.py) on
+    Ingolstadt: three runs alone and the same three sharing worlds, SUMO's bicycles
+    waiting inside each other among their overlaps. Every overlapping step of every
+    trace is judged in the run, pair by pair as the replay judges it."""
+    done = subprocess.run([sys.executable, str(REPO / "benchmarks" / "audit_in_run.py"),
+                           "--samples", "3", "--families", "ingolstadt"],
+                          capture_output=True, text=True, check=False, cwd=REPO)
+    assert done.returncode == 0, done.stderr[-3000:]
+    (line,) = done.stdout.splitlines()  # no difference was printed
+    figures = dict(zip(line.split()[1::2], line.split()[2::2], strict=True))
+    assert figures["runs"] == "6" and int(figures["worlds"]) < 6, line  # some shared
+    assert int(figures["overlapped"]) >= 3 and int(figures["steps_judged"]) > 100, line
+    assert figures["steps_differing"] == "0", line
 
 
 def test_a_body_reaching_back_off_its_lane_lies_along_the_lanes_before_it():

@@ -194,6 +194,10 @@ class HighwayWorld:
     def leave(self, slot: int) -> None:
         """The ego's run has ended: nothing steps this world again."""
 
+    def witness(self) -> None:
+        """None: highway-env's traffic has no model of its own to judge ours against."""
+        return None
+
     def twin(self) -> None:
         """None: highway-env's traffic has no model of its own to judge ours against."""
         return None

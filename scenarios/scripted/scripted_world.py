@@ -162,6 +162,10 @@ class ScriptedWorld:
         """Traffic cars on the whole road."""
         return len(self._u_m)
 
+    def witness(self) -> None:
+        """None: its traffic is what the script says, no model to judge it by."""
+        return None
+
     def twin(self) -> None:
         """No witness replays this world: its traffic is what the script says."""
         return None

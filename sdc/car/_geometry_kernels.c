@@ -136,8 +136,9 @@ fail_a:
     return result;
 }
 
-/* does box a overlap box b? (separating axes; touching counts) */
-static int overlaps(const double *a, const double *b) {
+/* do boxes a and b overlap? (separating axes): their shadows on each of the four axes
+ * overlap by more than `deeper` [m] (strict), or, without `strict`, at least touch */
+static int shadows_overlap(const double *a, const double *b, double deeper, int strict) {
     double ac = cos(a[2]), as = sin(a[2]), bc = cos(b[2]), bs = sin(b[2]);
     double a_axes[2][2] = {{ac, as}, {-as, ac}}, b_axes[2][2] = {{bc, bs}, {-bs, bc}};
     double ha[2] = {0.5 * a[3], 0.5 * a[4]}, hb[2] = {0.5 * b[3], 0.5 * b[4]};
@@ -148,10 +149,14 @@ static int overlaps(const double *a, const double *b) {
                     + fabs(axis[0] * a_axes[1][0] + axis[1] * a_axes[1][1]) * ha[1];
         double rb = fabs(axis[0] * b_axes[0][0] + axis[1] * b_axes[0][1]) * hb[0]
                     + fabs(axis[0] * b_axes[1][0] + axis[1] * b_axes[1][1]) * hb[1];
-        if (!(fabs(axis[0] * gx + axis[1] * gy) <= ra + rb)) return 0;
+        double gap = fabs(axis[0] * gx + axis[1] * gy);
+        if (strict ? !(gap < ra + rb - deeper) : !(gap <= ra + rb)) return 0;
     }
     return 1;
 }
+
+/* does box a overlap box b? (touching counts) */
+static int overlaps(const double *a, const double *b) { return shadows_overlap(a, b, 0.0, 0); }
 
 /* corners of a box, counter-clockwise from front-left (box_corners of sdc/car/geometry.py) */
 static void corners(const double *b, double out[4][2]) {
@@ -365,9 +370,59 @@ done:
     return result;
 }
 
+/* may two bodies other than the ego overlap? The gate of the world's audit inside the
+ * run (sdc/run/world_witness.py): of the rows of boxes, the first n_traffic traffic and
+ * the rest obstacles, people[k] 1 for a person, owners[k] the body a box is of. Two
+ * persons, two pieces of one body and two obstacles are never a pair. A pair whose
+ * shadows overlap by more than tolerance on each of the four axes (pairs_overlap of
+ * analysis/measures/world_audit.py) answers 1; the gate errs to 1 by GATE_SLACK_M,
+ * never to 0: what it lets through is decided by pairs_overlap itself. */
+#define GATE_SLACK_M 1e-9
+static PyObject *bodies_may_overlap(PyObject *self, PyObject *args) {
+    PyObject *objs[3];
+    Py_ssize_t n_traffic;
+    double tolerance;
+    if (!PyArg_ParseTuple(args, "OnOOd", &objs[0], &n_traffic, &objs[1], &objs[2], &tolerance))
+        return NULL;
+    static const char *names[3] = {"boxes", "people", "owners"};
+    static const Py_ssize_t rows[3] = {5, 1, 1};
+    Py_buffer views[3];
+    Py_ssize_t counts[3];
+    PyObject *result = NULL;
+    int got = 0;
+    for (; got < 3; got++)
+        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+            goto done;
+    Py_ssize_t n = counts[0];
+    if (counts[1] != n || counts[2] != n || n_traffic < 0 || n_traffic > n) {
+        PyErr_SetString(PyExc_ValueError, "a person flag and an owner per box, and at most "
+                                          "as many traffic boxes as boxes");
+        goto done;
+    }
+    const double *boxes = views[0].buf, *people = views[1].buf, *owners = views[2].buf;
+    int found = 0;
+    for (Py_ssize_t i = 0; i < n_traffic && !found; i++) {
+        const double *a = boxes + 5 * i;
+        double reach_a = 0.5 * hypot(a[3], a[4]);
+        for (Py_ssize_t j = i + 1; j < n && !found; j++) {
+            const double *b = boxes + 5 * j;
+            if (owners[i] == owners[j] || (people[i] != 0.0 && people[j] != 0.0)) continue;
+            double dx = b[0] - a[0], dy = b[1] - a[1], reach = reach_a + 0.5 * hypot(b[3], b[4]);
+            if (dx * dx + dy * dy > reach * reach + GATE_SLACK_M) continue;
+            found = shadows_overlap(a, b, tolerance - GATE_SLACK_M, 1);
+        }
+    }
+    result = PyBool_FromLong(found);
+done:
+    while (got-- > 0) PyBuffer_Release(&views[got]);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     {"scan", scan, METH_VARARGS, "Lidar ranges against boxes and segments into out."},
     {"step", step, METH_VARARGS, "A step's contacts and conflicts along the road."},
+    {"bodies_may_overlap", bodies_may_overlap, METH_VARARGS,
+     "May two bodies other than the ego overlap? (the in-run audit's gate)"},
     {NULL, NULL, 0, NULL},
 };
 

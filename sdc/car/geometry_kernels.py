@@ -106,6 +106,19 @@ _scan = scan_numpy if _compiled is None else _compiled.scan
 _step = step_numpy if _compiled is None else _compiled.step
 
 
+def _always(*args) -> bool:
+    return True
+
+
+#: ``(boxes, n_traffic, people, owners, tolerance_m) -> bool``: may two bodies other
+#: than the ego overlap by more than ``tolerance_m``? A gate that errs only to True
+#: (the in-run audit, :mod:`sdc.run.world_witness`, asks the exact question after it):
+#: compiled, a pass over the pairs; else always True. ``boxes``: (M, 5), the first
+#: ``n_traffic`` traffic and the rest obstacles; ``people``, ``owners``: (M,) floats, 1
+#: for a person, the body each box is of
+bodies_may_overlap = _always if _compiled is None else _compiled.bodies_may_overlap
+
+
 def _dense(array: np.ndarray) -> np.ndarray:
     """The array as C-contiguous float64 (itself, when it is already)."""
     return np.ascontiguousarray(array, np.float64)

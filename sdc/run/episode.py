@@ -48,7 +48,7 @@ from sdc.run.result_row import ok_row, raised_at
 from sdc.run.stop_lines import StopLineWatch
 from sdc.run.trace_recorder import TraceRecorder
 from sdc.run.world_loop import run_alone
-from sdc.run.world_witness import Judged, Verdict, judge_world, unjudged
+from sdc.run.world_witness import InRunAudit, Judged, Verdict, unjudged, verdict
 
 COLLISION, DURATION, ROUTE_END = "collision", "duration", "route_end"
 
@@ -93,12 +93,12 @@ class Simulation:
     """
 
     def __init__(self, spec: ScenarioSpec, world: World, look_ahead_m: float | None = None,
-                 road: RoadGeometry | None = None, controller=None):
+                 road: RoadGeometry | None = None, controller=None, slot: int = 0):
         """``road``: the run's road, when it is not the world's (an ego of a shared
         world other than the first). ``controller``: what decides each :meth:`turn`
         (the protocol of ``sdc.car.controller_api``; None: the caller records and
-        moves the car itself, as the gym does)."""
-        self.spec, self.world, self.controller = spec, world, controller
+        moves the car itself, as the gym does). ``slot``: its ego's in the world."""
+        self.spec, self.world, self.controller, self.slot = spec, world, controller, slot
         self.look_ahead_m = (spec.controller.look_ahead_m if look_ahead_m is None
                              else look_ahead_m)
         self.road = world.road if road is None else road
@@ -137,6 +137,10 @@ class Simulation:
         self.lanes_beside: LanesBeside | None = None
         self.contacts: Contacts | None = None
         self.conflicts: Conflicts | None = None
+        #: the world's audit inside the run, where the world has a model to judge by
+        witness = world.witness()
+        self.audit = (None if witness is None
+                      else InRunAudit(witness, slot, self.obstacle_classes))
 
     def place(self) -> Pose:
         """The car where it starts (its body box in ``box``), before the world starts."""
@@ -156,8 +160,11 @@ class Simulation:
         self._sense()
 
     def _sense(self) -> None:
-        """Sense the world at the current state, its body box already in ``box``."""
+        """Sense the world at the current state, its body box already in ``box``; the
+        world's audit looks at the step before the world steps on."""
         state, snapshot = self.state, self.snapshot
+        if self.audit is not None:
+            self.audit.look(snapshot, self.k)
         self.ranges = self.lidar.scan(
             self.vehicle.point_ahead(state, self.spec.lidar.mount_ahead_m), state.yaw_rad,
             snapshot.obstacle_boxes, snapshot.traffic_boxes)
@@ -268,13 +275,13 @@ class Simulation:
 
     def _whose_overlaps(self) -> Verdict:
         """The steps in which bodies other than the ego overlap, judged: ours and SUMO's
-        own, and the first of each (:mod:`sdc.run.world_witness`, on the sumo backend;
-        elsewhere all ours)."""
+        own, and the first of each, as the world's audit judged them during the run
+        (:class:`sdc.run.world_witness.InRunAudit`, on the sumo backend; elsewhere all
+        ours)."""
         judged = self.judged()
-        twin = self.world.twin() if len(judged.steps) else None
-        if twin is None:  # nothing to judge, or a backend with no model to judge by
+        if self.audit is None:  # a backend with no model to judge by
             return unjudged(judged)
-        return judge_world(twin, [judged])[0]
+        return verdict(judged, self.audit.witnessed)
 
     def _standing(self) -> Standing | None:
         """What the car stood for at the last step (None: it was moving)."""
@@ -286,12 +293,9 @@ class Simulation:
                                self.obstacle_classes, trace.signals, trace.floats[TraceCol.t_s],
                                self.world.signal_cycles_s)
 
-    def finish(self, termination: str, run_id: str | None = None,
-               overlaps: Verdict | None = None) -> Episode:
+    def finish(self, termination: str, run_id: str | None = None) -> Episode:
         """The run's :class:`Episode`; its row is named ``run_id`` (default
-        :func:`default_run_id`). Called once its world is closed (judging an overlap
-        runs the world's twin); ``overlaps``: the overlaps judged, where the caller
-        judged them (a shared world's runs, judged together)."""
+        :func:`default_run_id`)."""
         spec, model, road = self.spec, self.model, self.road
         trace = self.trace()
         t_end = float(trace.floats[TraceCol.t_s][-1])
@@ -306,7 +310,7 @@ class Simulation:
             obstacles[:, 3])
         progress_m = run_outcome.progress_m(floats[TraceCol.s_m], lane_scale(spec, road))
         standing = self._standing()
-        judged = self._whose_overlaps() if overlaps is None else overlaps
+        judged = self._whose_overlaps()
         firsts = [o for o in (judged.first_ours, judged.first_sumo) if o is not None]
         row = ok_row(
             metrics=trace_metrics(trace.floats, trace.phase, trace.lidar,

@@ -37,7 +37,6 @@ from sdc.car.controller_plugins import make_controller
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import Episode, Simulation, initial_state
 from sdc.run.world_loop import Failed, WorldLoop
-from sdc.run.world_witness import Verdict, judge_world, unjudged
 
 
 def start_points(spec: ScenarioSpec, road: RoadGeometry) -> tuple[np.ndarray, np.ndarray]:
@@ -90,8 +89,9 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
     sims: list[Simulation] = []
     try:
         world = make_shared_world(egos, cache_dir, warm_state, source)
-        sims = [Simulation(spec, world, road=road, controller=controller)
-                for (spec, road), controller in zip(egos, controllers, strict=True)]
+        sims = [Simulation(spec, world, road=road, controller=controller, slot=slot)
+                for slot, ((spec, road), controller)
+                in enumerate(zip(egos, controllers, strict=True))]
         for sim in sims:
             sim.world_egos = len(egos)
         with world:
@@ -102,7 +102,6 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         failed = Failed.of(e)
         for i in range(len(egos)):
             ends.setdefault(i, failed)
-    overlaps = _judged_together(world, sims, ends) if sims else {}
     out: list[Episode | Failed] = []
     for i, sim in enumerate(sims or [None] * len(egos)):
         end = ends[i]
@@ -110,25 +109,10 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
             out.append(end)
             continue
         try:
-            out.append(sim.finish(end, run_ids[i], overlaps.get(i)))
+            out.append(sim.finish(end, run_ids[i]))
         except Exception as e:  # noqa: BLE001 - its summing up failed: its row says so
             out.append(Failed.of(e))
     return out
-
-
-def _judged_together(world, sims: list[Simulation], ends: dict) -> dict[int, Verdict]:
-    """Each run's overlapping steps of bodies other than its ego, ours and SUMO's own,
-    judged in one replay of the world (:func:`sdc.run.world_witness.judge_world`).
-    Without every run's trace (a run failed) the world cannot be replayed: none is
-    judged, and every overlap counts as ours."""
-    ran = {i: sim.judged() for i, sim in enumerate(sims) if not isinstance(ends[i], Failed)}
-    all_ours = {i: unjudged(judged) for i, judged in ran.items()}
-    if len(ran) < len(sims):
-        return all_ours
-    try:
-        return dict(enumerate(judge_world(world.twin(), list(ran.values()))))
-    except Exception:  # noqa: BLE001 - no witness: missing evidence is never SUMO's alibi
-        return all_ours
 
 
 def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,

@@ -2,24 +2,29 @@
 steps in which two bodies other than the ego overlap; here each such step is judged
 against SUMO's own placement of the bodies.
 
-The run's SUMO is run once more, the ego pushed where the trace has it (same spec, same
-seed, the same pushes: the same world, step for step, checked against the trace), and
-at each such step the overlapping bodies are laid along their lanes as SUMO's own model
-holds them (:meth:`scenarios.sumo.sumo_world.SumoWorld.placed_by_sumo`). Where those overlap
-too, SUMO's own model put them through each other (its junctions let vehicles on
-crossing lanes wait inside one another, its bicycles ride through its pedestrians):
-``sumo_overlaps``. Where they do not, what we made of SUMO's world did (a rigid box
-where SUMO holds a body along its lane, a body reaching where SUMO was not shown it):
-``world_overlaps``. A step whose replay differs from the trace counts as ours: missing
-evidence is never SUMO's alibi. Only runs with an overlap pay for the second run. The
-first step of each kind is named with the SUMO ids this replay reads (the trace keeps
-none): :class:`Verdict`, told by :mod:`analysis.measures.overlap_detail`.
+At each such step the overlapping bodies are laid along their lanes as SUMO's own
+model holds them (:meth:`scenarios.sumo.sumo_world.SumoWorld.placed_by_sumo`). Where
+those overlap too, SUMO's own model put them through each other (its junctions let
+vehicles on crossing lanes wait inside one another, its bicycles ride through its
+pedestrians): ``sumo_overlaps``. Where they do not, what we made of SUMO's world did
+(a rigid box where SUMO holds a body along its lane, a body reaching where SUMO was
+not shown it): ``world_overlaps``. The first step of each kind is named with SUMO's
+ids (the trace keeps none): :class:`Verdict`, told by
+:mod:`analysis.measures.overlap_detail`.
 
-A shared world's runs (:mod:`sdc.run.shared_world`) are judged in one replay of it,
-every ego pushed along its own trace and leaving when its run ended. An overlap with
-another ego is that ego's collision (its own check ends its run on it): its row counts
-it, the audit of the others does not. One with another run's obstacle is ours: where
-an ego's run is, we put it.
+:class:`InRunAudit` judges during the run, at the step the overlap happens, from
+SUMO's state at that step before it steps on: no run is simulated twice. The replay
+(:func:`witness_world`) judges the same steps afterwards: the run's SUMO run once
+more, each ego pushed where its trace has it (same spec, same seed, the same pushes:
+the same world, step for step, checked against the trace). It is what judged before,
+and stays the oracle the in-run audit is held to (``benchmarks/audit_in_run.py``,
+``tests/test_world_witness.py``). A step whose replay differs from the trace counts
+as ours: missing evidence is never SUMO's alibi.
+
+In a shared world (:mod:`sdc.run.shared_world`) each ego's run is judged in its own
+slot. An overlap with another ego is that ego's collision (its own check ends its run
+on it): its row counts it, the audit of the others does not. One with another run's
+obstacle is ours: where an ego's run is, we put it.
 """
 
 from __future__ import annotations
@@ -31,8 +36,18 @@ import numpy as np
 from analysis.measures.overlap_detail import Overlap, deepest, describe, overlaps_at
 from analysis.measures.trace_columns import TraceCol
 from analysis.measures.trace_file import Trace
-from analysis.measures.world_audit import overlapping_pairs, pairs_overlap
+from analysis.measures.world_audit import (
+    OVERLAP_TOLERANCE_M,
+    box_owners,
+    overlapping_pairs,
+    pairs_overlap,
+)
+from scenarios.scene.boxes import as_boxes
+from scenarios.scene.snapshot import Snapshot
+from scenarios.spec.bodies import are_people
 from scenarios.sumo.routes_xml import ego_names
+from scenarios.world_backends import WitnessWorld
+from sdc.car.geometry_kernels import bodies_may_overlap
 from sdc.car.vehicle import Vehicle, VehicleState
 from sdc.run.world_loop import Failed, WorldLoop
 
@@ -172,6 +187,42 @@ def _judged(world, snapshot, step: int, obstacle_classes, slot: int) -> list[Wit
             for i, j in pairs]
 
 
+class InRunAudit:
+    """The world's audit inside a run: at each step, the overlapping pairs of bodies other
+    than the ego of ``slot`` judged from that step's own state, as SUMO holds it before
+    it steps on (:func:`_judged`, the replay's judging at the same state), so no second
+    simulation is needed. The steps looked at are the trace's own: its traffic boxes as
+    the trace holds them (float32), as :func:`analysis.measures.world_audit.overlap_steps`
+    finds them afterwards. ``world``: a world with a model to judge by (SUMO's)."""
+
+    def __init__(self, world: WitnessWorld, slot: int,
+                 obstacle_classes: tuple[str | None, ...]):
+        world.keep_ids = True  # the judging names the bodies by SUMO's ids: before it starts
+        self.world, self.slot, self.obstacle_classes = world, slot, obstacle_classes
+        self.obstacle_people = np.asarray(are_people(obstacle_classes), float)
+        self.witnessed: list[Witnessed] = []
+
+    def look(self, snapshot: Snapshot, step: int) -> None:
+        """Judge ``snapshot``'s overlapping pairs, if any (``step``: its trace row)."""
+        held = np.asarray(snapshot.traffic_boxes, np.float32).astype(np.float64).reshape(-1, 5)
+        obstacles = as_boxes(snapshot.obstacle_boxes)
+        n = len(held)
+        people = np.concatenate([np.asarray(are_people(snapshot.traffic_classes), float),
+                                 self.obstacle_people])
+        owners = box_owners(n, snapshot.traffic_bodies, len(obstacles)).astype(float)
+        if not bodies_may_overlap(np.vstack([held, obstacles]), n, people, owners,
+                                  OVERLAP_TOLERANCE_M):
+            return
+        if not overlapping_pairs(held, obstacles, snapshot.traffic_classes,
+                                 self.obstacle_classes, snapshot.traffic_bodies):
+            return
+        try:
+            self.witnessed += _judged(self.world, snapshot, step, self.obstacle_classes,
+                                      self.slot)
+        except Exception:  # noqa: BLE001 - unjudged, the step counts as ours (verdict):
+            pass  # missing evidence is never SUMO's alibi, nor the end of the run
+
+
 def unjudged(run: Judged) -> Verdict:
     """Every overlapping step of ``run`` counted ours, not judged (another backend, or a
     world that cannot be replayed), the first named by its place in the trace."""
@@ -206,15 +257,3 @@ def verdict(run: Judged, witnessed: list[Witnessed]) -> Verdict:
                         for w in pairs])
 
     return Verdict(len(ours), len(sumo), first(ours, False), first(sumo, True))
-
-
-def judge_world(twin, runs: list[Judged]) -> list[Verdict]:
-    """Each run's overlapping steps (``runs`` in slot order) judged in one replay of the
-    world (:func:`witness_world`): how many hold an overlap SUMO's own bodies do not
-    have (ours: also every step the replay did not reach), how many one they have too
-    (SUMO's own; a step may hold both), and the first of each; none judged when no run
-    has an overlap."""
-    if not any(len(run.steps) for run in runs):
-        return [Verdict(0, 0) for _ in runs]
-    return [verdict(run, witnessed)
-            for run, witnessed in zip(runs, witness_world(twin, runs), strict=True)]
