@@ -7,7 +7,8 @@ pushed along its trace) judges the same steps afterwards. This runs families of 
 runs, alone and several to a world, judges each both ways and compares them pair by
 pair at every step::
 
-    python benchmarks/audit_in_run.py --samples 25
+    python benchmarks/audit_in_run.py --samples 30 --families ingolstadt people a10
+    python benchmarks/audit_in_run.py --samples 12 --families town --warm-seed 1
 
 Families (``avoid`` where the sweep has it, else its first runs; ``--samples`` runs
 each, alone, then the same runs 4 to a world
@@ -111,9 +112,14 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=25, help="runs a family")
     parser.add_argument("--families", nargs="*", default=list(FAMILIES))
     parser.add_argument("--per-world", type=int, default=4, help="egos a shared world")
+    parser.add_argument("--warm-seed", type=int, help="every run's traffic.warm_seed (one "
+                        "warm state for all: the town's take a minute each)")
     args = parser.parse_args()
     for family in args.families:
         specs = FAMILIES[family](args.samples)
+        if args.warm_seed is not None:  # one warm state for all, as a sweep's pool has few
+            specs = [dataclasses.replace(s, traffic=dataclasses.replace(
+                s.traffic, warm_seed=args.warm_seed)) for s in specs]
         egos = [(spec, make_road(spec)) for spec in specs]
         worlds = [[ego] for ego in egos]
         for start in range(0, len(specs), args.per_world):  # the same runs, sharing

@@ -62,6 +62,7 @@ class WitnessWorld(World, Protocol):
     ego_ids: frozenset[str]  # the ids of the world's egos
 
     def is_traffic(self, vehicle_id: str) -> bool: ...  # no ego's, nor their obstacles
+    def ids(self, slot: int) -> list[str]: ...  # the SUMO ids of the last snapshot's rows
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows: list[int],
                        obstacles: list[int], slot_index: int = 0) -> list[np.ndarray]: ...
     def hand_ego_to_sumo(self, slot: int, max_speed_mps: float) -> None: ...

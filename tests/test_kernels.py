@@ -251,12 +251,14 @@ def crowd_st(draw):
     return boxes, n_traffic, kinds, bodies
 
 
-def gate(boxes, n_traffic, kinds, bodies) -> bool:
-    """The compiled gate, asked as the in-run audit asks it."""
+def gate(boxes, n_traffic, kinds, bodies, people_known=True) -> bool:
+    """The compiled gate, asked as the in-run audit asks it (people not known: its first
+    question)."""
     people = np.array([kind == "pedestrian" for kind in kinds], float)
-    owners = np.concatenate([bodies, n_traffic + np.arange(len(boxes) - n_traffic)])
-    return compiled.bodies_may_overlap(np.ascontiguousarray(boxes, float), n_traffic, people,
-                                       owners.astype(float), OVERLAP_TOLERANCE_M)
+    return compiled.bodies_may_overlap(
+        np.ascontiguousarray(boxes[:n_traffic], float), np.ascontiguousarray(boxes[n_traffic:],
+                                                                             float),
+        people if people_known else None, np.array(bodies, float), OVERLAP_TOLERANCE_M)
 
 
 def audit_pairs(boxes, n_traffic, kinds, bodies) -> list:
@@ -272,7 +274,7 @@ def test_the_compiled_overlap_gate_never_hides_a_pair(crowd):
     """The in-run audit's gate (sdc/run/world_witness.py) lets every step through where
     the audit's own question finds a pair: it errs only to letting one through."""
     if audit_pairs(*crowd):
-        assert gate(*crowd) is True
+        assert gate(*crowd) is True and gate(*crowd, people_known=False) is True
 
 
 @needs_compiled
@@ -286,10 +288,11 @@ def test_the_compiled_overlap_gate_shuts_where_no_pair_is():
             ([car, through], 2, two, [0, 1], True),
             ([car, through], 1, two, [0], True),  # traffic through an obstacle
             ([car, through], 0, two, [], False),  # two obstacles: the spec's doing
-            ([car, through], 2, ["pedestrian"] * 2, [0, 1], False),  # a crowd
+            ([car, through], 2, ["pedestrian"] * 2, [0, 1], False),  # a crowd...
             ([car, through], 2, two, [0, 0], False),  # pieces of one body
             ([car, touching], 2, two, [0, 1], False),
             ([car, apart], 2, two, [0, 1], False)):
         boxes = np.array(boxes, float)
         assert gate(boxes, n, kinds, bodies) is open_, (boxes, n, kinds, bodies)
+        assert gate(boxes, n, kinds, bodies, people_known=False) is (open_ or kinds[0] != two[0])
         assert bool(audit_pairs(boxes, n, kinds, bodies)) is open_

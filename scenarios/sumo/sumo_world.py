@@ -92,6 +92,8 @@ class SumoWorld:
         #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
         self.keep_ids = False
         self.last_ids: dict[int, list[str]] = {}
+        self._taken: frozenset[str] = frozenset()  # the last read's (ids: read again)
+        self._read_ids: dict[int, list[str]] = {}
         self._source = source
         # a sumo_config road's configuration (its files are written into the scratch
         # folder), its enter_s checked before any SUMO
@@ -275,6 +277,7 @@ class SumoWorld:
         """The state after a step for each ego still in the world, without the vehicles
         ``taken`` off since."""
         last_ids = self.last_ids if self.keep_ids else None
+        self._taken, self._read_ids = taken, {}
         read = {slot.slot: self._reader.read(slot, taken, last_ids)
                 for slot in self._slots if slot.active}
         self._reader.watch()
@@ -285,13 +288,23 @@ class SumoWorld:
                                 signals, bodies, owners)
                 for index, (boxes, speeds, classes, bodies, owners) in read.items()}
 
+    def ids(self, slot_index: int) -> list[str]:
+        """The SUMO ids of the rows of the last snapshot of the ego in ``slot_index``:
+        kept (``keep_ids``), else read again once (SUMO's subscription results stand
+        until it steps on: the same rows, without a pass a step to keep them)."""
+        if self.keep_ids:
+            return self.last_ids[slot_index]
+        if slot_index not in self._read_ids:
+            self._reader.read(self._slots[slot_index], self._taken, self._read_ids)
+        return self._read_ids[slot_index]
+
     def placed_by_sumo(self, traffic_boxes: np.ndarray, rows, obstacles, slot_index: int = 0
                        ) -> list[np.ndarray]:
         """The bodies of the last snapshot's traffic ``rows`` of the ego in ``slot_index``
-        (indices into its ``traffic_boxes``, of rows read from SUMO; needs ``keep_ids``)
+        (indices into its ``traffic_boxes``, of rows read from SUMO: :meth:`ids`)
         and of its spec's ``obstacles`` (indices) as SUMO's own lanes hold them
         (:func:`scenarios.sumo.lane_laying.held_bodies`)."""
-        return held_bodies(self._sumo, self._reader.paths, self.last_ids[slot_index],
+        return held_bodies(self._sumo, self._reader.paths, self.ids(slot_index),
                            traffic_boxes, rows, self._slots[slot_index].names.obstacle_prefix,
                            obstacles, self.people_subscribed)
 

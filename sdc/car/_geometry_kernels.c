@@ -371,42 +371,45 @@ done:
 }
 
 /* may two bodies other than the ego overlap? The gate of the world's audit inside the
- * run (sdc/run/world_witness.py): of the rows of boxes, the first n_traffic traffic and
- * the rest obstacles, people[k] 1 for a person, owners[k] the body a box is of. Two
- * persons, two pieces of one body and two obstacles are never a pair. A pair whose
- * shadows overlap by more than tolerance on each of the four axes (pairs_overlap of
- * analysis/measures/world_audit.py) answers 1; the gate errs to 1 by GATE_SLACK_M,
- * never to 0: what it lets through is decided by pairs_overlap itself. */
+ * run (sdc/run/world_witness.py): traffic and obstacle boxes; people (None: not known)
+ * 1 for a person, traffic's then the obstacles'; owners (None: each its own) the body
+ * each traffic box is of. Two persons, two pieces of one body and two obstacles are
+ * never a pair. A pair whose shadows overlap by more than tolerance on each of the four
+ * axes (pairs_overlap of analysis/measures/world_audit.py) answers True; the gate errs
+ * to True (by GATE_SLACK_M, and where people are not known), never to False: what it
+ * lets through is decided by pairs_overlap itself. */
 #define GATE_SLACK_M 1e-9
 static PyObject *bodies_may_overlap(PyObject *self, PyObject *args) {
-    PyObject *objs[3];
-    Py_ssize_t n_traffic;
+    PyObject *objs[4];
     double tolerance;
-    if (!PyArg_ParseTuple(args, "OnOOd", &objs[0], &n_traffic, &objs[1], &objs[2], &tolerance))
+    if (!PyArg_ParseTuple(args, "OOOOd", &objs[0], &objs[1], &objs[2], &objs[3], &tolerance))
         return NULL;
-    static const char *names[3] = {"boxes", "people", "owners"};
-    static const Py_ssize_t rows[3] = {5, 1, 1};
-    Py_buffer views[3];
-    Py_ssize_t counts[3];
+    static const char *names[4] = {"traffic", "obstacles", "people", "owners"};
+    static const Py_ssize_t rows[4] = {5, 5, 1, 1};
+    Py_buffer views[4];
+    Py_ssize_t counts[4] = {0, 0, 0, 0};
+    int given[4] = {1, 1, objs[2] != Py_None, objs[3] != Py_None};
     PyObject *result = NULL;
     int got = 0;
-    for (; got < 3; got++)
-        if (get_doubles(objs[got], &views[got], 0, rows[got], &counts[got], names[got]) < 0)
+    for (; got < 4; got++)
+        if (given[got] && get_doubles(objs[got], &views[got], 0, rows[got], &counts[got],
+                                      names[got]) < 0)
             goto done;
-    Py_ssize_t n = counts[0];
-    if (counts[1] != n || counts[2] != n || n_traffic < 0 || n_traffic > n) {
-        PyErr_SetString(PyExc_ValueError, "a person flag and an owner per box, and at most "
-                                          "as many traffic boxes as boxes");
+    Py_ssize_t n_t = counts[0], n = counts[0] + counts[1];
+    if ((given[2] && counts[2] != n) || (given[3] && counts[3] != n_t)) {
+        PyErr_SetString(PyExc_ValueError, "a person flag a box, an owner a traffic box");
         goto done;
     }
-    const double *boxes = views[0].buf, *people = views[1].buf, *owners = views[2].buf;
+    const double *traffic = views[0].buf, *obstacles = views[1].buf;
+    const double *people = given[2] ? views[2].buf : NULL, *owners = given[3] ? views[3].buf : NULL;
     int found = 0;
-    for (Py_ssize_t i = 0; i < n_traffic && !found; i++) {
-        const double *a = boxes + 5 * i;
+    for (Py_ssize_t i = 0; i < n_t && !found; i++) {
+        const double *a = traffic + 5 * i;
         double reach_a = 0.5 * hypot(a[3], a[4]);
         for (Py_ssize_t j = i + 1; j < n && !found; j++) {
-            const double *b = boxes + 5 * j;
-            if (owners[i] == owners[j] || (people[i] != 0.0 && people[j] != 0.0)) continue;
+            const double *b = j < n_t ? traffic + 5 * j : obstacles + 5 * (j - n_t);
+            if (owners && j < n_t && owners[i] == owners[j]) continue;
+            if (people && people[i] != 0.0 && people[j] != 0.0) continue;
             double dx = b[0] - a[0], dy = b[1] - a[1], reach = reach_a + 0.5 * hypot(b[3], b[4]);
             if (dx * dx + dy * dy > reach * reach + GATE_SLACK_M) continue;
             found = shadows_overlap(a, b, tolerance - GATE_SLACK_M, 1);
@@ -414,7 +417,8 @@ static PyObject *bodies_may_overlap(PyObject *self, PyObject *args) {
     }
     result = PyBool_FromLong(found);
 done:
-    while (got-- > 0) PyBuffer_Release(&views[got]);
+    while (got-- > 0)
+        if (given[got]) PyBuffer_Release(&views[got]);
     return result;
 }
 

@@ -110,12 +110,13 @@ def _always(*args) -> bool:
     return True
 
 
-#: ``(boxes, n_traffic, people, owners, tolerance_m) -> bool``: may two bodies other
+#: ``(traffic, obstacles, people, owners, tolerance_m) -> bool``: may two bodies other
 #: than the ego overlap by more than ``tolerance_m``? A gate that errs only to True
 #: (the in-run audit, :mod:`sdc.run.world_witness`, asks the exact question after it):
-#: compiled, a pass over the pairs; else always True. ``boxes``: (M, 5), the first
-#: ``n_traffic`` traffic and the rest obstacles; ``people``, ``owners``: (M,) floats, 1
-#: for a person, the body each box is of
+#: compiled, a pass over the pairs; else always True. ``traffic``, ``obstacles``: (N,
+#: 5), (K, 5) float64 boxes; ``people``: (N + K,) 1.0 for a person, or None (not known:
+#: no pair of two persons is left out); ``owners``: (N,) the body each traffic box is
+#: of, or None (each its own)
 bodies_may_overlap = _always if _compiled is None else _compiled.bodies_may_overlap
 
 

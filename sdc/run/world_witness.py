@@ -29,6 +29,7 @@ obstacle is ours: where an ego's run is, we put it.
 
 from __future__ import annotations
 
+import contextlib
 from typing import NamedTuple
 
 import numpy as np
@@ -38,11 +39,9 @@ from analysis.measures.trace_columns import TraceCol
 from analysis.measures.trace_file import Trace
 from analysis.measures.world_audit import (
     OVERLAP_TOLERANCE_M,
-    box_owners,
     overlapping_pairs,
     pairs_overlap,
 )
-from scenarios.scene.boxes import as_boxes
 from scenarios.scene.snapshot import Snapshot
 from scenarios.spec.bodies import are_people
 from scenarios.sumo.routes_xml import ego_names
@@ -172,7 +171,7 @@ def _judged(world, snapshot, step: int, obstacle_classes, slot: int) -> list[Wit
     that ego's collision (its own check ends its run on it), judged in its row; one
     with another run's obstacle is ours: where an ego's run is, we put it."""
     traffic = snapshot.traffic_boxes
-    n, ids = len(traffic), world.last_ids[slot]
+    n, ids = len(traffic), world.ids(slot)
     pairs = overlapping_pairs(traffic, snapshot.obstacle_boxes, snapshot.traffic_classes,
                               obstacle_classes, snapshot.traffic_bodies)
     rows = sorted({i for pair in pairs for i in pair if i < n and world.is_traffic(ids[i])})
@@ -197,30 +196,30 @@ class InRunAudit:
 
     def __init__(self, world: WitnessWorld, slot: int,
                  obstacle_classes: tuple[str | None, ...]):
-        world.keep_ids = True  # the judging names the bodies by SUMO's ids: before it starts
         self.world, self.slot, self.obstacle_classes = world, slot, obstacle_classes
         self.obstacle_people = np.asarray(are_people(obstacle_classes), float)
         self.witnessed: list[Witnessed] = []
 
     def look(self, snapshot: Snapshot, step: int) -> None:
         """Judge ``snapshot``'s overlapping pairs, if any (``step``: its trace row)."""
-        held = np.asarray(snapshot.traffic_boxes, np.float32).astype(np.float64).reshape(-1, 5)
-        obstacles = as_boxes(snapshot.obstacle_boxes)
-        n = len(held)
+        held = np.asarray(snapshot.traffic_boxes, np.float32).astype(np.float64)
+        obstacles = np.ascontiguousarray(snapshot.obstacle_boxes, np.float64)
+        bodies = snapshot.traffic_bodies
+        owners = None if bodies is None else np.asarray(bodies, np.float64)
+        if not bodies_may_overlap(held, obstacles, None, owners, OVERLAP_TOLERANCE_M):
+            return
         people = np.concatenate([np.asarray(are_people(snapshot.traffic_classes), float),
                                  self.obstacle_people])
-        owners = box_owners(n, snapshot.traffic_bodies, len(obstacles)).astype(float)
-        if not bodies_may_overlap(np.vstack([held, obstacles]), n, people, owners,
-                                  OVERLAP_TOLERANCE_M):
+        if not bodies_may_overlap(held, obstacles, people, owners, OVERLAP_TOLERANCE_M):
             return
         if not overlapping_pairs(held, obstacles, snapshot.traffic_classes,
                                  self.obstacle_classes, snapshot.traffic_bodies):
             return
-        try:
+        # a judging that fails leaves the step unjudged, counted ours (verdict): missing
+        # evidence is never SUMO's alibi, nor the end of the run
+        with contextlib.suppress(Exception):
             self.witnessed += _judged(self.world, snapshot, step, self.obstacle_classes,
                                       self.slot)
-        except Exception:  # noqa: BLE001 - unjudged, the step counts as ours (verdict):
-            pass  # missing evidence is never SUMO's alibi, nor the end of the run
 
 
 def unjudged(run: Judged) -> Verdict:
