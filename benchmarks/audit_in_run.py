@@ -84,10 +84,10 @@ FAMILIES = {
 }
 
 
-def judged_both_ways(egos: list[tuple]) -> list[tuple[list, list, float]]:
-    """Run ``egos`` (spec, road) in one world and replay it: each run's pairs judged
-    in the run, those the replay judged, and the world's wall time [s] (the first
-    run's entry)."""
+def judged_both_ways(egos: list[tuple]) -> tuple[list[tuple[list, list, list]], float, float]:
+    """Run ``egos`` (spec, road) in one world and replay it: for each run the pairs
+    judged in the run, those the replay judged and its trace's overlapping steps; then
+    the wall times [s] of the world's run and of its replay."""
     world = make_shared_world(egos, None, None)
     sims = [Simulation(spec, world, road=road, controller=make_controller(spec.controller),
                        slot=slot) for slot, (spec, road) in enumerate(egos)]
@@ -103,8 +103,9 @@ def judged_both_ways(egos: list[tuple]) -> list[tuple[list, list, float]]:
     replayed = (witness_world(world.twin(), judged) if any(len(j.steps) for j in judged)
                 else [[] for _ in judged])
     replay_s = time.perf_counter() - start
-    return [(sim.audit.witnessed, seen, judged_one.steps.tolist(), run_s, replay_s)
-            for sim, seen, judged_one in zip(sims, replayed, judged, strict=True)]
+    return ([(sim.audit.witnessed, seen, judged_one.steps.tolist())
+             for sim, seen, judged_one in zip(sims, replayed, judged, strict=True)],
+            run_s, replay_s)
 
 
 def main() -> None:
@@ -132,10 +133,10 @@ def main() -> None:
         runs = overlapped = steps = differ = 0
         run_s = replay_s = AUDIT_S[0] = 0.0
         for world in worlds:
-            results = judged_both_ways(world)
-            run_s += results[0][3]
-            replay_s += results[0][4]
-            for in_run, replayed, overlap_steps, _, _ in results:
+            results, world_s, world_replay_s = judged_both_ways(world)
+            run_s += world_s
+            replay_s += world_replay_s
+            for in_run, replayed, overlap_steps in results:
                 runs += 1
                 overlapped += bool(overlap_steps)
                 steps += len(overlap_steps)

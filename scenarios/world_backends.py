@@ -51,14 +51,10 @@ class World(Protocol):
 
 
 class WitnessWorld(World, Protocol):
-    """A world with a model of its own to hold ours against (SUMO): its replay names
-    the bodies it holds (``keep_ids``), lays them as it holds them
-    (``sdc.run.world_witness``), and its own driver can take an ego's place
-    (``sdc.run.sumo_driver``)."""
+    """A world with a model of its own to hold ours against (SUMO): it names the bodies
+    it holds (:meth:`ids`), lays them as it holds them (``sdc.run.world_witness``), and
+    its own driver can take an ego's place (``sdc.run.sumo_driver``)."""
 
-    #: keep the ids of each snapshot's traffic rows in ``last_ids`` (slot -> ids)
-    keep_ids: bool
-    last_ids: dict[int, list[str]]
     ego_ids: frozenset[str]  # the ids of the world's egos
 
     def is_traffic(self, vehicle_id: str) -> bool: ...  # no ego's, nor their obstacles

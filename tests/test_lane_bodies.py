@@ -149,7 +149,6 @@ def test_every_body_lies_where_sumo_holds_it(config, enter_s, steps, long_ones, 
     tracks: dict[str, list] = {}  # each vehicle's fronts since it last moved sideways
     tracked = 0
     with make_world(spec, road) as world:
-        world.keep_ids = True
         world.start(ego, 0.0)
         sumo = world._sumo
         for k in range(steps):
@@ -158,7 +157,7 @@ def test_every_body_lies_where_sumo_holds_it(config, enter_s, steps, long_ones, 
                       else snapshot.traffic_bodies)
             for body in np.unique(bodies):
                 rows = np.flatnonzero(bodies == body)
-                vid = world.last_ids[0][rows[0]]
+                vid = world.ids(0)[rows[0]]
                 if snapshot.traffic_classes[rows[0]] == "pedestrian":
                     continue
                 segments = centre_segments(snapshot.traffic_boxes[rows])

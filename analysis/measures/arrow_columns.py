@@ -5,7 +5,7 @@ what it is given): half a second in every worker that writes a trace and never
 needs pandas. These build the same arrays from buffers instead
 (``pyarrow.Array.from_buffers``, ``pyarrow.ListArray.from_arrays``), none of which
 imports it; the Parquet file written from them is byte for byte the one
-``pyarrow.array`` gives (``tests/test_trace.py``).
+``pyarrow.array`` gives (``tests/test_trace_file.py``).
 """
 
 from __future__ import annotations

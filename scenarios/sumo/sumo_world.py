@@ -87,12 +87,9 @@ class SumoWorld:
         self._obstacle_prefixes = tuple(slot.names.obstacle_prefix for slot in self._slots)
         self._demand = NetworkDemand()
         self._types = VehicleTypes()
-        #: keep the SUMO ids of each snapshot's traffic rows (``last_ids``: slot -> the
-        #: ids of its rows, the other egos' bodies after those read from SUMO), for
-        #: :meth:`placed_by_sumo`; off in a run (it costs a Python pass a step)
-        self.keep_ids = False
-        self.last_ids: dict[int, list[str]] = {}
-        self._taken: frozenset[str] = frozenset()  # the last read's (ids: read again)
+        # what :meth:`ids` reads again: the vehicles the last read left out, and the
+        # ids it has read since (slot -> ids)
+        self._taken: frozenset[str] = frozenset()
         self._read_ids: dict[int, list[str]] = {}
         self._source = source
         # a sumo_config road's configuration (its files are written into the scratch
@@ -276,9 +273,8 @@ class SumoWorld:
     def _snapshots(self, taken: frozenset[str] = frozenset()) -> dict[int, Snapshot]:
         """The state after a step for each ego still in the world, without the vehicles
         ``taken`` off since."""
-        last_ids = self.last_ids if self.keep_ids else None
         self._taken, self._read_ids = taken, {}
-        read = {slot.slot: self._reader.read(slot, taken, last_ids)
+        read = {slot.slot: self._reader.read(slot, taken)
                 for slot in self._slots if slot.active}
         self._reader.watch()
         signals = {tl: values[tc.TL_RED_YELLOW_GREEN_STATE] for tl, values
@@ -289,11 +285,10 @@ class SumoWorld:
                 for index, (boxes, speeds, classes, bodies, owners) in read.items()}
 
     def ids(self, slot_index: int) -> list[str]:
-        """The SUMO ids of the rows of the last snapshot of the ego in ``slot_index``:
-        kept (``keep_ids``), else read again once (SUMO's subscription results stand
-        until it steps on: the same rows, without a pass a step to keep them)."""
-        if self.keep_ids:
-            return self.last_ids[slot_index]
+        """The SUMO ids of the rows of the last snapshot of the ego in ``slot_index`` (the
+        other egos' bodies after those read from SUMO), read again once when asked:
+        SUMO's subscription results stand until it steps on, so they are the same rows,
+        and no step pays a Python pass to keep ids nobody asks for."""
         if slot_index not in self._read_ids:
             self._reader.read(self._slots[slot_index], self._taken, self._read_ids)
         return self._read_ids[slot_index]

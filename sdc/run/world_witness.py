@@ -150,7 +150,6 @@ def witness_world(twin, runs: list[Judged]) -> list[list[Witnessed]]:
     the replay did not reach as its trace has it. ``twin``: an unstarted world of the
     same egos."""
     with twin as world:
-        world.keep_ids = True
         drivers = [_Replayed(world, run, slot) for slot, run in enumerate(runs)]
         ends = WorldLoop(world, drivers).run()
     for end in ends.values():
