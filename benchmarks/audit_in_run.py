@@ -11,8 +11,8 @@ pair at every step::
     python benchmarks/audit_in_run.py --samples 12 --families town --warm-seed 1
 
 Families (``avoid`` where the sweep has it, else its first runs; ``--samples`` runs
-each, alone, then the same runs 4 to a world
-where the placement rule lets them share): ``town`` (sweeps/grid-town.toml),
+each, alone, then the same runs 8 to a world, 4 of them at a time, entering as
+seats free and the placement rule lets them): ``town`` (sweeps/grid-town.toml),
 ``ingolstadt`` (SUMO's Ingolstadt with its own demand and bicycles), ``people``
 (sweeps/real-people.toml: fokr_bs_demo with its people), ``a10``
 (sweeps/real-motorway-stop.toml). Prints a line a family: runs, runs with an overlap,
@@ -35,7 +35,7 @@ from scenarios.spec.toml_io import read_toml
 from scenarios.world_backends import make_road, make_shared_world
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
-from sdc.run.shared_world import placed_apart
+from sdc.run.shared_world import Seats
 from sdc.run.world_loop import Failed, WorldLoop
 from sdc.run.world_witness import InRunAudit, witness_world
 
@@ -84,24 +84,27 @@ FAMILIES = {
 }
 
 
-def judged_both_ways(egos: list[tuple]) -> tuple[list[tuple[list, list, list]], float, float]:
-    """Run ``egos`` (spec, road) in one world and replay it: for each run the pairs
-    judged in the run, those the replay judged and its trace's overlapping steps; then
-    the wall times [s] of the world's run and of its replay."""
+def judged_both_ways(egos: list[tuple], seats: int
+                     ) -> tuple[list[tuple[list, list, list]], float, float]:
+    """Run ``egos`` (spec, road) in one world, ``seats`` at a time, and replay it: for
+    each run the pairs judged in the run, those the replay judged and its trace's
+    overlapping steps; then the wall times [s] of the world's run and of its replay."""
     world = make_shared_world(egos, None, None)
     sims = [Simulation(spec, world, road=road, controller=make_controller(spec.controller),
                        slot=slot) for slot, (spec, road) in enumerate(egos)]
     start = time.perf_counter()
     with world:
-        ends = WorldLoop(world, sims).run()
+        loop = WorldLoop(world, sims, seating=Seats(egos, seats))
+        ends = loop.run()
     run_s = time.perf_counter() - start
     failed = [end for end in ends.values() if isinstance(end, Failed)]
     if failed:
         raise RuntimeError(failed[0].traceback)
     judged = [sim.judged() for sim in sims]
     start = time.perf_counter()
-    replayed = (witness_world(world.twin(), judged) if any(len(j.steps) for j in judged)
-                else [[] for _ in judged])
+    entries = [loop.entered[i] for i in range(len(sims))]
+    replayed = (witness_world(world.twin(), judged, entries)
+                if any(len(j.steps) for j in judged) else [[] for _ in judged])
     replay_s = time.perf_counter() - start
     return ([(sim.audit.witnessed, seen, judged_one.steps.tolist())
              for sim, seen, judged_one in zip(sims, replayed, judged, strict=True)],
@@ -112,7 +115,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=25, help="runs a family")
     parser.add_argument("--families", nargs="*", default=list(FAMILIES))
-    parser.add_argument("--per-world", type=int, default=4, help="egos a shared world")
+    parser.add_argument("--seats", type=int, default=4, help="egos a shared world holds")
+    parser.add_argument("--per-world", type=int, default=8, help="runs a shared world")
     parser.add_argument("--warm-seed", type=int, help="every run's traffic.warm_seed (one "
                         "warm state for all: the town's take a minute each)")
     args = parser.parse_args()
@@ -122,18 +126,18 @@ def main() -> None:
             specs = [dataclasses.replace(s, traffic=dataclasses.replace(
                 s.traffic, warm_seed=args.warm_seed)) for s in specs]
         egos = [(spec, make_road(spec)) for spec in specs]
-        worlds = [[ego] for ego in egos]
+        worlds = [([ego], 1) for ego in egos]
         for start in range(0, len(specs), args.per_world):  # the same runs, sharing
             chunk = specs[start:start + args.per_world]
             traffic = dataclasses.replace(chunk[0].traffic, warm_seed=1)
             group = [(spec, make_road(spec)) for spec in
                      (dataclasses.replace(s, road=chunk[0].road, traffic=traffic)
                       for s in chunk)]
-            worlds += [[group[i] for i in world] for world in placed_apart(group)]
+            worlds.append((group, args.seats))
         runs = overlapped = steps = differ = 0
         run_s = replay_s = AUDIT_S[0] = 0.0
-        for world in worlds:
-            results, world_s, world_replay_s = judged_both_ways(world)
+        for world, seats in worlds:
+            results, world_s, world_replay_s = judged_both_ways(world, seats)
             run_s += world_s
             replay_s += world_replay_s
             for in_run, replayed, overlap_steps in results:

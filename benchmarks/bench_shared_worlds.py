@@ -64,7 +64,7 @@ from sdc.batch.sweeps.progress import QuietReporter
 from sdc.batch.sweeps.sweep_runner import run_sweep
 from sdc.car.controller_plugins import make_controller
 from sdc.run.episode import Simulation
-from sdc.run.shared_world import placed_apart
+from sdc.run.shared_world import Seats
 
 #: the samples of every sweep
 SAMPLES = size(16, 2)
@@ -120,7 +120,8 @@ def seated_town(k: int, candidates: int = 400) -> list[tuple]:
         spec = dataclasses.replace(spec, traffic=dataclasses.replace(spec.traffic,
                                                                      warm_seed=1))
         ego = (spec, make_road(spec))
-        if placed_apart([*seated, ego]) == [list(range(len(seated) + 1))]:
+        together = list(range(len(seated) + 1))
+        if Seats([*seated, ego], len(together)).entering(together, {}, 0) == together:
             seated.append(ego)
         if len(seated) == k:
             break

@@ -64,7 +64,7 @@ def _outcome() -> dict:
             "min_road_edge_gap_m": np.float64(0.7),
             "stop_gap_m": 27.275, "stop_possible": np.True_,
             "sim_time_s": 0.2, "steps": 3, "wall_time_s": 0.01, "network_vehicles": 0,
-            "warm_state": None, "world_egos": 1,
+            "warm_state": None, "world_egos": 1, "world_entry_step": None,
             "trace_sha256": "ab" * 32}
 
 

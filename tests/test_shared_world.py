@@ -28,7 +28,7 @@ from scenarios.world_backends import make_road
 from sdc.car.collision import ROAD_EDGE, VEHICLE, describe
 from sdc.car.geometry_kernels import Contacts
 from sdc.run.episode import Episode, run_episode
-from sdc.run.shared_world import Failed, placed_apart, run_group, run_world
+from sdc.run.shared_world import Failed, Seats, run_group, run_world
 
 QUICK_TOWN = Path(__file__).parent / "data" / "grid-town-quick.toml"
 STEP_S = 0.064
@@ -367,22 +367,42 @@ def test_a_run_alone_sees_no_second_ego():
 def test_a_world_of_the_same_runs_gives_the_same_traces_and_counts_its_egos():
     specs = [town(seed) for seed in (11, 12, 13, 14, 15, 16)]
     ids = [f"r{i}" for i in range(len(specs))]
-    worlds = placed_apart(with_roads(specs))
-    assert sorted(i for w in worlds for i in w) == list(range(len(specs)))
-    assert any(len(w) > 1 for w in worlds) and len(worlds) > 1  # shared, and split
-    first = episodes(run_group(specs, ids))
-    second = episodes(run_group(specs, ids))
+    first = episodes(run_group(specs, ids, 3))
+    second = episodes(run_group(specs, ids, 3))
     assert [e.row["trace_sha256"] for e in first] == [e.row["trace_sha256"] for e in second]
     assert [without_wall_time(e.row) for e in first] == [without_wall_time(e.row)
                                                           for e in second]
     assert len({e.row["trace_sha256"] for e in first}) == len(specs)
-    size = {i: len(w) for w in worlds for i in w}
-    assert [e.row["world_egos"] for e in first] == [size[i] for i in range(len(specs))]
+    assert [e.row["world_egos"] for e in first] == [len(specs)] * len(specs)
     assert [e.row["run_id"] for e in first] == ids
     assert all(e.row["termination"] == "duration" for e in first)
-    # a run placed in a further world on its own has the same traffic: it is its plain run
-    for i in (i for w in worlds if len(w) == 1 for i in w):
-        assert first[i].row["trace_sha256"] == run_episode(specs[i]).row["trace_sha256"]
+    entries = [e.row["world_entry_step"] for e in first]
+    assert entries[0] == 0 and max(entries) > 0  # some entered as seats freed
+    assert_seated_apart(first, 3)
+
+
+def assert_seated_apart(runs: list[Episode], seats: int) -> None:
+    """At each step of their world no more than ``seats`` of ``runs`` were in it, and
+    each ego entered farther from every other in it than the sum of their sensing
+    radii, each where its run starts (read from the traces and rows)."""
+    spans = [(e.row["world_entry_step"], e.row["world_entry_step"] + e.row["steps"] - 1)
+             for e in runs]
+    for step in range(max(end for _, end in spans) + 1):
+        assert sum(a <= step <= b for a, b in spans) <= seats, step
+    for i, run in enumerate(runs):
+        entry = spans[i][0]
+        assert run.trace.floats["t_s"][0] == 0.0
+        start = own_box(run, 0)[:2]
+        for j, other in enumerate(runs):
+            if j != i and spans[j][0] <= entry <= spans[j][1]:
+                there = own_box(other, entry - spans[j][0])[:2]
+                gap_m = np.hypot(*(start - there))
+                assert gap_m > (sensing_radius_m(run_spec(run))
+                                + sensing_radius_m(run_spec(other))), (i, j, gap_m)
+
+
+def run_spec(run: Episode) -> ScenarioSpec:
+    return ScenarioSpec.from_plain(run.metadata["spec"])
 
 
 # ------------------------------------------------------ a run that ends leaves
@@ -415,43 +435,92 @@ def test_a_run_that_ends_leaves_and_the_other_goes_on(early_slot):
     assert s_m[-1] - s_m[0] == pytest.approx(8.0 * n_long * STEP_S, rel=0.02)
 
 
+@pytest.mark.parametrize("flow_vph", [0.0, 1200.0])
+def test_a_waiting_run_enters_as_the_one_in_its_way_leaves(flow_vph):
+    """Two egos 100 m apart in one lane (too close to share by the placement rule), two
+    seats: the second enters the step after the first's 3 s run ends, where its run
+    starts, and drives its own 4 s. Neither ever saw the other; on an empty road the
+    late run is its run alone, step for step, and with traffic nothing drove through
+    it or anything else (the world's audit)."""
+    first = straight(100.0, duration_s=3.0, seed=1, flow_vph=flow_vph)
+    second = straight(200.0, duration_s=4.0, seed=2, flow_vph=flow_vph)
+    a, b = episodes(run_world(with_roads([first, second]), ["a", "b"], 2))
+    n_a, n_b = round(3.0 / STEP_S), round(4.0 / STEP_S)
+    assert (a.row["world_entry_step"], b.row["world_entry_step"]) == (0, n_a + 1)
+    assert (a.row["steps"], b.row["steps"]) == (n_a + 1, n_b + 1)
+    assert b.row["termination"] == "duration" and not b.row["collision"]
+    assert not any(holds(boxes_at(a, k), own_box(b, 0), tol=5.0) for k in range(n_a + 1))
+    assert b.row["world_overlaps"] == 0 and a.row["world_overlaps"] == 0
+    assert b.trace.floats["s_m"][0] == pytest.approx(200.0, abs=0.5)
+    if not flow_vph:  # it left as its run ended: the late one never sees it
+        assert all(len(boxes_at(b, k)) == 0 for k in range(n_b + 1))
+        assert b.row["trace_sha256"] == run_episode(second).row["trace_sha256"]
+
+
 # ------------------------------------------------------ the placement rule
+
+
+def seated_first(egos: list[tuple], seats: int | None = None) -> list[int]:
+    """The slots of ``egos`` that enter their world as it starts, ``seats`` at a time
+    (default: all)."""
+    every = list(range(len(egos)))
+    return Seats(egos, seats or len(egos)).entering(every, {}, 0)
 
 
 def test_the_placement_rule_keeps_sensing_radii_apart():
     radius = sensing_radius_m(straight(10.0))
     assert radius == 150.0
-    # start points farther apart than the sum of the radii: one world
-    assert placed_apart(with_roads([straight(10.0), straight(400.0)])) == [[0, 1]]
-    assert placed_apart(with_roads([straight(10.0), straight(315.0)])) == [[0, 1]]
-    # not farther: a world each
-    assert placed_apart(with_roads([straight(10.0), straight(200.0)])) == [[0], [1]]
-    assert placed_apart(with_roads([straight(10.0), straight(300.0)])) == [[0], [1]]
+    # start points farther apart than the sum of the radii: together
+    assert seated_first(with_roads([straight(10.0), straight(400.0)])) == [0, 1]
+    assert seated_first(with_roads([straight(10.0), straight(315.0)])) == [0, 1]
+    # not farther: the second waits
+    assert seated_first(with_roads([straight(10.0), straight(200.0)])) == [0]
+    assert seated_first(with_roads([straight(10.0), straight(300.0)])) == [0]
     # lanes do not matter, distance does
-    assert placed_apart(with_roads([straight(10.0), straight(200.0, lane=1)])) == [[0], [1]]
-    # an ego joins the first world it fits
-    assert placed_apart(with_roads([straight(10.0), straight(200.0), straight(400.0),
-                                    straight(600.0)])) == [[0, 2], [1, 3]]
+    assert seated_first(with_roads([straight(10.0), straight(200.0, lane=1)])) == [0]
+    # the first that fit enter, in slot order
+    assert seated_first(with_roads([straight(10.0), straight(200.0), straight(400.0),
+                                    straight(600.0)])) == [0, 2]
+
+
+@pytest.mark.parametrize("seats", [1, 2, 3, 4])
+def test_no_more_egos_enter_than_the_world_has_seats(seats):
+    apart = with_roads([straight(start_m) for start_m in (10.0, 400.0, 790.0)])
+    assert seated_first(apart, seats) == [0, 1, 2][:seats]
+
+
+def test_a_waiting_ego_enters_by_where_the_others_are_now():
+    egos = with_roads([straight(10.0), straight(300.0)])
+    start = {i: Seats(egos, 2)._runs[i][0] for i in (0, 1)}
+    seats = Seats(egos, 2)
+
+    def at(x_m: float) -> dict[int, np.ndarray]:  # the first ego's box, moved along x
+        return {0: np.array([start[0][0] + x_m, start[0][1], 0.0, 4.9, 2.0])}
+
+    assert seats.entering([1], at(0.0), 5) == []  # 290 m apart: not yet
+    assert seats.entering([1], at(-20.0), 5) == [1]  # driven 20 m away: 310 m
+    assert seats.entering([1], {}, 5) == [1]  # the world is empty
+    assert Seats(egos, 1).entering([1], at(-20.0), 5) == []  # no seat free
 
 
 def test_an_obstacle_within_another_egos_radius_splits_them():
     far = ({"kind": "car", "lane": 1, "position_m": 200.0},)  # 200 m from the ego at 400
     near = ({"kind": "car", "lane": 1, "position_m": 300.0},)  # 100 m from it
-    assert placed_apart(with_roads([straight(10.0, obstacles=far), straight(400.0)])) == [[0, 1]]
-    assert placed_apart(with_roads([straight(10.0, obstacles=near),
-                                    straight(400.0)])) == [[0], [1]]
+    assert seated_first(with_roads([straight(10.0, obstacles=far), straight(400.0)])) == [0, 1]
+    assert seated_first(with_roads([straight(10.0, obstacles=near),
+                                    straight(400.0)])) == [0]
     # the other way round: the second ego's obstacle (ahead of it) near the first
     ahead = ({"kind": "barrel", "lane": 0, "position_m": 500.0},)  # 100 m from the ego at 600
     clear = ({"kind": "barrel", "lane": 0, "position_m": 400.0},)  # 200 m from it
-    assert placed_apart(with_roads([straight(600.0),
-                                    straight(200.0, obstacles=ahead)])) == [[0], [1]]
-    assert placed_apart(with_roads([straight(600.0),
-                                    straight(200.0, obstacles=clear)])) == [[0, 1]]
+    assert seated_first(with_roads([straight(600.0),
+                                    straight(200.0, obstacles=ahead)])) == [0]
+    assert seated_first(with_roads([straight(600.0),
+                                    straight(200.0, obstacles=clear)])) == [0, 1]
 
 
 def test_the_rule_sums_each_egos_own_radius():
     wide = straight(400.0, max_range_m=200.0)  # 225 m
     assert sensing_radius_m(wide) == 225.0
     # 390 m apart: 150 + 225 = 375 fit, 225 + 225 = 450 do not
-    assert placed_apart(with_roads([straight(10.0), wide])) == [[0, 1]]
-    assert placed_apart(with_roads([straight(10.0, max_range_m=200.0), wide])) == [[0], [1]]
+    assert seated_first(with_roads([straight(10.0), wide])) == [0, 1]
+    assert seated_first(with_roads([straight(10.0, max_range_m=200.0), wide])) == [0]

@@ -53,9 +53,9 @@ def worlds_of(plan) -> dict[str, list]:
 # ------------------------------------------------------ the plan
 
 
-def test_a_sweep_seats_each_controllers_runs_in_worlds_of_up_to_k():
+def test_a_sweep_seats_each_controllers_runs_in_worlds_of_up_to_r():
     plain_plan = expand(make())
-    plan = expand(make(egos_per_world=4))
+    plan = expand(make(egos_per_world=2, runs_per_world=4))
     assert len(plan) == len(plain_plan) == 20
     assert [r.run_id for r in plan] == [r.run_id for r in plain_plan]
     assert all(run.world is not None and run.spec is not None for run in plan)
@@ -87,7 +87,7 @@ def test_a_sweep_seats_each_controllers_runs_in_worlds_of_up_to_k():
 
 
 def test_runs_of_different_traffic_never_share_a_world():
-    plan = expand(make(egos_per_world=4, params={
+    plan = expand(make(egos_per_world=4, runs_per_world=4, params={
         "ego.speed_mps": {"uniform": [3.0, 6.0]},
         "traffic.vehicles": {"choice": [200, 300]}}))
     values = {r.spec.traffic.vehicles for r in plan}
@@ -127,12 +127,34 @@ def test_group_worlds_on_its_own():
     specs = [dataclasses.replace(spec, scenario=dataclasses.replace(spec.scenario, seed=s))
              for s in (5, 6, 7)]
     runs = [(k, f"{k:03d}", "seed", s) for k, s in enumerate(specs)]
-    grouped = group_worlds(runs, 2)
+    grouped = group_worlds(runs, 2, 1)
     assert {k: seat for k, (seat, _) in grouped.items()} == {
-        0: WorldSeat("w000-seed", 0), 1: WorldSeat("w000-seed", 1),
-        2: WorldSeat("w002-seed", 0)}
+        0: WorldSeat("w000-seed", 0, 1), 1: WorldSeat("w000-seed", 1, 1),
+        2: WorldSeat("w002-seed", 0, 1)}
     assert [grouped[k][1].traffic.warm_seed for k in range(3)] == [5, 5, 7]
     assert [grouped[k][1].scenario.seed for k in range(3)] == [5, 6, 7]
+
+
+@pytest.mark.parametrize("k", [2, 3, 8])
+def test_a_world_serves_two_runs_a_seat_unless_told(k):
+    """By default a world of K seats serves 2K runs (the seat a run frees is taken by
+    the next); runs_per_world says otherwise, never fewer than the seats, and only where
+    runs share worlds. Each run's seat carries its world's K."""
+    sweep = make(egos_per_world=k)
+    assert sweep.runs_per_world == 2 * k
+    assert sweep.to_plain()["sweep"]["runs_per_world"] == 2 * k
+    plan = expand(sweep)
+    assert {len(runs) for runs in worlds_of(plan).values()} <= set(range(1, 2 * k + 1))
+    assert max(len(runs) for runs in worlds_of(plan).values()) == min(2 * k, 10)
+    assert {run.world.seats for run in plan} == {k}
+    assert make(egos_per_world=k, runs_per_world=k).runs_per_world == k
+    with pytest.raises(SpecError) as e:
+        make(egos_per_world=k, runs_per_world=k - 1)
+    assert e.value.field == "sweep.runs_per_world" and "egos_per_world" in e.value.message
+    with pytest.raises(SpecError) as e:
+        make(runs_per_world=4)  # one ego a world: no world has turns to take
+    assert e.value.field == "sweep.runs_per_world"
+    assert make(runs_per_world=1).runs_per_world == 1
 
 
 def test_at_most_the_measured_egos_share_a_world():
@@ -297,14 +319,17 @@ def test_a_sweep_of_shared_worlds_fills_the_world_columns(swept):
     assert results.world_egos.notna().all()
     seats = {r.run_id: (r.world.world_id, r.world.slot) for r in plan}
     assert {row.run_id: (row.world_id, row.world_slot) for row in results.itertuples()} == seats
-    assert results.world_id.nunique() == len(CONTROLLERS) * SAMPLES // EGOS
+    # by default a world serves two runs a seat
+    assert results.world_id.nunique() == len(CONTROLLERS) * SAMPLES // (2 * EGOS)
     for world_id, runs in results.groupby("world_id"):
-        assert len(runs) <= EGOS and runs.controller.nunique() == 1, world_id
+        assert len(runs) == 2 * EGOS and runs.controller.nunique() == 1, world_id
         assert sorted(runs.world_slot) == list(range(len(runs)))
-        assert runs.world_egos.between(1, len(runs)).all()
-        # the placement rule splits a world into SUMO worlds of n egos: n runs say n
-        for n, count in runs.world_egos.value_counts().items():
-            assert count % n == 0, (world_id, n, count)
+        assert (runs.world_egos == len(runs)).all()
+        # never more than its seats in it at once; runs entered as seats freed
+        first, last = runs.world_entry_step, runs.world_entry_step + runs.steps - 1
+        for step in range(int(last.max()) + 1):
+            assert ((first <= step) & (step <= last)).sum() <= EGOS, (world_id, step)
+        assert (first == 0).any() and (first > 0).sum() >= EGOS, world_id
         assert runs.warm_state.nunique() == 1  # one traffic, one warm state
     by_controller = results.groupby("controller").trace_sha256
     assert (by_controller.nunique() == SAMPLES).all()
@@ -333,13 +358,17 @@ def test_the_report_says_what_the_shared_worlds_cost_and_how_wide_they_made_the_
     sharing = json.loads((out / "summary.json").read_text())["shared_worlds"]
     assert sharing["steps_alone"] == results.steps.sum()
     assert sharing["sumo_steps"] < sharing["steps_alone"]  # fewer steps shared
-    for (_, egos), runs in results.groupby(["world_id", "world_egos"]):
-        if egos > 1 and len(runs) == egos:  # one simulation: its runs timed it
-            assert runs.wall_time_s.max() < 1.1 * runs.wall_time_s.min(), runs.wall_time_s
+    ends = results.world_entry_step + results.steps
+    assert sharing["sumo_steps"] == ends.groupby(results.world_id).max().sum()
+    assert sharing["egos_per_step"] == pytest.approx(
+        sharing["steps_alone"] / sharing["sumo_steps"], abs=1e-3)
+    for _, runs in results.groupby("world_id"):  # one simulation: its runs timed it
+        assert runs.wall_time_s.max() < 1.1 * runs.wall_time_s.min(), runs.wall_time_s
     text = "\n".join(report.terminal)
     assert f"SUMO stepped {sharing['sumo_steps']:,} steps for the 16 runs (measured" in text
     assert "had each run a world of its own (estimated: the sum of the runs' steps)" in text
-    assert "s of wall time (measured: a run's wall_time_s is its simulation's)" in text
+    assert "s of wall time (measured: a run's wall_time_s is its world's)" in text
+    assert f"its SUMO steps carried {sharing['egos_per_step']:.2f} egos on average" in text
     assert "seed's completed rate: design effect" in text
     assert "lane-keep's completed rate: design effect" in text
     page = (out / "report.html").read_text()
@@ -355,7 +384,7 @@ def test_a_resumed_sweep_of_shared_worlds_is_the_uninterrupted_one(swept, tmp_pa
     table = pq.read_table(out / "results.parquet")
     ids = table.column("run_id").to_pylist()
     worlds = table.column("world_id").to_pylist()
-    lost = {ids[1], ids[len(ids) - 1], ids[len(ids) - 3]}  # in two worlds, one run of
+    lost = {ids[0], ids[len(ids) - 1], ids[len(ids) - 3]}  # in two worlds, one run of
     kept = table.filter(pa.array([i not in lost for i in ids]))
     pq.write_table(kept, out / "results.parquet")
     for run_id in lost:

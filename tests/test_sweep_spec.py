@@ -237,8 +237,8 @@ def test_set_changes_the_sweep_table_its_parameters_or_its_base(tmp_path):
 
 @pytest.mark.parametrize(("value", "message"), [
     ("sweep.sampels=2", "--set sweep.sampels=2: unknown key (known: base, controllers, "
-                        "egos_per_world, levels, name, params, sampler, samples, seed, "
-                        "warm_states)"),
+                        "egos_per_world, levels, name, params, runs_per_world, sampler, "
+                        "samples, seed, warm_states)"),
     ("sweep.samples=0", "--set sweep.samples=0: must be > 0, got 0"),
     ("sweep.params.ego.speed_mps={ uniform = [5.0, 1.0] }",
      '--set sweep.params.ego.speed_mps={ uniform = [5.0, 1.0] }: sweep.params."ego.speed_mps"'

@@ -22,7 +22,7 @@ from scenarios.sumo_net.build import input_path
 from scenarios.world_backends import make_road, make_shared_world, make_world
 from sdc.car.vehicle import Vehicle
 from sdc.run.episode import run_episode
-from sdc.run.shared_world import placed_apart, run_world
+from sdc.run.shared_world import Seats, run_world
 from sdc.run.world_witness import Judged, witness_overlaps, witness_world
 
 REPO = Path(__file__).resolve().parent.parent
@@ -142,7 +142,7 @@ def test_a_shared_worlds_runs_are_judged_as_one_replay_of_the_world_judges_them(
     first = dataclasses.replace(first, traffic=dataclasses.replace(first.traffic, warm_seed=1))
     second = first.with_seed(2)
     egos = [(spec, make_road(spec)) for spec in (first, second)]
-    assert placed_apart(egos) == [[0, 1]]  # one world
+    assert Seats(egos, 2).entering([0, 1], {}, 0) == [0, 1]  # together from the start
     outcomes = run_world(egos, ["first", "second"])
     rows = [outcome.row for outcome in outcomes]
     assert [row["world_egos"] for row in rows] == [2, 2]

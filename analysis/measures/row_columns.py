@@ -71,6 +71,7 @@ class RowCol:
     network_vehicles = "network_vehicles"
     warm_state = "warm_state"
     world_egos = "world_egos"
+    world_entry_step = "world_entry_step"
     trace_sha256 = "trace_sha256"
     traceback = "traceback"
     # a search's or estimate's, after the p.<path> columns

@@ -93,14 +93,17 @@ def shared_world_lines(summary: SweepSummary) -> list[str]:
     worlds = summary.shared_worlds
     if worlds is None:
         return []
-    fewer = worlds["runs_with_fewer"]
+    carried = worlds["egos_per_step"]
     return [f"Shared worlds: the {worlds['runs']} runs ran as egos of "
-            f"{plural(worlds['worlds'], 'world')} ([sweep] egos_per_world = "
-            f"{worlds['egos_per_world']}), in {plural(worlds['simulations'], 'SUMO simulation')}"
-            + (f"; {fewer} of them shared theirs with fewer egos (the placement rule keeps "
-               "each ego's sensing radius clear of the others at the start)" if fewer else "")
+            f"{plural(worlds['worlds'], 'world')}, each one SUMO simulation holding up to "
+            f"{worlds['egos_per_world']} egos at a time ([sweep] egos_per_world), a run "
+            "entering as a seat freed and the placement rule let it (each ego's sensing "
+            "radius clear of the others as it enters)"
+            + (f"; its SUMO steps carried {carried:.2f} egos on average (measured)"
+               if carried else "")
             + ". A world's runs share its traffic: each world is one cluster in every "
-            "interval, and each ego was a body to the others (column world_egos).",
+            "interval, and each ego was a body to the others (columns world_egos, "
+            "world_entry_step).",
             sharing_cost_line(worlds), clustering_line(summary)]
 
 
@@ -114,14 +117,14 @@ def sharing_cost_line(worlds: dict) -> str:
     alone, each number said measured or estimated
     (:func:`analysis.measures.world_sharing.sharing_cost`)."""
     steps, alone = worlds["sumo_steps"], worlds["steps_alone"]
-    bound = ("" if worlds["sumo_steps_exact"] else "; at most, where a world took several "
-             "simulations of as many egos")
+    bound = ("" if worlds["sumo_steps_exact"] else "; at least: rows without "
+             "world_entry_step do not say when each run entered")
     text = (f"Cost of sharing: SUMO stepped {steps:,} steps for the {worlds['ok_runs']} runs "
-            f"(measured: each simulation as long as its longest run{bound}) against "
+            f"(measured: each world until its last run ended{bound}) against "
             f"{alone:,} had each run a world of its own (estimated: the sum of the runs' "
             f"steps): {_times(alone / steps, 'more', 'fewer') if steps else '-'}; the "
-            f"simulations took {worlds['wall_time_s']:.1f} s of wall time (measured: a run's "
-            "wall_time_s is its simulation's) against ")
+            f"worlds took {worlds['wall_time_s']:.1f} s of wall time (measured: a run's "
+            "wall_time_s is its world's) against ")
     alone_s = worlds["wall_time_alone_s"]
     if alone_s is None or not worlds["wall_time_s"]:
         return text + ("an unknown wall time alone (no run ran in a simulation of its own "

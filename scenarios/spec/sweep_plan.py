@@ -150,10 +150,11 @@ def plan_samples(sweep: SweepSpec, samples: list[dict[str, Any]], seeds: list[in
             ))
     if progress is not None:
         progress(len(plan), total)
-    return _seated(plan, sweep.egos_per_world, width)
+    return _seated(plan, sweep.egos_per_world, sweep.runs_per_world, width)
 
 
-def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[PlannedRun]:
+def _seated(plan: list[PlannedRun], egos_per_world: int, runs_per_world: int, width: int
+            ) -> list[PlannedRun]:
     """``plan`` with its runs seated in shared worlds (:func:`group_worlds`), each
     run's spec taking its world's traffic seed; unchanged for one ego a world. Only
     SUMO holds several egos, and only a network road places them apart: a run swept
@@ -165,7 +166,7 @@ def _seated(plan: list[PlannedRun], egos_per_world: int, width: int) -> list[Pla
                             if run.spec is not None
                             and run.spec.scenario.world_backend.holds_several_egos
                             and run.spec.road.on_network],
-                           egos_per_world)
+                           runs_per_world, egos_per_world)
     return [run if k not in grouped else
             dataclasses.replace(run, spec=grouped[k][1], world=grouped[k][0])
             for k, run in enumerate(plan)]

@@ -38,6 +38,11 @@ MAX_RUNS = 100_000
 #: the most egos one world holds ([sweep] egos_per_world): the largest K whose
 #: verdicts were measured to agree with one ego a world (docs/how-to/shared-worlds.md)
 MAX_EGOS_PER_WORLD = 16
+#: a shared world's runs by default ([sweep] runs_per_world): this many for each of its
+#: seats, so a seat a run frees is taken by the next (docs/how-to/shared-worlds.md)
+RUNS_PER_SEAT = 2
+#: the most runs one world serves: a world task holds one worker for all of them
+MAX_RUNS_PER_WORLD = 256
 
 
 @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -52,6 +57,8 @@ class _SweepTable(Spec):
     #: runs that share one SUMO world (its traffic simulated once), each with its own
     #: ego (scenarios/spec/world_seating.py); 1: every run in a world of its own
     egos_per_world: int = num(1, ge=1, le=MAX_EGOS_PER_WORLD)
+    #: runs one world serves, its egos_per_world at a time (None: RUNS_PER_SEAT a seat)
+    runs_per_world: int | None = num(None, ge=1, le=MAX_RUNS_PER_WORLD)
     controllers: tuple = ("seed",)
     params: tuple = ()
 
@@ -94,8 +101,10 @@ class SweepSpec:
     #: how many distinct warm states of the traffic the samples draw from (None: each
     #: sample warms up its own, from its seed)
     warm_states: int | None = None
-    #: runs that share one world (scenarios/spec/world_seating.py); 1: none share
+    #: egos one world holds at a time (scenarios/spec/world_seating.py); 1: none share
     egos_per_world: int = 1
+    #: runs one world serves, entering as seats free (1 when none share)
+    runs_per_world: int = 1
 
     #: the ``--set`` options it was read with (``PATH=VALUE``, as given), its
     #: manifest's ``overrides``
@@ -196,7 +205,8 @@ class SweepSpec:
                             "placed apart; leave it 1")
         return cls(meta.name, base_path, base, meta.samples, meta.sampler, meta.seed,
                    meta.levels or 5, tuple(controllers), tuple(parsed), meta.warm_states,
-                   meta.egos_per_world)
+                   meta.egos_per_world, _runs_per_world(meta.egos_per_world,
+                                                        meta.runs_per_world))
 
     @property
     def param_types(self) -> dict[str, type]:
@@ -230,10 +240,25 @@ class SweepSpec:
             table["warm_states"] = self.warm_states
         if self.egos_per_world > 1:
             table["egos_per_world"] = self.egos_per_world
+            table["runs_per_world"] = self.runs_per_world
         table["params"] = {p.path: {p.kind: list(p.args)} for p in self.params}
         if self.given is not None:
             table["given"] = self.given.files
         return {"sweep": table}
+
+
+def _runs_per_world(egos_per_world: int, asked: int | None) -> int:
+    """The runs a world serves: ``asked``, else :data:`RUNS_PER_SEAT` for each of its
+    ``egos_per_world`` seats; never fewer than its seats, and 1 when none share."""
+    if asked is None:
+        return 1 if egos_per_world == 1 else RUNS_PER_SEAT * egos_per_world
+    if egos_per_world == 1 and asked > 1:
+        raise SpecError("sweep.runs_per_world", "runs take turns in a shared world only: "
+                        "set sweep.egos_per_world above 1, or leave this out")
+    if asked < egos_per_world:
+        raise SpecError("sweep.runs_per_world", f"must be at least sweep.egos_per_world "
+                        f"({egos_per_world}): a world serves its seats' runs at least")
+    return asked
 
 
 def base_error(error: SpecError, base: str) -> SpecError:

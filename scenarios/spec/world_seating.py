@@ -10,9 +10,7 @@ of a spec stays each run's own: its start, route (its seed's, on a network),
 obstacles, controller, sensors, car and duration.
 
 A world is named ``w<its first sample>-<controller>`` and its runs keep their plan
-order as slots 0, 1, ...; where the placement rule does not let all of them share one
-SUMO simulation, the rest run in another on the same traffic
-(:mod:`sdc.run.shared_world`).
+order as slots 0, 1, ...: the order in which they take its seats.
 """
 
 from __future__ import annotations
@@ -53,14 +51,15 @@ class WorldSeat:
 
     world_id: str  # w<first sample>-<controller>
     slot: int  # its place among the world's runs, from 0
+    seats: int  # the egos its world holds at a time ([sweep] egos_per_world)
 
 
-def group_worlds(runs: list[tuple[int, str, str, ScenarioSpec]], egos_per_world: int
-                 ) -> dict[int, tuple[WorldSeat, ScenarioSpec]]:
+def group_worlds(runs: list[tuple[int, str, str, ScenarioSpec]], runs_per_world: int,
+                 seats: int) -> dict[int, tuple[WorldSeat, ScenarioSpec]]:
     """The worlds of ``runs`` (each: its index in the plan, its sample's number as run
     IDs write it, its controller's label and its spec; in plan order), up to
-    ``egos_per_world`` runs each: index -> its seat and its spec with the world's
-    traffic seed."""
+    ``runs_per_world`` runs each, ``seats`` of them at a time: index -> its seat and
+    its spec with the world's traffic seed."""
     open_worlds: dict[tuple[str, str], list[tuple[int, str, ScenarioSpec]]] = {}
     out: dict[int, tuple[WorldSeat, ScenarioSpec]] = {}
 
@@ -69,13 +68,14 @@ def group_worlds(runs: list[tuple[int, str, str, ScenarioSpec]], egos_per_world:
         world_id = f"w{members[0][1]}-{label}"
         for slot, (index, _, spec) in enumerate(members):
             traffic = dataclasses.replace(spec.traffic, warm_seed=seed)
-            out[index] = (WorldSeat(world_id, slot), dataclasses.replace(spec, traffic=traffic))
+            out[index] = (WorldSeat(world_id, slot, seats),
+                          dataclasses.replace(spec, traffic=traffic))
 
     for index, sample, label, spec in runs:
         key = (label, _group_key(spec))
         members = open_worlds.setdefault(key, [])
         members.append((index, sample, spec))
-        if len(members) == egos_per_world:
+        if len(members) == runs_per_world:
             close(label, open_worlds.pop(key))
     for (label, _), members in open_worlds.items():
         close(label, members)

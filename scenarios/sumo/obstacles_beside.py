@@ -1,4 +1,6 @@
-"""Obstacles shown to SUMO in the lanes beside their own: on a network, an obstacle
+"""Obstacles entering SUMO under way: those of a run entering a shared world that has
+started, in their own lanes (:func:`stand_obstacles`), and those shown to SUMO in the
+lanes beside their own: on a network, an obstacle
 standing too far into a lane beside its own for the traffic to pass
 (:func:`~scenarios.sumo.routes_xml.lanes_blocked`, for the widest type SUMO has
 loaded) stands there too, as a second stopped vehicle; so does one reaching into
@@ -38,6 +40,19 @@ def show_beside(sim, slot: EgoSlot, width_m: float, is_traffic: Callable[[str], 
                        front_m * beside.sumo_length_m / own_length_m, road.net, is_traffic)
         for lane, pos_m in lanes_reached(road.net, box, edge, width_m):
             _stand(sim, f"{prefix}.{lane.id}", obstacle, lane, pos_m, road.net, is_traffic)
+
+
+def stand_obstacles(sim, slot: EgoSlot, is_traffic: Callable[[str], bool]) -> None:
+    """Each of ``slot``'s obstacles stopped for good in its own lane, where it stands from
+    the start in a run that starts with the world (``routes_xml``'s placement), the
+    traffic too close to stop for it taken off. ``sim``: libsumo or traci."""
+    road = slot.road
+    for i, obstacle in enumerate(slot.spec.obstacles):
+        length_m = obstacle.size_m[0]
+        edge, lane, front_m = road.sumo_place(road.place_s_m(obstacle.position_m, length_m)
+                                              + length_m / 2, obstacle.lane)
+        _stand(sim, f"{slot.names.obstacle_prefix}{i}", obstacle,
+               road.net.lanes[f"{edge}_{lane}"], front_m, road.net, is_traffic)
 
 
 def _stand(sim, vid: str, obstacle: ObstacleSpec, lane: NetLane, pos_m: float, net: NetFile,

@@ -12,7 +12,7 @@ the world adds it once SUMO's vehicle types are known
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -194,27 +194,31 @@ def _routes(lines: list[str]) -> str:
 Egos = Sequence[tuple[ScenarioSpec, RoadGeometry]]
 
 
-def _egos_lines(egos: Egos, flows: bool, depart: str = "0", checks: str = "all") -> list[str]:
-    """Each ego's vType and route and its obstacles, the obstacles' types after the
-    first ego's type."""
+def _egos_lines(egos: Egos, flows: bool, seated: Collection[int], depart: str = "0",
+                checks: str = "all") -> list[str]:
+    """Each ego's vType and route, the obstacles' types after the first ego's type, and
+    the obstacles of the egos ``seated`` at the start (the others' enter with them)."""
     lines = []
     for slot, (spec, road) in enumerate(egos):
         names = ego_names(slot)
         lines += [_ego_type(spec, names), *(_obstacle_types(egos) if slot == 0 else []),
-                  _ego_route(spec, road, names),
-                  *_obstacles(spec, road, names, flows, depart=depart, checks=checks)]
+                  _ego_route(spec, road, names)]
+        if slot in seated:
+            lines += _obstacles(spec, road, names, flows, depart=depart, checks=checks)
     return lines
 
 
-def routes_xml(egos: Egos, flows: bool, trips: list[tuple[str, str]] = ()) -> str:
+def routes_xml(egos: Egos, flows: bool, trips: list[tuple[str, str]] = (),
+               seated: Collection[int] = (0,)) -> str:
     """The ``.rou.xml`` text of a world without a warm state: vehicle types, each ego's
-    route, obstacles as stopped vehicles, and the background traffic of the first
-    ego's spec (flows until the last run's end, or on a network the ``trips`` (from
-    edge, to edge) leaving at 0 s). ``flows``: the world's road source's flag."""
+    route, the obstacles of the egos ``seated`` at the start as stopped vehicles, and
+    the background traffic of the first ego's spec (flows until the last run's end, or
+    on a network the ``trips`` (from edge, to edge) leaving at 0 s). ``flows``: the
+    world's road source's flag."""
     spec, _ = egos[0]
     end_s = spec.traffic.warm_up_s + max(s.scenario.duration_s for s, _ in egos)
     enter_s = spec.scenario.step_s  # after the egos, which enter in the first step
-    return _routes([_traffic_type(spec, flows), *_egos_lines(egos, flows),
+    return _routes([_traffic_type(spec, flows), *_egos_lines(egos, flows, seated),
                     *(_flows(spec, EGO_ROUTE, end_s, enter_s) if flows
                       else _trips(trips, enter_s))])
 
@@ -229,8 +233,8 @@ def warm_up_routes_xml(spec: ScenarioSpec, flows: bool,
                     *_flows(spec, "traffic", WARM_FLOW_END_S)])
 
 
-def warm_run_routes_xml(egos: Egos, flows: bool) -> str:
+def warm_run_routes_xml(egos: Egos, flows: bool, seated: Collection[int] = (0,)) -> str:
     """The ``.rou.xml`` text loaded beside a warm state: each ego's types and route,
-    and the obstacles entering as the run begins, wherever the traffic stands
-    (the traffic on their spots is taken off first)."""
-    return _routes(_egos_lines(egos, flows, depart="begin", checks="none"))
+    and the obstacles of the egos ``seated`` at the start entering as the run begins,
+    wherever the traffic stands (the traffic on their spots is taken off first)."""
+    return _routes(_egos_lines(egos, flows, seated, depart="begin", checks="none"))

@@ -30,7 +30,7 @@ from scenarios.sumo.ego_pose import ego_pose, place_stand_ins
 from scenarios.sumo.ego_slot import EgoSlot
 from scenarios.sumo.lane_laying import held_bodies
 from scenarios.sumo.network_demand import NetworkDemand
-from scenarios.sumo.obstacles_beside import show_beside
+from scenarios.sumo.obstacles_beside import show_beside, stand_obstacles
 from scenarios.sumo.routes_xml import TRAFFIC_WIDTH_M, routes_xml, warm_run_routes_xml
 from scenarios.sumo.start_zone import clear_start
 from scenarios.sumo.sumo_process import SumoProcess
@@ -97,6 +97,7 @@ class SumoWorld:
         self._process = SumoProcess(spec, self._source, self._source.configuration(spec),
                                     cache_dir)
         self._reader: TrafficReader | None = None  # from SUMO's start
+        self._entering: list[EgoSlot] = []  # the slots whose egos enter at the next step
         self.warm_state_key: str | None = None  # the key of the warm state it started from
         #: each light along the egos' routes: its program's cycle as it started [s]
         self.signal_cycles_s: dict[str, float] = {}
@@ -168,8 +169,9 @@ class SumoWorld:
         return self.start_all({0: (ego_box, ego_speed_mps)})[0]
 
     def start_all(self, egos: dict[int, Pose]) -> dict[int, Snapshot]:
-        """Start SUMO, insert each ego (slot -> its box and speed; every slot) and
-        return each one's first snapshot.
+        """Start SUMO, insert each ego of ``egos`` (slot -> its box and speed) and return
+        each one's first snapshot. The world's other slots wait: each enters later
+        (:meth:`enter`), its obstacles with it.
 
         With a warm-up, SUMO starts afresh on the warm state (:meth:`warm_state`),
         the obstacles entering as the run begins. With ``gui``, the same simulation
@@ -183,47 +185,67 @@ class SumoWorld:
         else:
             import libsumo as sim  # imported here: only this backend needs the simulator
             command = ["sumo"]
+        for slot in self._slots:
+            slot.active = slot.slot in egos
+        seated = [slot for slot in self._slots if slot.active]
         spec, process = self.spec, self._process
         if uses_warm_state(spec):
             state = self.warm_state()
             state_file = process.scratch() / "warm-state.xml.gz"
             state_file.write_bytes(state.sumo_state)
-            process.start(sim, command, warm_run_routes_xml(self._egos(), self._source.flows),
+            process.start(sim, command, warm_run_routes_xml(self._egos(), self._source.flows,
+                                                            egos.keys()),
                           "--load-state", str(state_file), *self.sumo_options, fresh=False)
             self._demand = NetworkDemand.drawn(spec, self.road, self._source, warm_seed(spec))
             self._demand.restore(state.demand)  # it goes on where the warm-up left it
             self.warm_state_key = state.key
-            clear_start(sim.vehicle, self._slots, self.is_traffic, obstacles=True)
+            clear_start(sim.vehicle, seated, self.is_traffic, obstacles=True)
         else:
             seed = warm_seed(spec)  # the traffic's: the scenario's, unless given
             self._demand = NetworkDemand.drawn(spec, self.road, self._source, seed)
             trips = self._demand.first(spec.traffic.vehicles)
-            process.start(sim, command, routes_xml(self._egos(), self._source.flows, trips),
+            process.start(sim, command, routes_xml(self._egos(), self._source.flows, trips,
+                                                   egos.keys()),
                           *self.sumo_options, seed=seed)
         self._reader = TrafficReader(sim, self._slots, self._types, self.is_traffic)
-        for slot in self._slots:
-            ego, names = slot.spec.ego, slot.names
-            # inserted where it starts, so traffic knows of it from the first step
-            _, lane, front_m = slot.road.sumo_place(ego.start_m + slot.model.length_m / 2,
-                                                    ego.lane)
-            sim.vehicle.add(names.ego_id, names.route_id, typeID=names.ego_type, depart="now",
-                            departLane=str(lane), departPos=f"{front_m:.6f}",
-                            departSpeed=f"{egos[slot.slot][1]:.6f}")
-            sim.vehicle.setSpeedMode(names.ego_id, 0)
-            sim.vehicle.setLaneChangeMode(names.ego_id, 0)
+        for slot in seated:
+            self._insert_ego(slot, egos[slot.slot][1])
         for tl in sorted({stop.tl for slot in self._slots for stop in slot.road.stops()
                           if stop.tl is not None}):
             sim.trafficlight.subscribe(tl, [tc.TL_RED_YELLOW_GREEN_STATE])
             self.signal_cycles_s[tl] = _cycle_s(sim.trafficlight, tl)
         self._reader.watch()
-        if not self._source.flows:  # a built road's obstacles stand beside from the start
-            for slot in self._slots:
+        if not self._source.flows:  # a network's obstacles stand beside once types are known
+            for slot in seated:
                 show_beside(sim, slot, self._traffic_width_m(), self.is_traffic)
-        self._push(egos)
-        # what departed in this step entered beside an ego, not after it: checked here
-        taken = clear_start(sim.vehicle, self._slots, self.is_traffic,
-                            among=sim.simulation.getDepartedIDList())
-        return self._snapshots(taken)
+        self._entering = seated
+        return self.step_all(egos)
+
+    def _insert_ego(self, slot: EgoSlot, speed_mps: float) -> None:
+        """Add ``slot``'s ego where it starts, so traffic knows of it from the next step,
+        driven by us alone (no speed or lane-change rules of SUMO's)."""
+        sim, ego, names = self._sumo, slot.spec.ego, slot.names
+        _, lane, front_m = slot.road.sumo_place(ego.start_m + slot.model.length_m / 2, ego.lane)
+        sim.vehicle.add(names.ego_id, names.route_id, typeID=names.ego_type, depart="now",
+                        departLane=str(lane), departPos=f"{front_m:.6f}",
+                        departSpeed=f"{speed_mps:.6f}")
+        sim.vehicle.setSpeedMode(names.ego_id, 0)
+        sim.vehicle.setLaneChangeMode(names.ego_id, 0)
+
+    def enter(self, slot_index: int, pose: Pose) -> None:
+        """The ego of ``slot_index`` enters the world under way at the next step (its
+        box and speed ``pose``, pushed then), its obstacles with it: the traffic on
+        its entry and their spots taken off first, as at the start (its run starts on
+        the world's traffic as it is now, as a run alone starts on its warm state)."""
+        sim, slot = self._sumo, self._slots[slot_index]
+        clear_start(sim.vehicle, [slot], self.is_traffic, obstacles=True)
+        stand_obstacles(sim, slot, self.is_traffic)
+        self._insert_ego(slot, pose[1])
+        if not self._source.flows:
+            show_beside(sim, slot, self._traffic_width_m(), self.is_traffic)
+        slot.active = True
+        self._reader.watch()
+        self._entering.append(slot)
 
     def _traffic_width_m(self) -> float:
         """The widest traffic that may pass a body in a lane beside it: of the types
@@ -236,10 +258,22 @@ class SumoWorld:
         return self.step_all({0: (ego_box, ego_speed_mps)})[0]
 
     def step_all(self, egos: dict[int, Pose | None]) -> dict[int, Snapshot]:
-        """Place each ego still in the world (slot -> its box and speed; None: SUMO's
-        driver moves it), advance SUMO one step, return each one's new state."""
+        """Place each ego in the world (slot -> its box and speed; None: SUMO's driver
+        moves it), advance SUMO one step, return each one's new state."""
         self._push(egos)
-        return self._snapshots()
+        if not self._entering:
+            return self._snapshots()
+        entering, self._entering = self._entering, []
+        sim = self._sumo
+        # what departed in this step entered beside an ego, not after it: checked here
+        taken = clear_start(sim.vehicle, entering, self.is_traffic,
+                            among=sim.simulation.getDepartedIDList())
+        present = set(sim.vehicle.getIDList())
+        missing = [vid for slot in entering for vid in slot.body_ids if vid not in present]
+        if missing:
+            raise SdcError(f"SUMO did not let {', '.join(missing)} enter where its run "
+                           "starts: its spot was not free")
+        return self._snapshots(taken)
 
     def leave(self, slot_index: int) -> None:
         """The run of the ego in ``slot_index`` has ended: it and its obstacles leave

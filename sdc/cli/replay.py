@@ -168,7 +168,8 @@ def _replay_in_world(recorded, gui: bool):
     run_ids, specs = recorded.world
     click.echo(f"{recorded.run_id}: slot {run_ids.index(recorded.run_id)} of a world of "
                f"{len(run_ids)} runs; re-simulating the world")
-    outcome = replay_in_world(specs, run_ids, recorded.run_id)
+    outcome = replay_in_world(specs, run_ids, recorded.run_id,
+                              recorded.manifest.egos_per_world)
     if isinstance(outcome, Failed):
         row = recorded.row
         click.echo(f"replay: {outcome.error}" + (f" (in the sweep: {row[RowCol.status]}: "

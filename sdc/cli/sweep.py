@@ -37,8 +37,10 @@ def _plan_lines(sweep, plan) -> list[str]:
                      f"(sweep.warm_states = {sweep.warm_states})")
     worlds = {run.world.world_id for run in plan if run.world is not None}
     if worlds:
-        lines.append(f"the runs share {len(worlds)} worlds (sweep.egos_per_world = "
-                     f"{sweep.egos_per_world}; the placement rule may seat fewer together)")
+        lines.append(f"the runs share {len(worlds)} worlds of up to {sweep.runs_per_world} "
+                     f"runs (sweep.runs_per_world), {sweep.egos_per_world} at a time "
+                     "(sweep.egos_per_world): a run enters as a seat frees and the "
+                     "placement rule lets it")
     paths = list(sweep.param_types)
     lines.append("  ".join([RowCol.run_id, RowCol.seed] + paths))
     for run in plan:

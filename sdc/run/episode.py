@@ -121,8 +121,10 @@ class Simulation:
         self.hit: str | None = None
         self.end: str | None = None  # why the run ended (None: it goes on)
         self.collision: Collision | None = None
-        #: the egos of its world (1: it ran alone; sdc.run.shared_world)
+        #: the runs of its world (1: it ran alone; sdc.run.shared_world), and the world's
+        #: step at which its ego entered (None: a world of its own)
         self.world_egos = 1
+        self.world_entry_step: int | None = None
         self.wall_start = time.perf_counter()
         # the current step: set by start(), then by each advance()
         self.k = 0
@@ -355,6 +357,7 @@ class Simulation:
             network_vehicles=self.network_vehicles,
             warm_state=warm_state_id(self.world.warm_state_key),
             world_egos=self.world_egos,
+            world_entry_step=self.world_entry_step,
             trace_sha256=trace.sha256(),
         )
         metadata = {

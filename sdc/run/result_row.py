@@ -191,9 +191,14 @@ COLUMNS: tuple[Column, ...] = (
            "the warm state the run's traffic started from (its key's first 16 hex "
            "digits); runs that share one share their traffic; None: no warm-up"),
     Column(RowCol.world_egos, pa.int64(), OUTCOME,
-           "the egos whose runs shared the run's SUMO world ([sweep] egos_per_world; each "
-           "a body to the others); 1: it ran alone. In a shared world every overlap of "
-           "other bodies counts in world_overlaps (no twin judges it)"),
+           "the runs that shared the run's SUMO world ([sweep] runs_per_world, up to "
+           "egos_per_world of them at a time; each ego a body to the others); 1: it ran "
+           "alone"),
+    Column(RowCol.world_entry_step, pa.int64(), OUTCOME,
+           "the step of its shared world at which the run's ego entered it (0: as the "
+           "world started; later: as a seat freed, on the world's traffic as it was "
+           "then); its world stepped at least world_entry_step + steps - 1 times; None: "
+           "a world of its own"),
     Column(RowCol.trace_sha256, pa.string(), OUTCOME,
            "hash of the trace: same spec and seed, same hash"),
     Column(RowCol.traceback, pa.string(), STATUS, "the Python traceback of a run that raised"),

@@ -8,17 +8,22 @@ SUMO and the others go on. The egos are bodies to each other: each sees the othe
 and their obstacles as traffic where they truly are, and can hit them (counted as
 hitting traffic).
 
-**The placement rule** (:func:`placed_apart`): egos share a world only when, at the
-start, each one's sensing radius holds no other ego nor any other ego's obstacle
-(their start points farther apart than the sum of their radii, every obstacle
-farther from another ego than that ego's radius). So every run starts as it would
-alone, and only what happens later (traffic an ego slowed, two routes that meet) can
-reach another run. Runs that do not fit go to a further world on the same traffic
-(the same warm state and seed): fewer share it, and ``world_egos`` says how many did.
+**Seats** (:class:`Seats`): a world holds up to ``seats`` egos at a time
+(``[sweep] egos_per_world``); its runs take them in slot order, and as a run ends
+the next waiting run that fits enters, on the world's traffic as it is then
+(``world_entry_step`` says when). So a world steps with about as many egos as it has
+seats until its runs are done.
 
-Each step, every ego still in the world senses, decides and is checked in slot order,
-then all move and SUMO advances once (:mod:`sdc.run.world_loop`, the loop of every
-world): a world of the same runs gives the same traces, bit for bit.
+**The placement rule**: an ego enters only when its sensing radius holds no other
+ego nor any other ego's obstacle (its start point farther from each ego in the world
+than the sum of their radii, each obstacle of either farther from the other ego than
+that ego's radius). So every run starts as it would alone, and only what happens
+later (traffic an ego slowed, two routes that meet) can reach another run.
+
+Each step, every ego in the world senses, decides and is checked in slot order, the
+waiting ones that may enter do, then all move and SUMO advances once
+(:mod:`sdc.run.world_loop`, the loop of every world): a world of the same runs gives
+the same traces, bit for bit.
 """
 
 from __future__ import annotations
@@ -47,7 +52,7 @@ def start_points(spec: ScenarioSpec, road: RoadGeometry) -> tuple[np.ndarray, np
 
 
 def _apart(a: tuple, b: tuple) -> bool:
-    """May two runs (each: its start point, obstacle centres, sensing radius) share a
+    """May two egos (each: its body centre, obstacle centres, sensing radius) be in one
     world by the placement rule?"""
     (start_a, obstacles_a, radius_a), (start_b, obstacles_b, radius_b) = a, b
     if np.hypot(*(start_a - start_b)) <= radius_a + radius_b:
@@ -56,28 +61,39 @@ def _apart(a: tuple, b: tuple) -> bool:
                 and np.all(np.hypot(*(obstacles_b - start_a).T) > radius_a))
 
 
-def placed_apart(egos: list[tuple[ScenarioSpec, RoadGeometry]]) -> list[list[int]]:
-    """The worlds ``egos`` (in slot order) run in: each a list of their indices, every
-    pair in one world apart by the placement rule; an ego joins the first world it
-    fits, else starts one."""
-    seen = [(*start_points(spec, road), sensing_radius_m(spec)) for spec, road in egos]
-    worlds: list[list[int]] = []
-    for i, mine in enumerate(seen):
-        home = next((w for w in worlds if all(_apart(mine, seen[j]) for j in w)), None)
-        if home is None:
-            worlds.append([i])
-        else:
-            home.append(i)
-    return worlds
+class Seats:
+    """Who of a world's runs (``egos``, in slot order: each a spec and its road) enters
+    it when (:class:`sdc.run.world_loop.Seating`): up to ``seats`` egos at a time, each
+    waiting run in slot order entering when a seat is free and the placement rule lets
+    it in beside the egos in the world (where they are now) and those entering."""
+
+    def __init__(self, egos: list[tuple[ScenarioSpec, RoadGeometry]], seats: int):
+        self.seats = seats
+        self._runs = [(*start_points(spec, road), sensing_radius_m(spec)) for spec, road in egos]
+
+    def entering(self, waiting: list[int], present: dict[int, np.ndarray], step: int
+                 ) -> list[int]:
+        here = [(box[:2], *self._runs[i][1:]) for i, box in present.items()]
+        chosen: list[int] = []
+        for i in waiting:
+            if len(here) >= self.seats:
+                break
+            if all(_apart(self._runs[i], other) for other in here):
+                here.append(self._runs[i])
+                chosen.append(i)
+        return chosen
 
 
-def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str], *,
-              cache_dir: Path | None = None, warm_state: Path | None = None,
-              source: RoadSource | None = None) -> list[Episode | Failed]:
+def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
+              seats: int | None = None, *, cache_dir: Path | None = None,
+              warm_state: Path | None = None, source: RoadSource | None = None
+              ) -> list[Episode | Failed]:
     """Run ``egos`` (each a spec and its road; the first's traffic is the world's) in
-    one SUMO world, stepped together; each run's :class:`Episode` named by
-    ``run_ids``, or how it failed. A failure of the world itself fails every run still
-    in it. ``source``: the road source the egos share, when the caller has it."""
+    one SUMO world, ``seats`` of them at a time by the placement rule (:class:`Seats`;
+    None: all of them from the start, wherever they are), stepped together; each run's
+    :class:`Episode` named by ``run_ids``, or how it failed. A failure of the world
+    itself fails every run in it or waiting for it. ``source``: the road source the
+    egos share, when the caller has it."""
     controllers: list = []
     for spec, _ in egos:
         try:
@@ -87,16 +103,15 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
     ends: dict[int, str | Failed] = {i: c for i, c in enumerate(controllers)
                                      if isinstance(c, Failed)}
     sims: list[Simulation] = []
+    entered: dict[int, int] = {}
     try:
         world = make_shared_world(egos, cache_dir, warm_state, source)
         sims = [Simulation(spec, world, road=road, controller=controller, slot=slot)
                 for slot, ((spec, road), controller)
                 in enumerate(zip(egos, controllers, strict=True))]
-        for sim in sims:
-            sim.world_egos = len(egos)
         with world:
-            loop = WorldLoop(world, sims, ends)
-            ends = loop.ends  # filled as runs end: kept when the world then fails
+            loop = WorldLoop(world, sims, ends, None if seats is None else Seats(egos, seats))
+            ends, entered = loop.ends, loop.entered  # filled as runs go: kept if it fails
             loop.run()
     except Exception as e:  # noqa: BLE001 - the world failed: so did every run in it
         failed = Failed.of(e)
@@ -108,6 +123,8 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
         if isinstance(end, Failed):
             out.append(end)
             continue
+        sim.world_egos = len(egos)
+        sim.world_entry_step = entered[i] if len(egos) > 1 else None  # else its own world
         try:
             out.append(sim.finish(end, run_ids[i]))
         except Exception as e:  # noqa: BLE001 - its summing up failed: its row says so
@@ -115,13 +132,12 @@ def run_world(egos: list[tuple[ScenarioSpec, RoadGeometry]], run_ids: list[str],
     return out
 
 
-def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
+def run_group(specs: list[ScenarioSpec], run_ids: list[str], seats: int | None = None, *,
               cache_dir: Path | None = None, warm_state: Path | None = None
               ) -> list[Episode | Failed]:
-    """Run the runs of one group of a sweep (specs sharing the world's fields, in slot
-    order) in as many worlds as the placement rule needs, one after the other: each
-    run's outcome, as :func:`run_world` (its row's ``world_egos`` says how many egos
-    shared its world)."""
+    """Run the runs of one world of a sweep (specs sharing the world's fields, in slot
+    order), ``seats`` of them at a time (default: all that fit): each run's outcome, as
+    :func:`run_world` (a run whose road cannot be had fails alone)."""
     egos, out = [], {}
     # the group's one road source: its runs share their road (world_fields)
     source = road_source(specs[0].road) if specs else None
@@ -132,17 +148,18 @@ def run_group(specs: list[ScenarioSpec], run_ids: list[str], *,
             out[i] = Failed.of(e)
             egos.append(None)
     placeable = [i for i, ego in enumerate(egos) if ego is not None]
-    for world in placed_apart([egos[i] for i in placeable]):
-        members = [placeable[j] for j in world]
-        results = run_world([egos[i] for i in members], [run_ids[i] for i in members],
-                            cache_dir=cache_dir, warm_state=warm_state, source=source)
-        out.update(zip(members, results, strict=True))
+    if placeable:
+        results = run_world([egos[i] for i in placeable], [run_ids[i] for i in placeable],
+                            seats or len(placeable), cache_dir=cache_dir,
+                            warm_state=warm_state, source=source)
+        out.update(zip(placeable, results, strict=True))
     return [out[i] for i in range(len(specs))]
 
 
 def replay_in_world(specs: list[ScenarioSpec], run_ids: list[str], run_id: str,
-                    cache_dir: Path | None = None) -> Episode | Failed:
+                    seats: int, cache_dir: Path | None = None) -> Episode | Failed:
     """Re-simulate the shared world of ``specs`` (its runs in slot order, named
-    ``run_ids``) as its sweep ran it, and return ``run_id``'s outcome."""
-    outcomes = run_group(specs, run_ids, cache_dir=cache_dir)
+    ``run_ids``, ``seats`` at a time) as its sweep ran it, and return ``run_id``'s
+    outcome."""
+    outcomes = run_group(specs, run_ids, seats, cache_dir=cache_dir)
     return outcomes[run_ids.index(run_id)]

@@ -142,16 +142,30 @@ class _Replayed:
         self.k += 1
 
 
-def witness_world(twin, runs: list[Judged]) -> list[list[Witnessed]]:
+class _Entries:
+    """The replay's seating (:class:`sdc.run.world_loop.Seating`): each ego enters at the
+    world's step its run entered at (``steps``, by slot)."""
+
+    def __init__(self, steps: list[int]):
+        self.steps = steps
+
+    def entering(self, waiting: list[int], present: dict, step: int) -> list[int]:
+        return [i for i in waiting if self.steps[i] == step]
+
+
+def witness_world(twin, runs: list[Judged], entries: list[int] | None = None
+                  ) -> list[list[Witnessed]]:
     """Each run's overlapping pairs at its overlapping steps, judged by SUMO's own
     placement; ``runs``: every run of the world, in slot order (one, or a shared
-    world's: each ego pushed along its trace, leaving SUMO after its last step, as
+    world's: each ego pushed along its trace from the world's step it entered at,
+    ``entries`` (default: all at the start), leaving SUMO after its last step, as
     :mod:`sdc.run.shared_world` stepped them). A run's judging stops at the first step
     the replay did not reach as its trace has it. ``twin``: an unstarted world of the
     same egos."""
     with twin as world:
         drivers = [_Replayed(world, run, slot) for slot, run in enumerate(runs)]
-        ends = WorldLoop(world, drivers).run()
+        ends = WorldLoop(world, drivers,
+                         seating=None if entries is None else _Entries(entries)).run()
     for end in ends.values():
         if isinstance(end, Failed):  # a judging that raised: raised again, as raised
             raise end.exception

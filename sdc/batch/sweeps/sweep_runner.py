@@ -124,7 +124,8 @@ def plan_tasks(plan: list[PlannedRun], done: set[str], trace_dir: Path | None,
             worlds.setdefault(run.world.world_id, []).append(run)
     for world_id, runs in worlds.items():
         if any(run.run_id not in done for run in runs):
-            tasks.append(WorldTask.of(world_id, [task(run) for run in runs]))
+            tasks.append(WorldTask.of(world_id, [task(run) for run in runs],
+                                      runs[0].world.seats))
     return tasks
 
 

@@ -25,15 +25,17 @@ class WorldTask:
     run_id: str
     spec: ScenarioSpec
     members: tuple[RunTask, ...]
+    seats: int  # the egos its world holds at a time
     files: tuple[JobFile, ...] = ()
     cache_dir: Path | None = None  # where its runs find built networks and road edges
     recorded_spec: ScenarioSpec | None = None  # the driver's spec, when on a worker's copies
     warm_state: Path | None = None  # the worker's copy of the world's warm state
 
     @classmethod
-    def of(cls, world_id: str, members: Sequence[RunTask]) -> WorldTask:
-        """The task of ``members``, the runs of the world ``world_id``."""
-        return cls(world_id, members[0].spec, tuple(members))
+    def of(cls, world_id: str, members: Sequence[RunTask], seats: int) -> WorldTask:
+        """The task of ``members``, the runs of the world ``world_id``, ``seats`` of them
+        at a time."""
+        return cls(world_id, members[0].spec, tuple(members), seats)
 
     def execute(self) -> dict:
         """Run its runs together (:func:`sdc.run.shared_world.run_group`), on the files
@@ -44,8 +46,8 @@ class WorldTask:
         local = self.spec
         specs = [dataclasses.replace(m.spec, road=local.road, controller=dataclasses.replace(
             m.spec.controller, name=local.controller.name)) for m in self.members]
-        outcomes = run_group(specs, [m.run_id for m in self.members], cache_dir=self.cache_dir,
-                             warm_state=self.warm_state)
+        outcomes = run_group(specs, [m.run_id for m in self.members], self.seats,
+                             cache_dir=self.cache_dir, warm_state=self.warm_state)
         rows = []
         for member, outcome in zip(self.members, outcomes, strict=True):
             if isinstance(outcome, Failed):
