@@ -405,6 +405,23 @@ def run_spec(run: Episode) -> ScenarioSpec:
     return ScenarioSpec.from_plain(run.metadata["spec"])
 
 
+def test_runs_on_routes_of_their_own_share_a_world_each_on_its_own():
+    """Two town runs whose roads differ in length and turns (each ego's own) share one
+    world; each drives its own road, as it would alone."""
+    short = town(12)
+    short = dataclasses.replace(short, road=dataclasses.replace(short.road, length_m=150.0))
+    turning = town(14)
+    turning = dataclasses.replace(turning, road=dataclasses.replace(
+        turning.road, length_m=400.0, route_turns="any"))
+    egos = with_roads([short, turning])
+    assert egos[0][1].length_m < egos[1][1].length_m  # each its own road
+    runs = episodes(run_group([short, turning], ["s", "t"], 2))
+    assert [run.row["world_egos"] for run in runs] == [2, 2]
+    for run, (spec, road) in zip(runs, egos, strict=True):
+        assert run.metadata["spec"]["road"] == spec.to_plain()["road"]
+        assert run.metadata["road"] == road.to_plain()
+
+
 # ------------------------------------------------------ a run that ends leaves
 
 

@@ -23,7 +23,13 @@ from scenarios.common.errors import SpecError
 from scenarios.spec.sweep_plan import expand, plan_sha256
 from scenarios.spec.sweep_spec import SweepSpec, load_sweep
 from scenarios.spec.toml_io import load_spec
-from scenarios.spec.world_seating import WorldSeat, group_worlds, traffic_seed, world_fields
+from scenarios.spec.world_seating import (
+    WorldSeat,
+    group_worlds,
+    on_world_road,
+    traffic_seed,
+    world_fields,
+)
 
 DATA = Path(__file__).parent / "data"
 QUICK_TOWN = DATA / "grid-town-quick.toml"
@@ -84,6 +90,38 @@ def test_a_sweep_seats_each_controllers_runs_in_worlds_of_up_to_r():
         assert alone.world is None and alone.spec.traffic.warm_seed is None
         assert dataclasses.replace(run.spec, traffic=alone.spec.traffic) == alone.spec
         assert run.params == alone.params and run.seed == alone.seed
+
+
+def test_runs_whose_road_differs_only_by_their_route_share_a_world():
+    """The route through the network, its length and its turns are each ego's own: runs
+    swept over them share worlds (each keeping its own), as runs of one route do."""
+    plan = expand(make(egos_per_world=2, runs_per_world=4, params={
+        "road.length_m": {"uniform": [150.0, 400.0]},
+        "road.route_turns": {"choice": ["straight", "any"]}}))
+    worlds = worlds_of(plan)
+    assert len(worlds) == 6  # 10 runs a controller in worlds of 4: 4 + 4 + 2
+    mixed = [runs for runs in worlds.values()
+             if len({(r.spec.road.length_m, r.spec.road.route_turns) for r in runs}) > 1]
+    assert len(mixed) == 6
+    for runs in worlds.values():
+        assert len({json.dumps(world_fields(r.spec), sort_keys=True) for r in runs}) == 1
+    lengths = {r.run_id: r.spec.road.length_m for r in plan}
+    assert len(set(lengths.values())) == 10  # each sample its own length, kept
+
+
+def test_a_worlds_run_takes_the_worlds_network_files_and_keeps_its_route():
+    """On a worker a world's runs read the network where the worker holds it (the
+    world's spec, its files localised): each keeps its own route."""
+    spec = load_spec(QUICK_TOWN)
+    own = dataclasses.replace(spec, road=dataclasses.replace(
+        spec.road, length_m=222.0, route_turns="any", see_edges=False))
+    local = dataclasses.replace(spec, road=dataclasses.replace(
+        spec.road, net_file="/worker/files/grid.net.xml"))
+    moved = on_world_road(own, local)
+    assert moved.road.net_file == "/worker/files/grid.net.xml"
+    assert (moved.road.length_m, moved.road.route_turns, moved.road.see_edges) == (
+        222.0, "any", False)
+    assert dataclasses.replace(moved, road=own.road) == own
 
 
 def test_runs_of_different_traffic_never_share_a_world():

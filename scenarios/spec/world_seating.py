@@ -28,12 +28,28 @@ def traffic_seed(spec: ScenarioSpec) -> int:
     return spec.scenario.seed if seed is None else seed
 
 
+#: the fields of a network road each ego of a world has its own: its route through the
+#: network, how far it drives along it, and whether its lidar sees the road's edges
+EGO_ROAD_FIELDS = ("length_m", "route_turns", "route_edges", "route_lane", "see_edges")
+
+
 def world_fields(spec: ScenarioSpec) -> dict:
-    """What the egos of one world share (plain data): its road, its traffic (its seed
-    :func:`traffic_seed` among it), its step length and backend."""
+    """What the egos of one world share (plain data): its road (on a network, but for
+    :data:`EGO_ROAD_FIELDS`), its traffic (its seed :func:`traffic_seed` among it),
+    its step length and backend."""
     plain = spec.to_plain()
-    return {"road": plain["road"], "traffic": plain["traffic"],
+    road = plain["road"]
+    if spec.road.on_network:
+        road = {k: v for k, v in road.items() if k not in EGO_ROAD_FIELDS}
+    return {"road": road, "traffic": plain["traffic"],
             "step_s": spec.scenario.step_s, "backend": spec.scenario.backend}
+
+
+def on_world_road(spec: ScenarioSpec, world: ScenarioSpec) -> ScenarioSpec:
+    """``spec`` on the road of ``world`` (a spec of its world, its files where a worker
+    holds them), its own route kept (:data:`EGO_ROAD_FIELDS`)."""
+    own = {name: getattr(spec.road, name) for name in EGO_ROAD_FIELDS}
+    return dataclasses.replace(spec, road=dataclasses.replace(world.road, **own))
 
 
 def _group_key(spec: ScenarioSpec) -> str:

@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from scenarios.spec.scenario_spec import ScenarioSpec
+from scenarios.spec.world_seating import on_world_road
 from sdc.batch.tasks.job_files import JobFile
 from sdc.batch.tasks.run_task import RunTask
 from sdc.batch.tasks.task import WORLD_ROWS
@@ -44,7 +45,7 @@ class WorldTask:
         from sdc.run.shared_world import Failed, run_group
 
         local = self.spec
-        specs = [dataclasses.replace(m.spec, road=local.road, controller=dataclasses.replace(
+        specs = [dataclasses.replace(on_world_road(m.spec, local), controller=dataclasses.replace(
             m.spec.controller, name=local.controller.name)) for m in self.members]
         outcomes = run_group(specs, [m.run_id for m in self.members], self.seats,
                              cache_dir=self.cache_dir, warm_state=self.warm_state)
