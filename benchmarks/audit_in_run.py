@@ -85,10 +85,11 @@ FAMILIES = {
 
 
 def judged_both_ways(egos: list[tuple], seats: int
-                     ) -> tuple[list[tuple[list, list, list]], float, float]:
+                     ) -> tuple[list[tuple[list, list, list, int]], float, float]:
     """Run ``egos`` (spec, road) in one world, ``seats`` at a time, and replay it: for
-    each run the pairs judged in the run, those the replay judged and its trace's
-    overlapping steps; then the wall times [s] of the world's run and of its replay."""
+    each run the pairs judged in the run, those the replay judged, its trace's
+    overlapping steps and the world's step it entered at; then the wall times [s] of
+    the world's run and of its replay."""
     world = make_shared_world(egos, None, None)
     sims = [Simulation(spec, world, road=road, controller=make_controller(spec.controller),
                        slot=slot) for slot, (spec, road) in enumerate(egos)]
@@ -106,8 +107,9 @@ def judged_both_ways(egos: list[tuple], seats: int
     replayed = (witness_world(world.twin(), judged, entries)
                 if any(len(j.steps) for j in judged) else [[] for _ in judged])
     replay_s = time.perf_counter() - start
-    return ([(sim.audit.witnessed, seen, judged_one.steps.tolist())
-             for sim, seen, judged_one in zip(sims, replayed, judged, strict=True)],
+    return ([(sim.audit.witnessed, seen, judged_one.steps.tolist(), entry)
+             for sim, seen, judged_one, entry in zip(sims, replayed, judged, entries,
+                                                     strict=True)],
             run_s, replay_s)
 
 
@@ -134,14 +136,15 @@ def main() -> None:
                      (dataclasses.replace(s, road=chunk[0].road, traffic=traffic)
                       for s in chunk)]
             worlds.append((group, args.seats))
-        runs = overlapped = steps = differ = 0
+        runs = overlapped = steps = differ = later = 0
         run_s = replay_s = AUDIT_S[0] = 0.0
         for world, seats in worlds:
             results, world_s, world_replay_s = judged_both_ways(world, seats)
             run_s += world_s
             replay_s += world_replay_s
-            for in_run, replayed, overlap_steps in results:
+            for in_run, replayed, overlap_steps, entry in results:
                 runs += 1
+                later += entry > 0
                 overlapped += bool(overlap_steps)
                 steps += len(overlap_steps)
                 judged_steps = {w.step for w in in_run}
@@ -154,7 +157,8 @@ def main() -> None:
                     differ += len(bad)
                     print(f"  {family}: in the run and in the replay differ at steps "
                           f"{sorted(bad)[:8]} (world of {len(world)})")
-        print(f"{family} runs {runs} overlapped {overlapped} steps_judged {steps} "
+        print(f"{family} runs {runs} entered_later {later} overlapped {overlapped} "
+              f"steps_judged {steps} "
               f"steps_differing {differ} worlds {len(worlds)} run_s {run_s:.1f} "
               f"audit_in_run_s {AUDIT_S[0]:.2f} replay_s {replay_s:.1f}", flush=True)
 

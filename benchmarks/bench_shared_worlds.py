@@ -20,8 +20,10 @@ Prints ``name value`` lines:
   cache (a world computes its warm state in the sweep, one for its K runs).
 - ``<family>_runs_per_hour_cached_k<K>_vs_k1``: the same on the filled cache (no
   warm-up left to compute): what sharing SUMO's step alone buys.
-- ``raw.<family>_mean_world_egos_k<K>``: how many egos a run shared its SUMO
-  simulation with, on average (the placement rule may seat fewer than K).
+- ``raw.<family>_egos_per_step_k<K>``: how many egos a SUMO step of the sweep's worlds
+  carried on average (the report's figure: the placement rule may seat fewer than K).
+  A world serves ``max(K, samples / workers)`` runs (``runs_per_world``), so every
+  worker has a world while there are runs for it.
 - ``town_world_step_vs_bare_sumo_k<K>``: the median step of one world holding K egos
   (each sensing, deciding under lane-keep, checked, pushed; then SUMO's one step),
   over SUMO's own step of the same town without an ego (the floor: what the world
@@ -46,6 +48,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import os
 import tempfile
 import time
@@ -53,7 +56,6 @@ from pathlib import Path
 
 import bench_perf
 import numpy as np
-import pandas as pd
 from smoke import SMOKE, size
 
 from scenarios import CATALOG_DIR
@@ -91,7 +93,10 @@ def write_sweep(tmp: Path, family: str, samples: int, egos_per_world: int) -> Pa
     base, controller, params = FAMILIES[family]
     lines = ['[sweep]', 'name = "shared-worlds-bench"', f'base = "{CATALOG_DIR / base}"',
              f"samples = {samples}", "seed = 11", f'controllers = ["{controller}"]',
-             f"egos_per_world = {egos_per_world}", "[sweep.params]", *params]
+             f"egos_per_world = {egos_per_world}",
+             *([f"runs_per_world = {max(egos_per_world, samples // WORKERS)}"]
+               if egos_per_world > 1 else []),
+             "[sweep.params]", *params]
     if SMOKE:
         lines += ['"scenario.duration_s" = { choice = [1.0] }', *SMOKE_PARAMS[family]]
     path = tmp / f"{family}-{egos_per_world}.toml"
@@ -100,14 +105,15 @@ def write_sweep(tmp: Path, family: str, samples: int, egos_per_world: int) -> Pa
 
 
 def runs_per_hour(sweep_file: Path, out_dir: Path) -> tuple[float, float]:
-    """The sweep's runs per hour, and the mean egos a run shared its world with."""
+    """The sweep's runs per hour, and the egos a SUMO step of its worlds carried."""
     start = time.perf_counter()
     outcome = run_sweep(load_sweep(sweep_file), out_dir, LocalExecutor(WORKERS),
                         QuietReporter(), traces="none")
     wall_s = time.perf_counter() - start
     assert outcome.counts["ok"] == outcome.runs, outcome.counts
-    rows = pd.read_parquet(out_dir / "results.parquet")
-    return outcome.runs / wall_s * 3600, float(rows.world_egos.mean())
+    manifest = json.loads((out_dir / "manifest.json").read_text())
+    return outcome.runs / wall_s * 3600, manifest.get("shared_worlds", {}).get(
+        "egos_per_step", 1.0)
 
 
 def seated_town(k: int, candidates: int = 400) -> list[tuple]:
@@ -201,7 +207,7 @@ def sweep_figures(wanted: set[int], families: list[str], figures: dict, raw: dic
                 name = f"{family}_runs_per_hour"
                 sweep = write_sweep(tmp, family, SAMPLES, k)
                 os.environ["SDC_CACHE_DIR"] = str(tmp / f"cache-{family}-{k}")  # cold
-                raw[f"{name}_k{k}"], raw[f"{family}_mean_world_egos_k{k}"] = (
+                raw[f"{name}_k{k}"], raw[f"{family}_egos_per_step_k{k}"] = (
                     runs_per_hour(sweep, tmp / f"cold-{family}-{k}"))
                 raw[f"{name}_cached_k{k}"], _ = runs_per_hour(sweep,
                                                               tmp / f"warm-{family}-{k}")

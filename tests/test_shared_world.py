@@ -26,8 +26,9 @@ from scenarios.sumo_net.build import sumo_binary
 from scenarios.sumo_net.road_source import road_source
 from scenarios.world_backends import make_road
 from sdc.car.collision import ROAD_EDGE, VEHICLE, describe
+from sdc.car.controller_plugins import make_controller
 from sdc.car.geometry_kernels import Contacts
-from sdc.run.episode import Episode, run_episode
+from sdc.run.episode import Episode, Simulation, run_episode
 from sdc.run.shared_world import Failed, Seats, run_group, run_world
 
 QUICK_TOWN = Path(__file__).parent / "data" / "grid-town-quick.toml"
@@ -420,6 +421,44 @@ def test_runs_on_routes_of_their_own_share_a_world_each_on_its_own():
     for run, (spec, road) in zip(runs, egos, strict=True):
         assert run.metadata["spec"]["road"] == spec.to_plain()["road"]
         assert run.metadata["road"] == road.to_plain()
+
+
+def test_an_entering_runs_obstacles_stand_where_its_spec_puts_them():
+    """One seat, two town runs: the second enters as the first ends, its car obstacle
+    with it. libsumo's own position of each run's obstacle, read as its run begins,
+    is where the spec puts it (the body centre, half its length behind SUMO's front
+    bumper), and it stands there at its entry as the first run's did at the start."""
+    import libsumo
+
+    from scenarios.sumo.routes_xml import ego_names
+    from scenarios.world_backends import make_shared_world
+    from sdc.run.world_loop import WorldLoop
+
+    seen: dict[int, list[float]] = {}
+
+    class Checked(Simulation):
+        def begin(self, snapshot):
+            super().begin(snapshot)
+            for i, box in enumerate(snapshot.obstacle_boxes):
+                vid = f"{ego_names(self.slot).obstacle_prefix}{i}"
+                front = np.array(libsumo.vehicle.getPosition(vid))
+                yaw = math.radians(90.0 - libsumo.vehicle.getAngle(vid))
+                centre = front - box[3] / 2 * np.array([math.cos(yaw), math.sin(yaw)])
+                seen.setdefault(self.slot, []).append(
+                    float(np.hypot(*(centre - box[:2]))))
+                assert libsumo.vehicle.getSpeed(vid) == 0.0
+
+    egos = with_roads([town(12, duration_s=2.0), town(14, duration_s=2.0)])
+    world = make_shared_world(egos, None, None)
+    sims = [Checked(spec, world, road=road, controller=make_controller(spec.controller),
+                    slot=slot) for slot, (spec, road) in enumerate(egos)]
+    with world:
+        loop = WorldLoop(world, sims, seating=Seats(egos, 1))
+        ends = loop.run()
+    assert ends == {0: "duration", 1: "duration"}
+    assert loop.entered == {0: 0, 1: round(2.0 / STEP_S) + 1}
+    assert set(seen) == {0, 1} and all(len(d) == 1 for d in seen.values())
+    assert max(max(d) for d in seen.values()) < 0.05, seen
 
 
 # ------------------------------------------------------ a run that ends leaves

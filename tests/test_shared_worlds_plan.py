@@ -450,3 +450,19 @@ def test_ray_runs_the_shared_worlds_as_local_processes_do(swept, tmp_path, ray_s
     assert outcome.counts == {"ok": SAMPLES * len(CONTROLLERS), "error": 0, "timeout": 0,
                               "missing": 0}
     pd.testing.assert_frame_equal(comparable(tmp_path / "ray"), comparable(reference))
+
+
+@pytest.mark.slow
+def test_a_run_that_entered_a_world_under_way_replays_to_its_trace(swept):
+    """sdc replay --verify re-simulates the run's world, its runs entering where they
+    entered: the replayed trace of a run that entered as a seat freed is its trace."""
+    _, reference = swept
+    results = pd.read_parquet(reference / "results.parquet")
+    traced = [p.stem for p in (reference / "traces").iterdir()]
+    late = results[(results.world_entry_step > 0) & results.run_id.isin(traced)]
+    assert len(late), results[["run_id", "world_entry_step", "outcome"]]
+    run_id = late.sort_values("world_entry_step").run_id.iloc[-1]  # the last to enter
+    replay = subprocess.run([*SDC, "replay", str(reference), "--run", run_id, "--verify"],
+                            capture_output=True, text=True, timeout=600)
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "re-simulating the world" in replay.stdout and "identical" in replay.stdout

@@ -167,18 +167,24 @@ def test_a_shared_worlds_runs_are_judged_as_one_replay_of_the_world_judges_them(
 
 
 @pytest.mark.slow
-def test_the_audit_in_the_run_judges_every_pair_as_the_replay_does():
-    """The in-run audit and the replay it replaced (benchmarks/audit_in_run.py) on
-    Ingolstadt: three runs alone and the same three sharing worlds, SUMO's bicycles
-    waiting inside each other among their overlaps. Every overlapping step of every
-    trace is judged in the run, pair by pair as the replay judges it."""
+@pytest.mark.parametrize("family, samples", [("ingolstadt", 3), ("people", 6)])
+def test_the_audit_in_the_run_judges_every_pair_as_the_replay_does(family, samples):
+    """The in-run audit and the replay it replaced (benchmarks/audit_in_run.py): runs
+    alone and the same runs in one world of two seats, some entering as a seat frees
+    (their obstacles with them: on fokr_bs_demo SUMO's insertion checks would hold one
+    back), SUMO's bicycles waiting inside each other in Ingolstadt and its people in
+    fokr_bs_demo among their overlaps. Every overlapping step of every trace is judged
+    in the run, pair by pair as the replay judges it."""
     done = subprocess.run([sys.executable, str(REPO / "benchmarks" / "audit_in_run.py"),
-                           "--samples", "3", "--families", "ingolstadt"],
+                           "--samples", str(samples), "--seats", "2", "--per-world",
+                           str(samples), "--families", family],
                           capture_output=True, text=True, check=False, cwd=REPO)
     assert done.returncode == 0, done.stderr[-3000:]
     (line,) = done.stdout.splitlines()  # no difference was printed
     figures = dict(zip(line.split()[1::2], line.split()[2::2], strict=True))
-    assert figures["runs"] == "6" and int(figures["worlds"]) < 6, line  # some shared
+    assert figures["runs"] == str(2 * samples), line
+    assert figures["worlds"] == str(samples + 1), line  # alone, then all in one
+    assert int(figures["entered_later"]) >= 1, line
     assert int(figures["overlapped"]) >= 3 and int(figures["steps_judged"]) > 100, line
     assert figures["steps_differing"] == "0", line
 

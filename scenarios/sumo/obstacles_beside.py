@@ -45,20 +45,24 @@ def show_beside(sim, slot: EgoSlot, width_m: float, is_traffic: Callable[[str], 
 def stand_obstacles(sim, slot: EgoSlot, is_traffic: Callable[[str], bool]) -> None:
     """Each of ``slot``'s obstacles stopped for good in its own lane, where it stands from
     the start in a run that starts with the world (``routes_xml``'s placement), the
-    traffic too close to stop for it taken off. ``sim``: libsumo or traci."""
+    traffic too close to stop for it taken off, and put there at once: SUMO's
+    insertion checks (a vehicle just ahead, a junction) would hold it back, as the
+    start's ``insertionChecks="none"`` does not. ``sim``: libsumo or traci."""
     road = slot.road
     for i, obstacle in enumerate(slot.spec.obstacles):
         length_m = obstacle.size_m[0]
         edge, lane, front_m = road.sumo_place(road.place_s_m(obstacle.position_m, length_m)
                                               + length_m / 2, obstacle.lane)
         _stand(sim, f"{slot.names.obstacle_prefix}{i}", obstacle,
-               road.net.lanes[f"{edge}_{lane}"], front_m, road.net, is_traffic)
+               road.net.lanes[f"{edge}_{lane}"], front_m, road.net, is_traffic, forced=True)
 
 
 def _stand(sim, vid: str, obstacle: ObstacleSpec, lane: NetLane, pos_m: float, net: NetFile,
-           is_traffic: Callable[[str], bool]) -> None:
+           is_traffic: Callable[[str], bool], forced: bool = False) -> None:
     """A vehicle of ``obstacle``'s kind stopped for good on ``lane`` of ``net``, its
-    front at ``pos_m``, the traffic too close to stop for it taken off."""
+    front at ``pos_m``, the traffic too close to stop for it taken off; ``forced``:
+    moved there at once (SUMO's way round its insertion checks, which
+    ``vehicle.add`` cannot turn off)."""
     # one number for its departure and its stop: a departure rounded past its
     # stop is refused
     pos_m = round(pos_m, 6)
@@ -67,4 +71,6 @@ def _stand(sim, vid: str, obstacle: ObstacleSpec, lane: NetLane, pos_m: float, n
     sim.vehicle.add(vid, vid, typeID=f"{OBSTACLE_TYPE_PREFIX}{obstacle.type_name}",
                     depart="now", departLane=str(lane.index), departPos=f"{pos_m:.6f}",
                     departSpeed="0")
+    if forced:
+        sim.vehicle.moveTo(vid, lane.id, pos_m)
     sim.vehicle.setStop(vid, lane.edge, pos=pos_m, laneIndex=lane.index, duration=1e9)

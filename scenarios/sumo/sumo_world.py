@@ -238,6 +238,9 @@ class SumoWorld:
         its entry and their spots taken off first, as at the start (its run starts on
         the world's traffic as it is now, as a run alone starts on its warm state)."""
         sim, slot = self._sumo, self._slots[slot_index]
+        if self._source.flows and slot.spec.obstacles:
+            raise SdcError(f"the run in slot {slot_index} cannot enter under way: on a built "
+                           "road its obstacles stand in the flows' lanes from the start")
         clear_start(sim.vehicle, [slot], self.is_traffic, obstacles=True)
         stand_obstacles(sim, slot, self.is_traffic)
         self._insert_ego(slot, pose[1])

@@ -103,7 +103,7 @@ class WorldLoop:
         """Every driver in the world takes its turn; those that ended leave; waiting
         ones enter as the seating lets them; the world advances once with the moves."""
         moves: dict[int, Pose | None] = {}
-        for i in self.entered:
+        for i in sorted(self.entered):
             if i in self.ends:
                 continue
             driver = self.drivers[i]
