@@ -132,8 +132,8 @@ class WorldLoop:
     def _entering(self, moves: dict[int, Pose | None]) -> list[int]:
         """The waiting drivers the seating lets in at this step, each placed where it
         starts (its pose added to ``moves``), its bodies entering the world."""
-        waiting = self._waiting()
-        if self.seating is None or not waiting:
+        waiting = [] if self.seating is None else self._waiting()
+        if not waiting:
             return []
         present = {i: move[0] for i, move in moves.items() if move is not None}
         entering = self.seating.entering(waiting, present, self.steps + 1)
