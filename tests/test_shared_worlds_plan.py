@@ -406,7 +406,7 @@ def test_the_report_says_what_the_shared_worlds_cost_and_how_wide_they_made_the_
     assert f"SUMO stepped {sharing['sumo_steps']:,} steps for the 16 runs (measured" in text
     assert "had each run a world of its own (estimated: the sum of the runs' steps)" in text
     assert "s of wall time (measured: a run's wall_time_s is its world's)" in text
-    assert f"its SUMO steps carried {sharing['egos_per_step']:.2f} egos on average" in text
+    assert f"their SUMO steps carried {sharing['egos_per_step']:.2f} egos on average" in text
     assert "seed's completed rate: design effect" in text
     assert "lane-keep's completed rate: design effect" in text
     page = (out / "report.html").read_text()

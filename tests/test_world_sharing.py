@@ -101,7 +101,7 @@ def test_the_report_says_what_sharing_cost_and_how_much_wider_the_intervals_are(
     shared = next(line for line in lines if line.startswith("Shared worlds"))
     assert ("the 40 runs ran as egos of 5 worlds, each one SUMO simulation holding up to 4 "
             "egos at a time") in shared
-    assert "its SUMO steps carried 4.00 egos on average (measured)" in shared
+    assert "their SUMO steps carried 4.00 egos on average (measured)" in shared
     cost = next(line for line in lines if line.startswith("Cost of sharing"))
     assert ("SUMO stepped 4,000 steps for the 40 runs (measured: each world until its last "
             "run ended) against 16,000 had each run a world of its own (estimated: the sum "

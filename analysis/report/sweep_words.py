@@ -99,7 +99,7 @@ def shared_world_lines(summary: SweepSummary) -> list[str]:
             f"{worlds['egos_per_world']} egos at a time ([sweep] egos_per_world), a run "
             "entering as a seat freed and the placement rule let it (each ego's sensing "
             "radius clear of the others as it enters)"
-            + (f"; its SUMO steps carried {carried:.2f} egos on average (measured)"
+            + (f"; their SUMO steps carried {carried:.2f} egos on average (measured)"
                if carried else "")
             + ". A world's runs share its traffic: each world is one cluster in every "
             "interval, and each ego was a body to the others (columns world_egos, "

@@ -197,8 +197,8 @@ COLUMNS: tuple[Column, ...] = (
     Column(RowCol.world_entry_step, pa.int64(), OUTCOME,
            "the step of its shared world at which the run's ego entered it (0: as the "
            "world started; later: as a seat freed, on the world's traffic as it was "
-           "then); its world stepped at least world_entry_step + steps - 1 times; None: "
-           "a world of its own"),
+           "then); its world's SUMO stepped at least world_entry_step + steps times; "
+           "None: a world of its own"),
     Column(RowCol.trace_sha256, pa.string(), OUTCOME,
            "hash of the trace: same spec and seed, same hash"),
     Column(RowCol.traceback, pa.string(), STATUS, "the Python traceback of a run that raised"),
