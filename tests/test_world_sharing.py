@@ -118,6 +118,27 @@ def test_the_report_says_what_sharing_cost_and_how_much_wider_the_intervals_are(
     assert DEFF_HEAD in verdict_rows(summary)[0]  # the table shows it too
 
 
+def test_the_report_says_how_many_paired_runs_met_the_traffic_at_different_moments():
+    """A sample's runs under two controllers sit in two worlds; a run that entered
+    later may enter at another step under the other controller (its world's runs ended
+    otherwise), on other traffic: the report counts those samples."""
+    avoid = shared_sweep(samples=16)
+    seed = avoid.assign(controller="seed", run_id=avoid.run_id.str.replace("avoid", "seed"),
+                        world_id=avoid.world_id.str.replace("avoid", "seed"))
+    seed.loc[[5, 6, 13], "world_entry_step"] = 350  # they entered earlier there
+    both = pd.concat([avoid, seed], ignore_index=True)
+    plain = summary_of(both).to_plain()["shared_worlds"]
+    assert (plain["samples_paired"], plain["samples_apart"]) == (16, 3)
+    shared = next(line for line in warm_state_lines(summary_of(both))
+                  if line.startswith("Shared worlds"))
+    assert ("Of the 16 samples run under several controllers, 3 entered their controllers' "
+            "worlds at different steps: the comparisons below pair those runs on traffic "
+            "of different moments.") in shared
+    alone = next(line for line in warm_state_lines(summary_of(avoid))
+                 if line.startswith("Shared worlds"))
+    assert "Of the" not in alone  # one controller: nothing paired
+
+
 def with_runs_alone(results: pd.DataFrame, wall_time_s: float) -> pd.DataFrame:
     """``results`` and two runs of 400 steps alone, each taking ``wall_time_s``."""
     alone = results.iloc[:2].assign(world_id=None, world_egos=1, world_entry_step=None,

@@ -17,7 +17,21 @@ def world_sharing(results: pd.DataFrame, egos_per_world: int) -> dict | None:
         return None
     shared = results[results[RowCol.world_id].notna()]
     return {"egos_per_world": egos_per_world, "worlds": int(shared[RowCol.world_id].nunique()),
-            "runs": len(shared), **sharing_cost(results)}
+            "runs": len(shared), **entered_apart(shared), **sharing_cost(results)}
+
+
+def entered_apart(shared: pd.DataFrame) -> dict:
+    """Of the samples that ran under several controllers in shared worlds (each
+    controller's runs in worlds of their own), how many entered their worlds at
+    different steps: their runs met the traffic at different moments, so a paired
+    comparison of those controllers does not compare them on the same traffic
+    (``samples_apart`` of ``samples_paired``; both 0 without the columns)."""
+    if RowCol.world_entry_step not in shared.columns or RowCol.sample not in shared.columns:
+        return {"samples_paired": 0, "samples_apart": 0}
+    steps = shared.groupby(RowCol.sample)[RowCol.world_entry_step]
+    paired = steps.size() > 1
+    apart = steps.nunique(dropna=False) > 1
+    return {"samples_paired": int(paired.sum()), "samples_apart": int((paired & apart).sum())}
 
 
 def sharing_cost(results: pd.DataFrame) -> dict:

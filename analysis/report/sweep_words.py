@@ -103,7 +103,11 @@ def shared_world_lines(summary: SweepSummary) -> list[str]:
                if carried else "")
             + ". A world's runs share its traffic: each world is one cluster in every "
             "interval, and each ego was a body to the others (columns world_egos, "
-            "world_entry_step).",
+            "world_entry_step)."
+            + (f" Of the {worlds['samples_paired']} samples run under several "
+               f"controllers, {worlds['samples_apart']} entered their controllers' worlds "
+               "at different steps: the comparisons below pair those runs on traffic of "
+               "different moments." if worlds.get("samples_apart") else ""),
             sharing_cost_line(worlds), clustering_line(summary)]
 
 
