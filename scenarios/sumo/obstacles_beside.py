@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from scenarios.spec.scenario_tables import ObstacleSpec
 from scenarios.sumo.ego_slot import EgoSlot
-from scenarios.sumo.routes_xml import OBSTACLE_TYPE_PREFIX, lanes_blocked
+from scenarios.sumo.routes_xml import OBSTACLE_TYPE_PREFIX, lanes_blocked, obstacle_spot
 from scenarios.sumo.start_zone import clear_lane
 from scenarios.sumo_net.lanes_reached import lanes_reached
 from scenarios.sumo_net.net_xml import NetFile, NetLane
@@ -29,8 +29,7 @@ def show_beside(sim, slot: EgoSlot, width_m: float, is_traffic: Callable[[str], 
     road = slot.road
     for i, (obstacle, box) in enumerate(zip(slot.spec.obstacles, slot.obstacle_boxes,
                                             strict=True)):
-        s_m = road.place_s_m(obstacle.position_m, obstacle.size_m[0])
-        edge, own, front_m = road.sumo_place(s_m + obstacle.size_m[0] / 2)
+        edge, own, front_m = obstacle_spot(road, obstacle)
         own_length_m = road.net.lanes[f"{edge}_{own}"].sumo_length_m
         prefix = f"{slot.names.obstacle_prefix}{i}"
         for step in lanes_blocked(road, box, 0, width_m):
@@ -50,9 +49,7 @@ def stand_obstacles(sim, slot: EgoSlot, is_traffic: Callable[[str], bool]) -> No
     start's ``insertionChecks="none"`` does not. ``sim``: libsumo or traci."""
     road = slot.road
     for i, obstacle in enumerate(slot.spec.obstacles):
-        length_m = obstacle.size_m[0]
-        edge, lane, front_m = road.sumo_place(road.place_s_m(obstacle.position_m, length_m)
-                                              + length_m / 2, obstacle.lane)
+        edge, lane, front_m = obstacle_spot(road, obstacle, obstacle.lane)
         _stand(sim, f"{slot.names.obstacle_prefix}{i}", obstacle,
                road.net.lanes[f"{edge}_{lane}"], front_m, road.net, is_traffic, forced=True)
 

@@ -22,6 +22,7 @@ from scenarios.scene.road_geometry import EDGE_ID, RoadGeometry
 from scenarios.scene.snapshot import obstacle_boxes
 from scenarios.spec.bodies import OBSTACLE_SIZES_M, VEHICLE_MODELS
 from scenarios.spec.scenario_spec import SPEED_FACTOR_BOUNDS, ScenarioSpec
+from scenarios.spec.scenario_tables import ObstacleSpec
 
 EGO_ID = "ego"
 EGO_TYPE, OBSTACLE_TYPE_PREFIX = "ego", "obstacle_"  # our vTypes: not traffic
@@ -155,6 +156,14 @@ def across_m(box: np.ndarray, heading_rad: float, d_m: float) -> tuple[float, fl
     return d_m - half_m, d_m + half_m
 
 
+def obstacle_spot(road: RoadGeometry, obstacle: ObstacleSpec, lane: int = 0
+                  ) -> tuple[str, int, float]:
+    """SUMO's edge, lane index and lane position of the front of ``obstacle`` standing
+    in ``lane`` of ``road`` (SUMO places a vehicle by its front bumper)."""
+    length_m = obstacle.size_m[0]
+    return road.sumo_place(road.place_s_m(obstacle.position_m, length_m) + length_m / 2, lane)
+
+
 def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, flows: bool,
                depart: str = "0", checks: str = "all") -> list[str]:
     """The obstacles as vehicles stopped for good where they stand, entering at
@@ -165,12 +174,10 @@ def _obstacles(spec: ScenarioSpec, road: RoadGeometry, names: EgoNames, flows: b
     checked = "" if checks == "all" else f' insertionChecks="{checks}"'
     for i, (obstacle, box) in enumerate(zip(spec.obstacles, obstacle_boxes(spec, road),
                                             strict=True)):
-        length_m = obstacle.size_m[0]
-        s_m = road.place_s_m(obstacle.position_m, length_m)
         # on a network, a second body beside it waits for SUMO's types (obstacles_beside.py)
         lanes = obstacle_lanes(road, box) if flows else [obstacle.lane]
         for k, spec_lane in enumerate(lanes):
-            edge, lane, front_m = road.sumo_place(s_m + length_m / 2, spec_lane)
+            edge, lane, front_m = obstacle_spot(road, obstacle, spec_lane)
             vid = (f"{names.obstacle_prefix}{i}" if k == 0
                    else f"{names.obstacle_prefix}{i}.{lane}")
             route = names.route_id if edge == EDGE_ID else vid
